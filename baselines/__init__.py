@@ -1,0 +1,38 @@
+"""Analytic controllers for DWR point stabilization, and their expert-policy wrapper."""
+
+from baselines.controllers import (
+    CONTROLLERS,
+    AstolfiController,
+    AstolfiParams,
+    Controller,
+    ControllerInput,
+    ConventionalPTCController,
+    ConventionalPTCParams,
+    FabregasController,
+    FabregasParams,
+    FixedTimeController,
+    FixedTimeParams,
+    PTCController,
+    PTCParams,
+    make_controller,
+)
+from baselines.expert import ExpertPolicy, controller_input_from_observation
+
+__all__ = [
+    "CONTROLLERS",
+    "AstolfiController",
+    "AstolfiParams",
+    "Controller",
+    "ControllerInput",
+    "ConventionalPTCController",
+    "ConventionalPTCParams",
+    "ExpertPolicy",
+    "FabregasController",
+    "FabregasParams",
+    "FixedTimeController",
+    "FixedTimeParams",
+    "PTCController",
+    "PTCParams",
+    "controller_input_from_observation",
+    "make_controller",
+]

@@ -1,0 +1,93 @@
+"""Any controller as a policy that acts from the env's observations alone."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from numpy.typing import NDArray
+
+from baselines.controllers import Controller, ControllerInput
+from dwr_gym.params import EnvParams, check_range
+
+
+def controller_input_from_observation(obs: NDArray[np.floating]) -> ControllerInput:
+    """Decode a batch of observations (N, 10) of DWRPointStabilization-v0 into controller inputs."""
+    obs = np.asarray(obs, dtype=np.float64)
+    return ControllerInput(
+        distance=obs[:, 0],
+        azimuth=np.arctan2(obs[:, 2], obs[:, 1]),
+        heading=np.arctan2(obs[:, 4], obs[:, 3]),
+        time=obs[:, 6] * obs[:, 7],
+        initial_distance=obs[:, 8],
+        initial_orientation_error=obs[:, 9],
+    )
+
+
+def env_params_of(env: Any) -> EnvParams:
+    """The :class:`EnvParams` of a single env, a Gymnasium vector env or an SB3 VecEnv of ours."""
+    if isinstance(env, EnvParams):
+        return env
+    for candidate in (env, getattr(env, "unwrapped", None)):
+        params = getattr(candidate, "params", None)
+        if isinstance(params, EnvParams):
+            return params
+    if hasattr(env, "get_attr"):  # a stable-baselines3 VecEnv over our env
+        return env_params_of(env.get_attr("params", [0])[0])
+    raise ValueError(f"env={env!r} is not a DWRPointStabilization env: no EnvParams found")
+
+
+class ExpertPolicy:
+    """Wraps a controller into a policy with stable-baselines3's ``predict`` signature.
+
+    Actions are the controller's (u, omega) divided by (u_max, omega_max) and clipped to [-1, 1],
+    as float32, for one observation (10,) or a batch (N, 10).
+
+    >>> import gymnasium as gym, dwr_gym
+    >>> from baselines import ExpertPolicy, PTCController
+    >>> env = gym.make("DWRPointStabilization-v0")
+    >>> expert = ExpertPolicy.from_env(env, PTCController())
+    >>> obs, _ = env.reset(seed=1)
+    >>> action, _ = expert.predict(obs)
+    >>> action.shape, action.dtype
+    ((2,), dtype('float32'))
+    """
+
+    def __init__(self, controller: Controller, u_max: float, omega_max: float) -> None:
+        self.controller = controller
+        self.u_max = check_range("u_max", u_max, 0.0, 1e9, low_inclusive=False)
+        self.omega_max = check_range("omega_max", omega_max, 0.0, 1e9, low_inclusive=False)
+
+    @classmethod
+    def from_env(cls, env: gym.Env[Any, Any] | Any, controller: Controller) -> ExpertPolicy:
+        """An expert scaled to the action limits of ``env``."""
+        params = env_params_of(env)
+        return cls(controller, params.u_max, params.omega_max)
+
+    def commands(self, obs: NDArray[np.floating]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The controller's raw (u, omega) for a batch of observations."""
+        return self.controller(controller_input_from_observation(obs))
+
+    def predict(
+        self,
+        observation: NDArray[np.floating],
+        state: tuple[NDArray[Any], ...] | None = None,
+        episode_start: NDArray[np.bool_] | None = None,
+        deterministic: bool = True,
+    ) -> tuple[NDArray[np.float32], tuple[NDArray[Any], ...] | None]:
+        """Normalised actions for one observation or a batch; ``state`` is passed through."""
+        obs = np.asarray(observation, dtype=np.float64)
+        single = obs.ndim == 1
+        batch = obs[None, :] if single else obs
+        if batch.ndim != 2 or batch.shape[1] != 10:
+            raise ValueError(f"observation of shape {obs.shape} is invalid: expected (10,) or (N, 10)")
+        if episode_start is not None:
+            self.controller.reset(np.asarray(episode_start, dtype=bool).reshape(-1))
+        u, omega = self.commands(batch)
+        actions = np.stack([u / self.u_max, omega / self.omega_max], axis=1)
+        actions = np.clip(actions, -1.0, 1.0).astype(np.float32)
+        return (actions[0] if single else actions), state
+
+    def __call__(self, observation: NDArray[np.floating]) -> NDArray[np.float32]:
+        return self.predict(observation)[0]

@@ -1,0 +1,234 @@
+"""DWRPointStabilization-v0: a thin gymnasium.Env over :mod:`dwr_gym.core` and :mod:`dwr_gym.model`."""
+
+from __future__ import annotations
+
+from typing import Any, SupportsFloat
+
+import gymnasium as gym
+import numpy as np
+from numpy.typing import NDArray
+
+from dwr_gym import core, model
+from dwr_gym.params import EnvParams
+
+RENDER_MODES = ("human", "rgb_array")
+RESET_OPTIONS = ("start", "goal")
+
+
+def check_render_mode(render_mode: str | None) -> None:
+    """Raise a ValueError for a render mode the env does not support."""
+    if render_mode is not None and render_mode not in RENDER_MODES:
+        raise ValueError(f"render_mode={render_mode!r} is invalid: expected None, 'human' or 'rgb_array'")
+
+
+def parse_reset_options(options: dict[str, Any] | None) -> dict[str, tuple[float, float, float]]:
+    """Validate reset options {'start': (x, y, psi), 'goal': (x_d, y_d, psi_d)}."""
+    options = dict(options or {})
+    unknown = sorted(set(options) - set(RESET_OPTIONS))
+    if unknown:
+        raise ValueError(f"unknown reset option(s) {unknown}; allowed: 'start', 'goal'")
+    return {name: core.parse_pose(name, value) for name, value in options.items()}
+
+
+def info_dict(
+    state: core.TaskState, coords: core.ErrorCoordinates, result: core.StepResult | None, i: int, params: EnvParams
+) -> dict[str, Any]:
+    """The info dict of robot ``i`` after a reset (``result`` None) or a step."""
+    terms = (
+        {name: 0.0 for name in core.REWARD_TERMS}
+        if result is None
+        else {n: float(v[i]) for n, v in result.reward_terms.items()}
+    )
+    success = bool(result.is_success[i]) if result is not None else bool(coords.distance[i] <= params.goal_tolerance)
+    return {
+        "distance": float(coords.distance[i]),
+        "orientation_error": float(coords.orientation_error[i]),
+        "heading_error": float(coords.psi[i]),
+        "time": float(state.step_count[i] * params.dt),
+        "is_success": success,
+        "energy": float(state.energy[i]),
+        "reward_terms": terms,
+        "linear_velocity": 0.0 if result is None else float(result.linear_velocity[i]),
+        "angular_velocity": 0.0 if result is None else float(result.angular_velocity[i]),
+        "pose": np.array([state.x[i], state.y[i], state.psi[i]]),
+    }
+
+
+class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
+    r"""Drive a differential wheeled robot to a goal within a prescribed time T_con.
+
+    ## Description
+    The robot follows the kinematic model (1) of Zhang, Chen and Chen (2023):
+    x' = u cos(psi), y' = u sin(psi), psi' = omega. Everything is computed in the goal's frame, so any
+    goal pose (x_d, y_d, psi_d) is allowed; the paper's case is psi_d = 0. The task is the paper's:
+    bring the distance d of eq. (2) below ``goal_tolerance`` before ``T_con`` seconds have passed.
+    The commands are held constant over each control period ``dt`` and integrated exactly
+    (zero-order hold, ``integrator="exact"``) or by Euler / RK4 sub-steps.
+
+    ## Action Space
+    ``Box(-1, 1, (2,), float32)``: action[0] * ``u_max`` is the linear velocity u [m/s], action[1] *
+    ``omega_max`` the angular velocity omega [rad/s]. Out-of-range actions are clipped; a non-finite
+    action raises ValueError.
+
+    ## Observation Space
+    ``Box((10,), float32)``, all relative to the goal, with enough to compute the paper's law (16)-(19):
+
+    | Num | Observation                                          | Min         | Max            |
+    |-----|------------------------------------------------------|-------------|----------------|
+    | 0   | distance d, eq. (2) [m]                              | 0           | 2 arena_radius |
+    | 1   | cos(alpha), alpha the azimuth of eq. (3)             | -1          | 1              |
+    | 2   | sin(alpha)                                           | -1          | 1              |
+    | 3   | cos(psi - psi_d), the heading relative to the goal's | -1          | 1              |
+    | 4   | sin(psi - psi_d)                                     | -1          | 1              |
+    | 5   | orientation error e_psi, eq. (6) [rad]               | -7 pi / 6   | 7 pi / 6       |
+    | 6   | elapsed fraction of the prescribed time t / T_con    | 0           | horizon_factor |
+    | 7   | T_con [s] (constant within an env)                   | 0           | T_con          |
+    | 8   | initial distance d_0 [m]                             | 0           | arena_radius   |
+    | 9   | initial orientation error e_psi0 [rad]               | -7 pi / 6   | 7 pi / 6       |
+
+    ## Rewards
+    With the Lyapunov function L = (d^2 + e_psi^2) / 2 of eq. (21), its potential Phi = -L, the
+    conventional scaling mu_1(t) = T_con / (T_con - t) of eq. (12) capped at ``time_gain_cap``, and
+    the normalised actions a, the reward of a step from s to s' (time t' after it) is the sum of
+
+    - progress = progress_weight * (gamma Phi(s') - Phi(s)) with gamma = ``shaping_discount``: a
+      potential-based term, which leaves the optimal policy unchanged (Ng, Harada, Russell 1999)
+      when gamma is the agent's discount;
+    - time = -time_weight * dt * mu_1(t') * d(s'): the cost of still being away grows as T_con nears;
+    - effort = -effort_weight * dt * (a_u^2 + a_omega^2);
+    - arrival = +arrival_bonus on arrival at or before T_con (nothing for a late arrival);
+    - late = -late_penalty * dt for each step after T_con without arrival;
+    - arena = -arena_penalty when the robot leaves the arena.
+
+    Each term is in ``info["reward_terms"]``.
+
+    ## Starting State
+    Without options the goal is (0, 0, 0) and the start is drawn from ``self.np_random``: distance
+    uniform in ``start_distance``, bearing uniform in [-pi, pi), heading relative to the goal uniform
+    in ``start_heading``. ``reset(options={"start": (x, y, psi), "goal": (x_d, y_d, psi_d)})`` places
+    either or both exactly (a random start is then drawn around the given goal).
+
+    ## Episode End
+    Terminated on arrival (d <= ``goal_tolerance``, and |psi - psi_d| <= ``heading_tolerance`` when
+    that is set) or on leaving the arena (d > ``arena_radius``). Truncated at the horizon
+    ``horizon_factor * T_con`` (30 s by default), past T_con so that late arrivals are observable.
+    The env truncates itself because the horizon depends on the keywords ``T_con`` and ``dt``.
+
+    ## Arguments
+    Every field of :class:`dwr_gym.params.EnvParams` is a keyword (``T_con``, ``dt``, ``u_max``,
+    ``omega_max``, ``goal_tolerance``, ``heading_tolerance``, ``horizon_factor``, ``arena_radius``,
+    ``start_distance``, ``start_heading``, ``integrator``, ``substeps``, ``k``, the reward weights,
+    ``observation_noise``, ``actuation_noise``), plus ``render_mode`` (None, "human", "rgb_array").
+    Invalid values and unknown keywords raise ValueError.
+
+    >>> import gymnasium as gym
+    >>> import dwr_gym
+    >>> env = gym.make("DWRPointStabilization-v0", T_con=20.0)
+    >>> obs, info = env.reset(seed=0, options={"start": (0.0, 0.0, 0.0), "goal": (0.8, 0.0, 0.0)})
+    >>> round(info["distance"], 3), obs.shape
+    (0.8, (10,))
+    >>> obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
+    >>> sorted(info["reward_terms"])
+    ['arena', 'arrival', 'effort', 'late', 'progress', 'time']
+
+    ## Version History
+    * v0: initial version.
+    """
+
+    metadata = {"render_modes": list(RENDER_MODES), "render_fps": 20}
+
+    def __init__(self, render_mode: str | None = None, **kwargs: Any) -> None:
+        self.params = EnvParams.from_kwargs(**kwargs)
+        check_render_mode(render_mode)
+        self.render_mode = render_mode
+        self.observation_space = core.observation_space(self.params)
+        self.action_space = core.action_space()
+        self._state = core.TaskState.zeros(1)
+        self._trail: list[tuple[float, float]] = []
+        self._renderer: Any = None
+        self._has_reset = False
+
+    def _noise(self, size: int, sigma: float) -> NDArray[np.float64] | None:
+        return self.np_random.standard_normal((1, size)) if sigma > 0 else None
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[NDArray[np.float32], dict[str, Any]]:
+        super().reset(seed=seed)
+        poses = parse_reset_options(options)
+        goal = poses.get("goal", (0.0, 0.0, 0.0))
+        start = (
+            poses["start"]
+            if "start" in poses
+            else model.from_goal_frame(*core.sample_start(self.np_random, self.params), *goal)
+        )
+        as_arrays = [np.array([float(v)]) for v in (*start, *goal)]
+        coords = core.reset_robots(self._state, slice(None), tuple(as_arrays[:3]), tuple(as_arrays[3:]), self.params)  # type: ignore[arg-type]
+        obs = core.observe_state(
+            self._state, coords, self.params, self.observation_space, self._noise(3, self.params.observation_noise)
+        )
+        self._trail = [(float(self._state.x[0]), float(self._state.y[0]))]
+        self._has_reset = True
+        if self.render_mode == "human":
+            self.render()
+        return obs[0], info_dict(self._state, coords, None, 0, self.params)
+
+    def step(
+        self, action: NDArray[np.float32]
+    ) -> tuple[NDArray[np.float32], SupportsFloat, bool, bool, dict[str, Any]]:
+        if not self._has_reset:
+            raise gym.error.ResetNeeded("call reset() before step()")
+        batch = np.asarray(action, dtype=np.float64)
+        if batch.shape != (2,):
+            raise ValueError(f"action of shape {batch.shape} is invalid: expected shape (2,)")
+        result = core.transition(
+            self._state, batch[None, :], self.params, self.observation_space,
+            self._noise(2, self.params.actuation_noise), self._noise(3, self.params.observation_noise),
+        )  # fmt: skip
+        if self.render_mode is not None:
+            self._trail.append((float(self._state.x[0]), float(self._state.y[0])))
+            if self.render_mode == "human":
+                self.render()
+        info = info_dict(self._state, result.coords, result, 0, self.params)
+        return (
+            result.observation[0],
+            float(result.reward[0]),
+            bool(result.terminated[0]),
+            bool(result.truncated[0]),
+            info,
+        )
+
+    def render(self) -> NDArray[np.uint8] | None:
+        if self.render_mode is None:
+            gym.logger.warn(
+                'render() called without a render_mode; pass render_mode="rgb_array" or "human" to gym.make'
+            )
+            return None
+        if self._renderer is None:
+            from dwr_gym.rendering import Renderer
+
+            self._renderer = Renderer(self.render_mode, self.metadata["render_fps"])
+        s = self._state
+        return self._renderer.draw(
+            (float(s.x[0]), float(s.y[0]), float(s.psi[0])),
+            (float(s.goal_x[0]), float(s.goal_y[0]), float(s.goal_psi[0])),
+            self._trail, float(s.step_count[0] * self.params.dt), self.params.T_con, self.params.goal_tolerance,
+        )  # fmt: skip
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+    @property
+    def time(self) -> float:
+        """Elapsed time of the current episode [s]."""
+        return float(self._state.step_count[0] * self.params.dt)
+
+    @property
+    def prescribed_time_left(self) -> float:
+        """T_con minus the elapsed time [s] (negative once T_con has passed)."""
+        return self.params.T_con - self.time
+
+
+__all__ = ["DWRPointStabilizationEnv"]

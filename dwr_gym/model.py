@@ -1,0 +1,263 @@
+"""The paper's mathematics as pure, batched numpy functions.
+
+Every function takes arrays (or scalars) of matching, broadcastable shapes and returns arrays of
+the same shape: one call handles N robots. Nothing here keeps state or knows about Gymnasium; the
+single env, the vector env and the controllers in :mod:`baselines` all call these functions, so
+each equation of the paper is written exactly once.
+
+Equation numbers refer to Zhang, Chen and Chen, "Prescribed-Time Fractional Order Control of DWR
+via Time-Varying Scaling Function" (2023). Coordinates are those of the goal frame: the goal sits
+at the origin with heading 0 (the paper's setting); :func:`to_goal_frame` maps any goal pose there.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+FloatArray = NDArray[np.float64]
+Integrator = Literal["exact", "euler", "rk4"]
+INTEGRATORS: tuple[str, ...] = ("exact", "euler", "rk4")
+
+#: Distances below this are treated as this in the divisions of eqs. (5) and (7) [m].
+DISTANCE_FLOOR = 1e-9
+#: Bound of |e_psi| implied by eq. (6): |alpha - psi| <= pi and |zeta| <= pi/6.
+MAX_ORIENTATION_ERROR = 7.0 * np.pi / 6.0
+
+
+def wrap_angle(angle: ArrayLike) -> FloatArray:
+    """Wrap angles to [-pi, pi)."""
+    return np.mod(np.asarray(angle, dtype=np.float64) + np.pi, 2.0 * np.pi) - np.pi
+
+
+def to_goal_frame(
+    x: ArrayLike, y: ArrayLike, psi: ArrayLike, goal_x: ArrayLike, goal_y: ArrayLike, goal_psi: ArrayLike
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Pose of the robot in the goal's frame (goal at the origin, heading 0)."""
+    dx = np.asarray(x, dtype=np.float64) - goal_x
+    dy = np.asarray(y, dtype=np.float64) - goal_y
+    cos_g, sin_g = np.cos(goal_psi), np.sin(goal_psi)
+    return cos_g * dx + sin_g * dy, -sin_g * dx + cos_g * dy, wrap_angle(np.asarray(psi) - goal_psi)
+
+
+def from_goal_frame(
+    x_g: ArrayLike, y_g: ArrayLike, psi_g: ArrayLike, goal_x: ArrayLike, goal_y: ArrayLike, goal_psi: ArrayLike
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Inverse of :func:`to_goal_frame`: world pose from a pose in the goal's frame."""
+    cos_g, sin_g = np.cos(goal_psi), np.sin(goal_psi)
+    x_g, y_g = np.asarray(x_g, dtype=np.float64), np.asarray(y_g, dtype=np.float64)
+    return (
+        goal_x + cos_g * x_g - sin_g * y_g,
+        goal_y + sin_g * x_g + cos_g * y_g,
+        wrap_angle(np.asarray(psi_g) + goal_psi),
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# Kinematics (1) and its integration over one control period
+# ---------------------------------------------------------------------------------------------
+def unicycle_derivative(
+    psi: ArrayLike, linear_velocity: ArrayLike, angular_velocity: ArrayLike
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Right-hand side of the kinematic model, eq. (1): (x_dot, y_dot, psi_dot)."""
+    u = np.asarray(linear_velocity, dtype=np.float64)
+    return u * np.cos(psi), u * np.sin(psi), np.asarray(angular_velocity, dtype=np.float64) + 0.0 * u
+
+
+def unicycle_step_exact(
+    x: ArrayLike, y: ArrayLike, psi: ArrayLike, linear_velocity: ArrayLike, angular_velocity: ArrayLike, dt: float
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Exact zero-order-hold solution of eq. (1) over ``dt`` for constant (u, omega).
+
+    The arc is written as chord length times the direction of the mid-heading,
+    ``u dt sinc(omega dt / 2) [cos, sin](psi + omega dt / 2)``, which has no division by omega
+    and is exactly the straight line when omega = 0.
+    """
+    u = np.asarray(linear_velocity, dtype=np.float64)
+    turn = np.asarray(angular_velocity, dtype=np.float64) * dt
+    chord = u * dt * np.sinc(turn / (2.0 * np.pi))  # np.sinc(z) = sin(pi z) / (pi z)
+    mid_heading = np.asarray(psi, dtype=np.float64) + 0.5 * turn
+    return x + chord * np.cos(mid_heading), y + chord * np.sin(mid_heading), wrap_angle(psi + turn)
+
+
+def unicycle_step_euler(
+    x: ArrayLike, y: ArrayLike, psi: ArrayLike, linear_velocity: ArrayLike, angular_velocity: ArrayLike, dt: float
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """One explicit Euler step of eq. (1)."""
+    x_dot, y_dot, psi_dot = unicycle_derivative(psi, linear_velocity, angular_velocity)
+    return x + dt * x_dot, y + dt * y_dot, wrap_angle(psi + dt * psi_dot)
+
+
+def unicycle_step_rk4(
+    x: ArrayLike, y: ArrayLike, psi: ArrayLike, linear_velocity: ArrayLike, angular_velocity: ArrayLike, dt: float
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """One classical Runge-Kutta step of eq. (1) for constant (u, omega)."""
+    psi = np.asarray(psi, dtype=np.float64)
+    k1 = unicycle_derivative(psi, linear_velocity, angular_velocity)
+    k2 = unicycle_derivative(psi + 0.5 * dt * k1[2], linear_velocity, angular_velocity)
+    k3 = unicycle_derivative(psi + 0.5 * dt * k2[2], linear_velocity, angular_velocity)
+    k4 = unicycle_derivative(psi + dt * k3[2], linear_velocity, angular_velocity)
+    increments = [dt / 6.0 * (a + 2.0 * b + 2.0 * c + e) for a, b, c, e in zip(k1, k2, k3, k4)]
+    return x + increments[0], y + increments[1], wrap_angle(psi + increments[2])
+
+
+_STEPPERS = {"exact": unicycle_step_exact, "euler": unicycle_step_euler, "rk4": unicycle_step_rk4}
+
+
+def integrate_unicycle(
+    x: ArrayLike,
+    y: ArrayLike,
+    psi: ArrayLike,
+    linear_velocity: ArrayLike,
+    angular_velocity: ArrayLike,
+    dt: float,
+    integrator: Integrator = "exact",
+    substeps: int = 1,
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Advance eq. (1) by one control period ``dt`` with the commands held constant."""
+    step = _STEPPERS[integrator]
+    h = dt / substeps
+    for _ in range(substeps):
+        x, y, psi = step(x, y, psi, linear_velocity, angular_velocity, h)
+    return x, y, psi  # type: ignore[return-value]
+
+
+# ---------------------------------------------------------------------------------------------
+# Error coordinates (2)-(8)
+# ---------------------------------------------------------------------------------------------
+def distance(x: ArrayLike, y: ArrayLike) -> FloatArray:
+    """Distance to the goal at the origin, eq. (2)."""
+    return np.hypot(x, y)
+
+
+def azimuth(x: ArrayLike, y: ArrayLike) -> FloatArray:
+    """Azimuth of the goal seen from the robot, eq. (3): atan2(y_d - y, x_d - x) with the goal at 0."""
+    # 0.0 - v turns -0.0 into +0.0, so atan2 gives 0 rather than +-pi at d = 0 exactly.
+    return np.arctan2(0.0 - np.asarray(y, dtype=np.float64), 0.0 - np.asarray(x, dtype=np.float64))
+
+
+def bearing_error(alpha: ArrayLike, psi: ArrayLike) -> FloatArray:
+    """alpha - psi wrapped to [-pi, pi), the interval eq. (6) assumes (after ref. [9])."""
+    return wrap_angle(np.asarray(alpha) - np.asarray(psi))
+
+
+def arcsine_term(alpha: ArrayLike, dist: ArrayLike, k: float) -> FloatArray:
+    """The auxiliary arcsine function zeta = asin(k alpha tanh d) of eq. (6)."""
+    return np.arcsin(k * np.asarray(alpha, dtype=np.float64) * np.tanh(dist))
+
+
+def orientation_error(alpha: ArrayLike, psi: ArrayLike, dist: ArrayLike, k: float) -> FloatArray:
+    """Distance-related orientation error e_psi = (alpha - psi) + zeta, eq. (6)."""
+    return bearing_error(alpha, psi) + arcsine_term(alpha, dist, k)
+
+
+def distance_rate(linear_velocity: ArrayLike, alpha: ArrayLike, psi: ArrayLike) -> FloatArray:
+    """d_dot = -u cos(alpha - psi), eq. (4)."""
+    return -np.asarray(linear_velocity, dtype=np.float64) * np.cos(np.asarray(alpha) - psi)
+
+
+def azimuth_rate(linear_velocity: ArrayLike, alpha: ArrayLike, psi: ArrayLike, dist: ArrayLike) -> FloatArray:
+    """alpha_dot = u sin(alpha - psi) / d, eq. (5)."""
+    # Guard: eq. (5) divides by d; below DISTANCE_FLOOR we divide by the floor instead.
+    return (
+        np.asarray(linear_velocity, dtype=np.float64)
+        * np.sin(np.asarray(alpha) - psi)
+        / np.maximum(dist, DISTANCE_FLOOR)
+    )
+
+
+def arcsine_term_rate(
+    alpha: ArrayLike, alpha_rate: ArrayLike, dist: ArrayLike, dist_rate: ArrayLike, k: float
+) -> FloatArray:
+    """zeta_dot, the last term of eqs. (7) and (18)."""
+    tanh_d = np.tanh(dist)
+    alpha = np.asarray(alpha, dtype=np.float64)
+    numerator = alpha_rate * tanh_d + alpha * (1.0 - tanh_d**2) * dist_rate
+    return k * numerator / np.sqrt(1.0 - (k * alpha * tanh_d) ** 2)
+
+
+def orientation_error_rate(
+    linear_velocity: ArrayLike,
+    angular_velocity: ArrayLike,
+    alpha: ArrayLike,
+    psi: ArrayLike,
+    dist: ArrayLike,
+    k: float,
+) -> FloatArray:
+    """e_psi_dot = u sin(e_psi - zeta) / d - omega + zeta_dot, eq. (7) (second line of eq. (8))."""
+    alpha_dot = azimuth_rate(linear_velocity, alpha, psi, dist)
+    d_dot = distance_rate(linear_velocity, alpha, psi)
+    return alpha_dot - angular_velocity + arcsine_term_rate(alpha, alpha_dot, dist, d_dot, k)
+
+
+def backstepping_delta(angle: ArrayLike) -> FloatArray:
+    """Delta = (1 - cos(x)) / x with x = e_psi - zeta, eq. (19); equal to 0 at x = 0.
+
+    Written as (x / 2) sinc^2(x / 2), which is the same function without the 0/0 at x = 0.
+    """
+    half = 0.5 * np.asarray(angle, dtype=np.float64)
+    return half * np.square(np.sinc(half / np.pi))
+
+
+# ---------------------------------------------------------------------------------------------
+# Constraint functions (9), (10)
+# ---------------------------------------------------------------------------------------------
+def velocity_constraint(alpha: ArrayLike, psi: ArrayLike) -> FloatArray:
+    """Ref. [9]'s linear-velocity constraint p = (pi - |alpha - psi|) / pi, eq. (9)."""
+    return (np.pi - np.abs(bearing_error(alpha, psi))) / np.pi
+
+
+def improved_velocity_constraint(orientation_err: ArrayLike, Ke: float) -> FloatArray:
+    """The paper's constraint p* = 1 / (1 + Ke e_psi^2), eq. (10)."""
+    return 1.0 / (1.0 + Ke * np.square(orientation_err))
+
+
+def improved_velocity_constraint_min(Ke: float) -> float:
+    """p*_min: the minimum of eq. (10) over the interval |e_psi| <= 7 pi / 6 that eq. (6) allows."""
+    return float(improved_velocity_constraint(MAX_ORIENTATION_ERROR, Ke))
+
+
+# ---------------------------------------------------------------------------------------------
+# Scaling functions (12), (13), (17)
+# ---------------------------------------------------------------------------------------------
+def conventional_scaling(t: ArrayLike, T: float, t0: float = 0.0, max_gain: float = 1e6) -> FloatArray:
+    """mu_1(t, T) = T / (T + t0 - t), eq. (12); equal to 1 at t0 and unbounded toward t0 + T."""
+    # Guard: eq. (12) is infinite at t = t0 + T and negative after; we cap it at max_gain.
+    return T / np.maximum(T + t0 - np.asarray(t, dtype=np.float64), T / max_gain)
+
+
+def conventional_scaling_power(
+    t: ArrayLike, T: float, order: int, extra: int, t0: float = 0.0, max_gain: float = 1e6
+) -> FloatArray:
+    """mu(t, T) = mu_1(t, T)^(n + m), eq. (13), with n = ``order`` and m = ``extra``."""
+    return np.minimum(conventional_scaling(t, T, t0, max_gain) ** (order + extra), max_gain)
+
+
+def switching_time(
+    initial_distance: ArrayLike, initial_orientation_error: ArrayLike, T_con: float, beta: float, K: float, p_min: float
+) -> FloatArray:
+    """t_v of eq. (17): T_con (1 - exp(-(d0^2 + e0^2)^(1-beta) / ((1-beta) 2 K p*_min))).
+
+    For the paper's parameters the exponent is about -150, so t_v equals T_con in double precision;
+    :func:`fractional_scaling` caps the gain that this would make unbounded.
+    """
+    energy = np.square(initial_distance) + np.square(initial_orientation_error)
+    exponent = -np.power(energy, 1.0 - beta) / ((1.0 - beta) * 2.0 * K * p_min)
+    return T_con * -np.expm1(exponent)
+
+
+def fractional_scaling(t: ArrayLike, T_con: float, switch_time: ArrayLike, max_gain: float = 1e6) -> FloatArray:
+    """mu*(t, T_con) of eq. (17): 1 / (T_con - t) up to t_v, then frozen at 1 / (T_con - t_v)."""
+    time_to_go = T_con - np.minimum(np.asarray(t, dtype=np.float64), switch_time)
+    # Guard: when t_v rounds to T_con, eq. (17) grows without bound; the gain is capped at max_gain.
+    return 1.0 / np.maximum(time_to_go, 1.0 / max_gain)
+
+
+# ---------------------------------------------------------------------------------------------
+# Lyapunov function (21)
+# ---------------------------------------------------------------------------------------------
+def lyapunov(dist: ArrayLike, orientation_err: ArrayLike) -> FloatArray:
+    """L = (d^2 + e_psi^2) / 2, eq. (21)."""
+    return 0.5 * (np.square(dist) + np.square(orientation_err))
