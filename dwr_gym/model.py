@@ -99,7 +99,7 @@ def unicycle_step_rk4(
     k2 = unicycle_derivative(psi + 0.5 * dt * k1[2], linear_velocity, angular_velocity)
     k3 = unicycle_derivative(psi + 0.5 * dt * k2[2], linear_velocity, angular_velocity)
     k4 = unicycle_derivative(psi + dt * k3[2], linear_velocity, angular_velocity)
-    increments = [dt / 6.0 * (a + 2.0 * b + 2.0 * c + e) for a, b, c, e in zip(k1, k2, k3, k4)]
+    increments = [dt / 6.0 * (a + 2.0 * b + 2.0 * c + e) for a, b, c, e in zip(k1, k2, k3, k4, strict=True)]
     return x + increments[0], y + increments[1], wrap_angle(psi + increments[2])
 
 
