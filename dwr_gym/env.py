@@ -30,28 +30,13 @@ def parse_reset_options(options: dict[str, Any] | None) -> dict[str, tuple[float
     return {name: core.parse_pose(name, value) for name, value in options.items()}
 
 
-def info_dict(
-    state: core.TaskState, coords: core.ErrorCoordinates, result: core.StepResult | None, i: int, params: EnvParams
-) -> dict[str, Any]:
-    """The info dict of robot ``i`` after a reset (``result`` None) or a step."""
-    terms = (
-        {name: 0.0 for name in core.REWARD_TERMS}
-        if result is None
-        else {n: float(v[i]) for n, v in result.reward_terms.items()}
-    )
-    success = bool(result.is_success[i]) if result is not None else bool(coords.distance[i] <= params.goal_tolerance)
-    return {
-        "distance": float(coords.distance[i]),
-        "orientation_error": float(coords.orientation_error[i]),
-        "heading_error": float(coords.psi[i]),
-        "time": float(state.step_count[i] * params.dt),
-        "is_success": success,
-        "energy": float(state.energy[i]),
-        "reward_terms": terms,
-        "linear_velocity": 0.0 if result is None else float(result.linear_velocity[i]),
-        "angular_velocity": 0.0 if result is None else float(result.angular_velocity[i]),
-        "pose": np.array([state.x[i], state.y[i], state.psi[i]]),
-    }
+def single_info(batch_infos: dict[str, Any], i: int = 0) -> dict[str, Any]:
+    """The info dict of robot ``i`` as Python scalars, from :func:`dwr_gym.core.infos`."""
+    info: dict[str, Any] = {key: float(batch_infos[key][i]) for key in core.INFO_KEYS if key != "pose"}
+    info["is_success"] = bool(batch_infos["is_success"][i])
+    info["pose"] = batch_infos["pose"][i]
+    info["reward_terms"] = {name: float(value[i]) for name, value in batch_infos["reward_terms"].items()}
+    return info
 
 
 class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
@@ -163,15 +148,17 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
             else model.from_goal_frame(*core.sample_start(self.np_random, self.params), *goal)
         )
         as_arrays = [np.array([float(v)]) for v in (*start, *goal)]
-        coords = core.reset_robots(self._state, slice(None), tuple(as_arrays[:3]), tuple(as_arrays[3:]), self.params)  # type: ignore[arg-type]
-        obs = core.observe_state(
+        core.reset_robots(self._state, slice(None), tuple(as_arrays[:3]), tuple(as_arrays[3:]), self.params)  # type: ignore[arg-type]
+        coords = self._state.coordinates(self.params.k)
+        obs = core.observe(
             self._state, coords, self.params, self.observation_space, self._noise(3, self.params.observation_noise)
         )
-        self._trail = [(float(self._state.x[0]), float(self._state.y[0]))]
+        info = single_info(core.infos(self._state, coords, self.params))
+        self._trail = [(float(info["pose"][0]), float(info["pose"][1]))]
         self._has_reset = True
         if self.render_mode == "human":
             self.render()
-        return obs[0], info_dict(self._state, coords, None, 0, self.params)
+        return obs[0], info
 
     def step(
         self, action: NDArray[np.float32]
@@ -185,11 +172,11 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
             self._state, batch[None, :], self.params, self.observation_space,
             self._noise(2, self.params.actuation_noise), self._noise(3, self.params.observation_noise),
         )  # fmt: skip
+        info = single_info(core.infos(self._state, result.coords, self.params, result))
         if self.render_mode is not None:
-            self._trail.append((float(self._state.x[0]), float(self._state.y[0])))
+            self._trail.append((float(info["pose"][0]), float(info["pose"][1])))
             if self.render_mode == "human":
                 self.render()
-        info = info_dict(self._state, result.coords, result, 0, self.params)
         return (
             result.observation[0],
             float(result.reward[0]),
@@ -208,12 +195,7 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
             from dwr_gym.rendering import Renderer
 
             self._renderer = Renderer(self.render_mode, self.metadata["render_fps"])
-        s = self._state
-        return self._renderer.draw(
-            (float(s.x[0]), float(s.y[0]), float(s.psi[0])),
-            (float(s.goal_x[0]), float(s.goal_y[0]), float(s.goal_psi[0])),
-            self._trail, float(s.step_count[0] * self.params.dt), self.params.T_con, self.params.goal_tolerance,
-        )  # fmt: skip
+        return self._renderer.draw_robot(self._state, 0, self._trail, self.params)
 
     def close(self) -> None:
         if self._renderer is not None:

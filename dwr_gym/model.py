@@ -28,31 +28,31 @@ MAX_ORIENTATION_ERROR = 7.0 * np.pi / 6.0
 
 
 def wrap_angle(angle: ArrayLike) -> FloatArray:
-    """Wrap angles to [-pi, pi)."""
-    return np.mod(np.asarray(angle, dtype=np.float64) + np.pi, 2.0 * np.pi) - np.pi
+    """Wrap angles to [-pi, pi) (to within one rounding error)."""
+    angle = np.asarray(angle, dtype=np.float64)
+    return angle - (2.0 * np.pi) * np.floor((angle + np.pi) * (0.5 / np.pi))  # floor is ~5x faster than np.mod
+
+
+def rotate(x: ArrayLike, y: ArrayLike, cos_angle: ArrayLike, sin_angle: ArrayLike) -> tuple[FloatArray, FloatArray]:
+    """Rotate the vectors (x, y) by the angles whose cosine and sine are given."""
+    x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
+    return cos_angle * x - sin_angle * y, sin_angle * x + cos_angle * y
 
 
 def to_goal_frame(
     x: ArrayLike, y: ArrayLike, psi: ArrayLike, goal_x: ArrayLike, goal_y: ArrayLike, goal_psi: ArrayLike
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Pose of the robot in the goal's frame (goal at the origin, heading 0)."""
-    dx = np.asarray(x, dtype=np.float64) - goal_x
-    dy = np.asarray(y, dtype=np.float64) - goal_y
-    cos_g, sin_g = np.cos(goal_psi), np.sin(goal_psi)
-    return cos_g * dx + sin_g * dy, -sin_g * dx + cos_g * dy, wrap_angle(np.asarray(psi) - goal_psi)
+    x_g, y_g = rotate(np.subtract(x, goal_x), np.subtract(y, goal_y), np.cos(goal_psi), -np.sin(goal_psi))
+    return x_g, y_g, wrap_angle(np.subtract(psi, goal_psi))
 
 
 def from_goal_frame(
     x_g: ArrayLike, y_g: ArrayLike, psi_g: ArrayLike, goal_x: ArrayLike, goal_y: ArrayLike, goal_psi: ArrayLike
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Inverse of :func:`to_goal_frame`: world pose from a pose in the goal's frame."""
-    cos_g, sin_g = np.cos(goal_psi), np.sin(goal_psi)
-    x_g, y_g = np.asarray(x_g, dtype=np.float64), np.asarray(y_g, dtype=np.float64)
-    return (
-        goal_x + cos_g * x_g - sin_g * y_g,
-        goal_y + sin_g * x_g + cos_g * y_g,
-        wrap_angle(np.asarray(psi_g) + goal_psi),
-    )
+    dx, dy = rotate(x_g, y_g, np.cos(goal_psi), np.sin(goal_psi))
+    return np.add(goal_x, dx), np.add(goal_y, dy), wrap_angle(np.add(psi_g, goal_psi))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -72,13 +72,16 @@ def unicycle_step_exact(
     """Exact zero-order-hold solution of eq. (1) over ``dt`` for constant (u, omega).
 
     The arc is written as chord length times the direction of the mid-heading,
-    ``u dt sinc(omega dt / 2) [cos, sin](psi + omega dt / 2)``, which has no division by omega
-    and is exactly the straight line when omega = 0.
+    ``u dt [sin(h) / h] [cos, sin](psi + h)`` with h = omega dt / 2, which needs no division by
+    omega and is exactly the straight line when omega = 0.
     """
     u = np.asarray(linear_velocity, dtype=np.float64)
-    turn = np.asarray(angular_velocity, dtype=np.float64) * dt
-    chord = u * dt * np.sinc(turn / (2.0 * np.pi))  # np.sinc(z) = sin(pi z) / (pi z)
-    mid_heading = np.asarray(psi, dtype=np.float64) + 0.5 * turn
+    half_turn = 0.5 * dt * np.asarray(angular_velocity, dtype=np.float64)
+    straight = half_turn == 0.0
+    safe = np.where(straight, 1.0, half_turn)
+    chord = u * dt * np.where(straight, 1.0, np.sin(safe) / safe)
+    turn = 2.0 * half_turn
+    mid_heading = np.asarray(psi, dtype=np.float64) + half_turn
     return x + chord * np.cos(mid_heading), y + chord * np.sin(mid_heading), wrap_angle(psi + turn)
 
 

@@ -9,6 +9,9 @@ import numpy as np
 from gymnasium.error import DependencyNotInstalled
 from numpy.typing import NDArray
 
+from dwr_gym.core import TaskState
+from dwr_gym.params import EnvParams
+
 BODY_RADIUS = 0.05  # [m] drawn size of the robot
 WHEEL_LENGTH = 0.045  # [m]
 WHEEL_WIDTH = 0.016  # [m]
@@ -101,6 +104,15 @@ class Renderer:
             self._clock.tick(self.fps)
             return None
         return np.transpose(np.array(pg.surfarray.pixels3d(canvas), dtype=np.uint8), (1, 0, 2))
+
+    def draw_robot(
+        self, state: TaskState, i: int, trail: list[tuple[float, float]], params: EnvParams
+    ) -> NDArray[np.uint8] | None:
+        """Draw robot ``i`` of a batched :class:`~dwr_gym.core.TaskState`."""
+        x, y, psi = (float(v[i]) for v in state.world_pose())
+        goal = (float(state.goal_x[i]), float(state.goal_y[i]), float(state.goal_psi[i]))
+        time = float(state.step_count[i] * params.dt)
+        return self.draw((x, y, psi), goal, trail, time, params.T_con, params.goal_tolerance)
 
     def close(self) -> None:
         """Close the window, if any."""

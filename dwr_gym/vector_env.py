@@ -13,9 +13,6 @@ from dwr_gym import core, model
 from dwr_gym.env import check_render_mode, parse_reset_options
 from dwr_gym.params import EnvParams
 
-INFO_KEYS = ("distance", "orientation_error", "heading_error", "time", "is_success", "energy",
-             "linear_velocity", "angular_velocity", "pose")  # fmt: skip
-
 
 def _pose_batch(name: str, value: Any, n: int) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """A pose option as three (n,) arrays: one pose (3,) for every env, or one per env (n, 3)."""
@@ -78,14 +75,14 @@ class DWRPointStabilizationVectorEnv(VectorEnv):
         index: NDArray[np.intp],
         start: tuple[NDArray[np.float64], ...] | None = None,
         goal: tuple[NDArray[np.float64], ...] | None = None,
-    ) -> core.ErrorCoordinates:
+    ) -> None:
         """Reset the sub-envs in ``index``: given poses, else the default goal and starts drawn per env."""
         n = index.size
         goal = goal if goal is not None else (np.zeros(n), np.zeros(n), np.zeros(n))
         if start is None:
             local = np.array([core.sample_start(self._rngs[i], self.params) for i in index]).reshape(n, 3)
             start = model.from_goal_frame(local[:, 0], local[:, 1], local[:, 2], *goal)
-        return core.reset_robots(self._state, index, start, goal, self.params)  # type: ignore[arg-type]
+        core.reset_robots(self._state, index, start, goal, self.params)  # type: ignore[arg-type]
 
     def _noise(self, size: int, sigma: float) -> NDArray[np.float64] | None:
         return self.np_random.standard_normal((self.num_envs, size)) if sigma > 0 else None
@@ -108,36 +105,19 @@ class DWRPointStabilizationVectorEnv(VectorEnv):
             None if start is None else tuple(a[index] for a in start),
             None if goal is None else tuple(a[index] for a in goal),
         )
-        coords = core.error_coordinates(*self._pose_arrays(), self.params.k)
-        obs = core.observe_state(self._state, coords, self.params, self.single_observation_space,
-                                 self._noise(3, self.params.observation_noise))  # fmt: skip
-        self._trail = [(float(self._state.x[0]), float(self._state.y[0]))]
+        coords = self._state.coordinates(self.params.k)
+        obs = core.observe(self._state, coords, self.params, self.single_observation_space,
+                           self._noise(3, self.params.observation_noise))  # fmt: skip
+        infos = self._with_masks(core.infos(self._state, coords, self.params))
+        self._trail = [(float(infos["pose"][0, 0]), float(infos["pose"][0, 1]))]
         if self.render_mode == "human":
             self.render()
-        return obs, self._infos(coords, None)
+        return obs, infos
 
-    def _pose_arrays(self) -> tuple[NDArray[np.float64], ...]:
-        s = self._state
-        return s.x, s.y, s.psi, s.goal_x, s.goal_y, s.goal_psi
-
-    def _infos(self, coords: core.ErrorCoordinates, result: core.StepResult | None) -> dict[str, Any]:
-        """Vector infos: one array per key, each with an all-True mask ``_key``, as Gymnasium's vector envs give."""
-        s, n = self._state, self.num_envs
-        zeros = np.zeros(n)
-        infos: dict[str, Any] = {
-            "distance": coords.distance,
-            "orientation_error": coords.orientation_error,
-            "heading_error": coords.psi,
-            "time": s.step_count * self.params.dt,
-            "is_success": coords.distance <= self.params.goal_tolerance if result is None else result.is_success,
-            "energy": s.energy.copy(),
-            "linear_velocity": zeros if result is None else result.linear_velocity,
-            "angular_velocity": zeros if result is None else result.angular_velocity,
-            "pose": np.stack([s.x, s.y, s.psi], axis=1),
-        }
-        terms = {name: zeros for name in core.REWARD_TERMS} if result is None else result.reward_terms
-        infos["reward_terms"] = {**terms, **{f"_{name}": self._all for name in terms}}
-        infos.update({f"_{key}": self._all for key in (*INFO_KEYS, "reward_terms")})
+    def _with_masks(self, infos: dict[str, Any]) -> dict[str, Any]:
+        """Add the all-True masks ``_key`` that Gymnasium's vector infos carry."""
+        infos["reward_terms"].update({f"_{name}": self._all for name in core.REWARD_TERMS})
+        infos.update({f"_{key}": self._all for key in (*core.INFO_KEYS, "reward_terms")})
         return infos
 
     def step(
@@ -150,28 +130,28 @@ class DWRPointStabilizationVectorEnv(VectorEnv):
             self._state, actions, self.params, self.single_observation_space,
             self._noise(2, self.params.actuation_noise), self._noise(3, self.params.observation_noise),
         )  # fmt: skip
-        infos = self._infos(result.coords, result)
+        infos = self._with_masks(core.infos(self._state, result.coords, self.params, result))
         obs = result.observation
         done = result.terminated | result.truncated
-        if self.render_mode is not None:
-            self._trail.append((float(self._state.x[0]), float(self._state.y[0])))
         if done.any():
             # SAME_STEP autoreset: the step's last observation and info move to final_obs / final_info,
-            # and the returned ones are those of the new episode, as in SyncVectorEnv.
+            # and the returned ones are those of the new episodes, as in SyncVectorEnv.
             infos["final_obs"], infos["_final_obs"] = obs.copy(), done
-            infos["final_info"] = {**infos, **{f"_{key}": done for key in (*INFO_KEYS, "reward_terms")}}
+            infos["final_info"] = {**infos, **{f"_{key}": done for key in (*core.INFO_KEYS, "reward_terms")}}
             infos["_final_info"] = done
             self._reset_envs(np.flatnonzero(done))
-            coords = core.error_coordinates(*self._pose_arrays(), self.params.k)
-            reset_obs = core.observe_state(self._state, coords, self.params, self.single_observation_space)
+            coords = self._state.coordinates(self.params.k)
+            reset_obs = core.observe(self._state, coords, self.params, self.single_observation_space)
             obs = np.where(done[:, None], reset_obs, obs)
-            reset_infos = self._infos(coords, None)
-            for key in INFO_KEYS:
+            reset_infos = core.infos(self._state, coords, self.params)
+            for key in core.INFO_KEYS:
                 infos[key] = np.where(done if infos[key].ndim == 1 else done[:, None], reset_infos[key], infos[key])
             infos["reward_terms"] = {k: np.where(done, 0.0, v) if not k.startswith("_") else v
                                      for k, v in infos["reward_terms"].items()}  # fmt: skip
+        if self.render_mode is not None:
             if done[0]:
-                self._trail = [(float(self._state.x[0]), float(self._state.y[0]))]
+                self._trail = []
+            self._trail.append((float(infos["pose"][0, 0]), float(infos["pose"][0, 1])))
         if self.render_mode == "human":
             self.render()
         return obs, result.reward, result.terminated, result.truncated, infos
@@ -184,12 +164,7 @@ class DWRPointStabilizationVectorEnv(VectorEnv):
             from dwr_gym.rendering import Renderer
 
             self._renderer = Renderer(self.render_mode, self.metadata["render_fps"])
-        s = self._state
-        return self._renderer.draw(
-            (float(s.x[0]), float(s.y[0]), float(s.psi[0])),
-            (float(s.goal_x[0]), float(s.goal_y[0]), float(s.goal_psi[0])),
-            self._trail, float(s.step_count[0] * self.params.dt), self.params.T_con, self.params.goal_tolerance,
-        )  # fmt: skip
+        return self._renderer.draw_robot(self._state, 0, self._trail, self.params)
 
     def close_extras(self, **kwargs: Any) -> None:
         if self._renderer is not None:

@@ -1,0 +1,173 @@
+"""The model functions against hand-computed values, finite differences and scipy's solve_ivp."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.integrate import solve_ivp
+
+from dwr_gym import model
+
+K = 1.0 / (2.0 * math.pi)
+
+
+def test_distance_and_azimuth_hand_values() -> None:
+    # goal at the origin; robot at (-3, -4): the goal lies at atan2(4, 3) from it
+    assert model.distance(-3.0, -4.0) == pytest.approx(5.0)
+    assert model.azimuth(-3.0, -4.0) == pytest.approx(math.atan2(4.0, 3.0))
+    assert model.azimuth(-1.0, 0.0) == pytest.approx(0.0)
+    assert model.azimuth(0.0, -1.0) == pytest.approx(math.pi / 2)
+
+
+def test_azimuth_is_zero_at_the_goal_even_for_negative_zero() -> None:
+    assert model.azimuth(0.0, 0.0) == 0.0
+    assert model.azimuth(-0.0, -0.0) == 0.0
+
+
+def test_orientation_error_hand_value() -> None:
+    # eq. (6): alpha = pi/2, psi = 0, d = 1, k = 1/(2 pi)
+    expected = math.pi / 2 + math.asin(K * (math.pi / 2) * math.tanh(1.0))
+    assert model.orientation_error(math.pi / 2, 0.0, 1.0, K) == pytest.approx(expected)
+    # k = 0 reduces (6) to alpha - psi, ref. [9]'s case (Remark 1)
+    assert model.orientation_error(1.0, -0.5, 3.0, 0.0) == pytest.approx(1.5)
+
+
+def test_orientation_error_wraps_alpha_minus_psi() -> None:
+    e = model.orientation_error(3.0, -3.0, 0.0, K)  # alpha - psi = 6 -> 6 - 2 pi
+    assert e == pytest.approx(6.0 - 2.0 * math.pi)
+
+
+def test_constraint_functions_hand_values() -> None:
+    assert model.velocity_constraint(math.pi / 2, 0.0) == pytest.approx(0.5)  # eq. (9)
+    assert model.velocity_constraint(math.pi, 0.0) == pytest.approx(0.0)
+    assert model.improved_velocity_constraint(1.0, 1.0) == pytest.approx(0.5)  # eq. (10)
+    assert model.improved_velocity_constraint_min(1.0) == pytest.approx(1.0 / (1.0 + (7 * math.pi / 6) ** 2))
+
+
+def test_lyapunov_hand_value() -> None:
+    assert model.lyapunov(3.0, 4.0) == pytest.approx(12.5)  # eq. (21)
+
+
+def test_conventional_scaling_properties() -> None:
+    T = 20.0
+    assert model.conventional_scaling(0.0, T) == pytest.approx(1.0)  # mu_1(t0, T) = 1
+    assert model.conventional_scaling(10.0, T) == pytest.approx(2.0)
+    t = np.linspace(0.0, 19.99, 200)
+    assert np.all(np.diff(model.conventional_scaling(t, T)) > 0)  # grows toward T
+    assert model.conventional_scaling(T, T, max_gain=1e3) == pytest.approx(1e3)  # guarded, finite
+    assert model.conventional_scaling_power(10.0, T, 1, 1) == pytest.approx(4.0)  # eq. (13), n + m = 2
+
+
+def test_switching_time_matches_eq17_and_rounds_to_T_con_for_the_paper() -> None:
+    d0, e0, T, beta, Kg, p_min = 0.8, 1.0, 20.0, 0.6, 5.0, 0.5
+    expected = T * (1 - math.exp(-((d0**2 + e0**2) ** (1 - beta)) / ((1 - beta) * 2 * Kg * p_min)))
+    assert model.switching_time(d0, e0, T, beta, Kg, p_min) == pytest.approx(expected)
+    paper = model.switching_time(0.8, math.pi, 20.0, 24 / 25, 1.2, model.improved_velocity_constraint_min(1.0))
+    assert paper == 20.0  # the reason for the gain cap
+
+
+def test_fractional_scaling_is_constant_after_switching_time() -> None:
+    T, t_v = 20.0, 12.0
+    t = np.array([0.0, 6.0, 12.0, 15.0, 40.0])
+    mu = model.fractional_scaling(t, T, t_v)
+    assert mu[0] == pytest.approx(1.0 / T)
+    assert mu[1] == pytest.approx(1.0 / 14.0)
+    assert np.allclose(mu[2:], 1.0 / (T - t_v))
+    assert model.fractional_scaling(T, T, T, max_gain=50.0) == pytest.approx(50.0)
+
+
+def test_backstepping_delta_matches_eq19() -> None:
+    x = np.array([-3.0, -0.2, 1e-3, 0.7, 3.5])
+    assert np.allclose(model.backstepping_delta(x), (1 - np.cos(x)) / x, rtol=1e-12)
+    assert model.backstepping_delta(0.0) == 0.0
+
+
+@pytest.mark.parametrize("u, omega", [(0.3, 0.0), (0.3, 0.7), (-0.2, -1.5), (0.0, 2.0)])
+def test_exact_step_matches_solve_ivp(u: float, omega: float) -> None:
+    x0, y0, psi0, dt = 0.4, -0.3, 2.9, 0.37
+
+    def rhs(_t: float, s: np.ndarray) -> list[float]:
+        return [u * math.cos(s[2]), u * math.sin(s[2]), omega]  # eq. (1)
+
+    ref = solve_ivp(rhs, (0.0, dt), [x0, y0, psi0], rtol=1e-12, atol=1e-13).y[:, -1]
+    x, y, psi = model.unicycle_step_exact(x0, y0, psi0, u, omega, dt)
+    assert x == pytest.approx(ref[0], abs=1e-10)
+    assert y == pytest.approx(ref[1], abs=1e-10)
+    assert psi == pytest.approx(model.wrap_angle(ref[2]), abs=1e-10)
+
+
+def test_euler_converges_to_exact_at_first_order_and_rk4_is_accurate() -> None:
+    args = (0.0, 0.0, 0.3, 0.5, 1.2)
+    exact = np.array(model.unicycle_step_exact(*args, 1.0))
+    errors = [
+        np.max(np.abs(np.array(model.integrate_unicycle(*args, 1.0, "euler", n)) - exact)) for n in (10, 20, 40, 80)
+    ]
+    assert errors[-1] < 5e-3
+    ratios = np.array(errors[:-1]) / np.array(errors[1:])
+    assert np.all((ratios > 1.8) & (ratios < 2.2))  # first order
+    rk4 = np.array(model.integrate_unicycle(*args, 1.0, "rk4", 8))
+    assert np.max(np.abs(rk4 - exact)) < 1e-6
+
+
+def test_rates_match_finite_differences_of_the_kinematics() -> None:
+    # eqs. (4), (5), (7) are the time derivatives of (2), (3), (6) along (1)
+    x, y, psi, u, omega, h = -0.7, 0.4, 0.9, 0.35, -0.6, 1e-6
+    alpha, dist = model.azimuth(x, y), model.distance(x, y)
+    x2, y2, psi2 = model.unicycle_step_exact(x, y, psi, u, omega, h)
+    x0, y0, psi0 = model.unicycle_step_exact(x, y, psi, u, omega, -h)
+    fd = lambda f: (f(x2, y2, psi2) - f(x0, y0, psi0)) / (2 * h)  # noqa: E731
+    assert model.distance_rate(u, alpha, psi) == pytest.approx(fd(lambda a, b, c: model.distance(a, b)), rel=1e-6)
+    assert model.azimuth_rate(u, alpha, psi, dist) == pytest.approx(fd(lambda a, b, c: model.azimuth(a, b)), rel=1e-6)
+    e_fd = fd(lambda a, b, c: model.orientation_error(model.azimuth(a, b), c, model.distance(a, b), K))
+    assert model.orientation_error_rate(u, omega, alpha, psi, dist, K) == pytest.approx(e_fd, rel=1e-6)
+
+
+def test_wrap_angle_range() -> None:
+    a = np.linspace(-50, 50, 10001)
+    w = model.wrap_angle(a)
+    assert np.all(np.abs(w) <= math.pi + 1e-12)
+    assert np.allclose(np.sin(w), np.sin(a)) and np.allclose(np.cos(w), np.cos(a))
+
+
+def test_goal_frame_round_trip() -> None:
+    pose = (3.0, -2.0, 2.5)
+    goal = (1.0, 4.0, -1.2)
+    back = model.from_goal_frame(*model.to_goal_frame(*pose, *goal), *goal)
+    assert np.allclose(back, pose)
+
+
+finite = st.floats(-1e8, 1e8, allow_nan=False)
+angle = st.floats(-10.0, 10.0, allow_nan=False)
+
+
+@settings(max_examples=300, deadline=None)
+@given(x=finite, y=finite, psi=angle, u=st.floats(-10, 10), omega=st.floats(-10, 10))
+def test_no_nan_or_inf_anywhere(x: float, y: float, psi: float, u: float, omega: float) -> None:
+    d, alpha = model.distance(x, y), model.azimuth(x, y)
+    values = [
+        d,
+        alpha,
+        model.orientation_error(alpha, psi, d, K),
+        model.distance_rate(u, alpha, psi),
+        model.azimuth_rate(u, alpha, psi, d),
+        model.orientation_error_rate(u, omega, alpha, psi, d, K),
+        model.improved_velocity_constraint(model.orientation_error(alpha, psi, d, K), 1.0),
+        model.velocity_constraint(alpha, psi),
+        model.lyapunov(d, 1.0),
+        *model.unicycle_step_exact(x, y, psi, u, omega, 0.05),
+    ]
+    assert np.all(np.isfinite(values))
+
+
+@pytest.mark.parametrize("alpha_minus_psi", [math.pi, -math.pi])
+def test_edge_states_are_finite(alpha_minus_psi: float) -> None:
+    # d = 0 exactly, alpha - psi = +-pi
+    for d in (0.0, 1e-300, 0.5):
+        e = model.orientation_error(0.0, -alpha_minus_psi, d, K)
+        assert abs(e) <= model.MAX_ORIENTATION_ERROR + 1e-12
+        assert np.isfinite(model.azimuth_rate(1.0, 0.0, -alpha_minus_psi, d))
+        assert np.isfinite(model.orientation_error_rate(1.0, 1.0, 0.0, -alpha_minus_psi, d, K))
