@@ -10,7 +10,7 @@ import argparse
 import json
 import platform
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from typing import Any
 
 
@@ -75,18 +75,148 @@ def cmd_info(args: argparse.Namespace) -> int:
     return 0
 
 
+def format_table(rows: list[dict[str, Any]], columns: list[tuple[str, str, str]]) -> str:
+    """Rows as an aligned text table; ``columns`` are (key, header, format)."""
+    cells = [[header for _, header, _ in columns]]
+    for row in rows:
+        cells.append(
+            [format(row[key], fmt) if isinstance(row[key], float) else str(row[key]) for key, _, fmt in columns]
+        )
+    widths = [max(len(r[i]) for r in cells) for i in range(len(columns))]
+    lines = [
+        "  ".join(c.rjust(w) if i else c.ljust(w) for i, (c, w) in enumerate(zip(r, widths, strict=True)))
+        for r in cells
+    ]
+    lines.insert(1, "-" * len(lines[0]))
+    return "\n".join(lines)
+
+
+EVAL_COLUMNS = [
+    ("scenario", "scenario", ""),
+    ("policy", "policy", ""),
+    ("n", "n", ".0f"),
+    ("success_rate", "success", ".3f"),
+    ("arrival_time_mean", "t_arr mean", ".2f"),
+    ("arrival_time_max", "t_arr max", ".2f"),
+    ("arrival_fraction_max", "t_arr/T max", ".3f"),
+    ("final_distance_max", "d_end max", ".4f"),
+    ("final_heading_error_mean", "|psi_end| mean", ".3f"),
+    ("peak_u_max", "peak u", ".3f"),
+    ("peak_omega_max", "peak w", ".3f"),
+    ("energy_mean", "energy", ".3f"),
+    ("path_length_mean", "path", ".3f"),
+    ("command_rate_rms_mean", "rate rms", ".3f"),
+]
+
+
+def write_results(rows: list[dict[str, Any]], out_dir: str, stem: str) -> list[str]:
+    """Write rows as CSV and JSON into ``out_dir``; returns the paths written."""
+    import csv
+    from pathlib import Path
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    csv_path, json_path = out / f"{stem}.csv", out / f"{stem}.json"
+    with csv_path.open("w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    json_path.write_text(json.dumps(rows, indent=2, default=float) + "\n")
+    return [str(csv_path), str(json_path)]
+
+
+def run_evaluation(
+    policies: dict[str, Any], scenarios: Sequence[str], n: int, seed: int, env_kwargs: dict[str, Any], progress: bool
+) -> list[dict[str, Any]]:
+    """Evaluate policies (controller names or objects with ``predict``) on named scenario sets."""
+    from train.evaluation import evaluate, make_scenario
+
+    rows = []
+    for name in scenarios:
+        scenario = make_scenario(name, n=n, seed=seed, env_kwargs=env_kwargs)
+        for label, result in evaluate(policies, scenario, seed=seed, progress=progress).items():
+            rows.append({"scenario": name, "policy": label, **result.summary()})
+    return rows
+
+
+def cmd_evaluate(args: argparse.Namespace) -> int:
+    """Evaluate controllers (and saved agents) on named scenario sets."""
+    from baselines.controllers import CONTROLLERS
+    from train.evaluation import SCENARIO_SETS
+
+    env_kwargs = parse_env_kwargs(args.env_kwargs)
+    validated_env_params(env_kwargs)
+    names = list(CONTROLLERS) if "all" in args.controllers else args.controllers
+    for name in names:
+        if name not in CONTROLLERS:
+            raise UsageError(f"--controllers {name!r} is invalid: expected 'all' or any of {', '.join(CONTROLLERS)}")
+    for name in args.scenarios:
+        if name not in SCENARIO_SETS:
+            raise UsageError(f"--scenarios {name!r} is invalid: expected any of {', '.join(SCENARIO_SETS)}")
+    if args.n < 1:
+        raise UsageError(f"--n {args.n} is invalid: expected an integer >= 1")
+    policies: dict[str, Any] = {name: name for name in names}
+    policies.update(load_agents(args.agent))
+    rows = run_evaluation(policies, args.scenarios, args.n, args.seed, env_kwargs, progress=not args.no_progress)
+    print(format_table(rows, EVAL_COLUMNS))
+    for path in write_results(rows, args.out, "evaluation"):
+        print(f"wrote {path}")
+    return 0
+
+
+def load_agents(paths: Sequence[str] | None) -> dict[str, Any]:
+    """Saved agents by label (the file's stem); a missing or unreadable file is a UsageError."""
+    if not paths:
+        return {}
+    from train.agents import AgentLoadError, load_agent
+
+    agents = {}
+    for path in paths:
+        try:
+            label, agent = load_agent(path)
+        except AgentLoadError as error:
+            raise UsageError(str(error)) from error
+        agents[label] = agent
+    return agents
+
+
+def add_evaluate_parser(sub: Any) -> None:
+    """The ``evaluate`` subcommand."""
+    from baselines.controllers import CONTROLLERS
+    from train.evaluation import SCENARIO_SETS
+
+    p = sub.add_parser("evaluate", help="evaluate controllers and agents on named scenario sets")
+    p.add_argument(
+        "--controllers",
+        nargs="+",
+        default=["all"],
+        metavar="NAME",
+        help=f"controllers to run: 'all' or any of {', '.join(CONTROLLERS)} (default: all)",
+    )
+    p.add_argument("--agent", action="append", metavar="PATH", help="a saved agent (.zip) to evaluate too; repeatable")
+    p.add_argument(
+        "--scenarios",
+        nargs="+",
+        default=list(SCENARIO_SETS),
+        metavar="SET",
+        help=f"scenario sets: any of {', '.join(SCENARIO_SETS)} (default: all)",
+    )
+    p.add_argument("--n", type=int, default=1000, help="number of random start poses for 'random' (default: 1000)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the random scenario set (default: 0)")
+    p.add_argument("--env-kwargs", nargs="*", metavar="KEY=VALUE", help="env keywords, e.g. T_con=25 dt=0.02")
+    p.add_argument("--out", default="results/evaluate", help="directory for evaluation.csv and .json")
+    p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    p.set_defaults(func=cmd_evaluate)  # fmt: skip
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``dwr-gym``."""
     parser = argparse.ArgumentParser(prog="dwr-gym", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     info = sub.add_parser("info", help="versions, the registered env and its defaults")
     info.set_defaults(func=cmd_info)
-    for register in _REGISTRARS:
-        register(sub)
+    add_evaluate_parser(sub)
     return parser
-
-
-_REGISTRARS: list[Callable[[Any], None]] = []
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -1,0 +1,260 @@
+"""Scenario sets, batched rollouts and metrics: the honest comparison of controllers and agents.
+
+A rollout steps all N scenarios of a set as one batch through :func:`dwr_gym.core.transition`,
+the same function the environments use, with the policy acting on the env's observations.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import numpy as np
+from numpy.typing import NDArray
+
+from baselines.controllers import Controller, make_controller
+from baselines.expert import ExpertPolicy
+from dwr_gym import core
+from dwr_gym.params import EnvParams
+
+SCENARIO_SETS: tuple[str, ...] = ("paper-fig5", "paper-fig7", "random")
+FIG5_HEADINGS = (0.0, -math.pi / 4, -math.pi / 2, -3 * math.pi / 4, math.pi, 3 * math.pi / 4, math.pi / 2, math.pi / 4)
+
+
+class Policy(Protocol):
+    """Anything with stable-baselines3's ``predict``."""
+
+    def predict(
+        self, observation: Any, state: Any = None, episode_start: Any = None, deterministic: bool = True
+    ) -> tuple[Any, Any]: ...
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A named set of N start and goal poses (world frame) with the env keywords they are run with."""
+
+    name: str
+    starts: NDArray[np.float64]  # (N, 3)
+    goals: NDArray[np.float64]  # (N, 3)
+    env_kwargs: dict[str, Any] = field(default_factory=dict)
+    controller_kwargs: dict[str, dict[str, Any]] = field(default_factory=dict)
+    """Per-controller keyword overrides, e.g. the paper's gains for its figure."""
+    labels: tuple[str, ...] = ()
+
+    @property
+    def size(self) -> int:
+        return int(self.starts.shape[0])
+
+
+def make_scenario(name: str, n: int = 100, seed: int = 0, env_kwargs: dict[str, Any] | None = None) -> Scenario:
+    """A named scenario set: 'paper-fig5', 'paper-fig7' or 'random' (``n`` seeded random starts)."""
+    env_kwargs = dict(env_kwargs or {})
+    if name == "paper-fig5":
+        starts = np.array([(0.0, 0.0, h) for h in FIG5_HEADINGS])
+        goals = np.tile([0.8, 0.0, 0.0], (len(FIG5_HEADINGS), 1))
+        labels = tuple(f"psi0={math.degrees(h):+.0f}deg" for h in FIG5_HEADINGS)
+        return Scenario(name, starts, goals, {"T_con": 20.0, **env_kwargs}, {}, labels)
+    if name == "paper-fig7":
+        starts = np.array([[-0.4, 0.0, math.radians(-178.0)]])
+        goals = np.array([[0.8, 0.0, 0.0]])
+        gains = {"ptc": {"K1": 2.5, "K2": 40.0, "K": 1.2}, "conventional-ptc": {"K1": 2.5, "K2": 40.0}}
+        return Scenario(name, starts, goals, {"T_con": 70.0, **env_kwargs}, gains, ("psi0=-178deg",))
+    if name == "random":
+        if isinstance(n, bool) or not isinstance(n, int) or n < 1:
+            raise ValueError(f"n={n!r} is invalid: expected an integer >= 1")
+        params = EnvParams.from_kwargs(**env_kwargs)
+        rng = np.random.default_rng(seed)
+        local = np.array([core.sample_start(rng, params) for _ in range(n)])
+        return Scenario(name, local, np.zeros((n, 3)), env_kwargs, {}, ())
+    raise ValueError(f"scenario={name!r} is invalid: expected one of {', '.join(SCENARIO_SETS)}")
+
+
+def controller_for(name: str, scenario: Scenario, params: EnvParams, **overrides: Any) -> Controller:
+    """Controller ``name`` configured for a scenario: its T_con (and dt for the integral law), its presets."""
+    kwargs: dict[str, Any] = {}
+    if name in ("ptc", "conventional-ptc"):
+        kwargs["T_con"] = params.T_con
+    if name == "fabregas":
+        kwargs["dt"] = params.dt
+    kwargs.update(scenario.controller_kwargs.get(name, {}))
+    kwargs.update(overrides)
+    return make_controller(name, **kwargs)
+
+
+@dataclass
+class RolloutResult:
+    """Per-robot outcomes of a batched rollout (arrays of shape (N,)) and, if recorded, trajectories."""
+
+    params: EnvParams
+    success: NDArray[np.bool_]  # arrived (within the tolerances) at or before T_con
+    arrived: NDArray[np.bool_]  # arrived at any time before the horizon
+    arrival_time: NDArray[np.float64]  # [s], NaN where the robot did not arrive
+    final_distance: NDArray[np.float64]
+    final_heading_error: NDArray[np.float64]  # |psi - psi_d| at the end [rad]
+    peak_linear_velocity: NDArray[np.float64]
+    peak_angular_velocity: NDArray[np.float64]
+    energy: NDArray[np.float64]  # integral of u^2 + omega^2
+    path_length: NDArray[np.float64]
+    command_rate_rms: NDArray[np.float64]  # RMS of the change of (u, omega) per second: lower is smoother
+    episode_return: NDArray[np.float64]
+    left_arena: NDArray[np.bool_]
+    trajectory: dict[str, NDArray[np.float64]] | None = None
+    """With ``record=True``: arrays (steps + 1, N) of time, x, y, psi, distance, orientation_error,
+    lyapunov, and (steps, N) of linear_velocity, angular_velocity."""
+
+    def summary(self) -> dict[str, float]:
+        """Aggregate metrics over the N robots (means and worst cases)."""
+        T = self.params.T_con
+        arrival = self.arrival_time[np.isfinite(self.arrival_time)]
+
+        def stat(values: NDArray[np.float64], fn: Callable[..., Any]) -> float:
+            return float(fn(values)) if values.size else float("nan")
+
+        return {
+            "n": float(self.success.size),
+            "success_rate": float(np.mean(self.success)),
+            "arrival_rate": float(np.mean(self.arrived)),
+            "arrival_time_mean": stat(arrival, np.mean),
+            "arrival_time_max": stat(arrival, np.max),
+            "arrival_fraction_mean": stat(arrival / T, np.mean),
+            "arrival_fraction_max": stat(arrival / T, np.max),
+            "final_distance_mean": float(np.mean(self.final_distance)),
+            "final_distance_max": float(np.max(self.final_distance)),
+            "final_heading_error_mean": float(np.mean(self.final_heading_error)),
+            "final_heading_error_max": float(np.max(self.final_heading_error)),
+            "peak_u_max": float(np.max(self.peak_linear_velocity)),
+            "peak_u_mean": float(np.mean(self.peak_linear_velocity)),
+            "peak_omega_max": float(np.max(self.peak_angular_velocity)),
+            "energy_mean": float(np.mean(self.energy)),
+            "path_length_mean": float(np.mean(self.path_length)),
+            "command_rate_rms_mean": float(np.mean(self.command_rate_rms)),
+            "return_mean": float(np.mean(self.episode_return)),
+        }
+
+
+def rollout(
+    policy: Policy,
+    params: EnvParams,
+    starts: NDArray[np.float64],
+    goals: NDArray[np.float64],
+    *,
+    record: bool = False,
+    seed: int = 0,
+    progress: bool = False,
+    description: str = "rollout",
+) -> RolloutResult:
+    """Run ``policy`` from N start poses to N goals (world frame, (N, 3)) until every episode ends.
+
+    Robots that have terminated are held still with zero actions and no longer counted.
+    """
+    starts, goals = np.asarray(starts, dtype=np.float64), np.asarray(goals, dtype=np.float64)
+    if starts.ndim != 2 or starts.shape[1] != 3 or goals.shape != starts.shape:
+        raise ValueError(f"starts {starts.shape} and goals {goals.shape} are invalid: expected two (N, 3) arrays")
+    n = starts.shape[0]
+    space = core.observation_space(params)
+    state = core.TaskState.zeros(n)
+    core.reset_robots(state, slice(None), tuple(starts.T), tuple(goals.T), params)  # type: ignore[arg-type]
+    rng = np.random.default_rng(seed)
+
+    def noise(size: int, sigma: float) -> NDArray[np.float64] | None:
+        return rng.standard_normal((n, size)) if sigma > 0 else None
+
+    coords = state.coordinates(params.k)
+    obs = core.observe(state, coords, params, space, noise(3, params.observation_noise))
+    active = np.ones(n, dtype=bool)
+    arrival_time = np.full(n, np.nan)
+    success = np.zeros(n, dtype=bool)
+    left_arena = np.zeros(n, dtype=bool)
+    peak_u, peak_w, path, rate_sq, ret = (np.zeros(n) for _ in range(5))
+    final_distance, final_heading = coords.distance.copy(), np.abs(coords.psi)
+    final_energy = np.zeros(n)
+    steps_taken = np.zeros(n)
+    prev_u, prev_w = np.zeros(n), np.zeros(n)
+    trajectory: dict[str, list[NDArray[np.float64]]] = {}
+    if record:
+        x, y, psi = state.world_pose()
+        trajectory = {"time": [np.zeros(n)], "x": [x], "y": [y], "psi": [psi], "distance": [coords.distance],
+                      "orientation_error": [coords.orientation_error], "lyapunov": [state.lyapunov.copy()],
+                      "linear_velocity": [], "angular_velocity": []}  # fmt: skip
+
+    steps = range(params.max_episode_steps)
+    if progress:
+        from tqdm.auto import tqdm
+
+        steps = tqdm(steps, desc=description, unit="step", leave=False)
+    episode_start = np.ones(n, dtype=bool)
+    for _ in steps:
+        actions, _ = policy.predict(obs, episode_start=episode_start, deterministic=True)
+        episode_start = np.zeros(n, dtype=bool)
+        actions = np.where(active[:, None], np.asarray(actions, dtype=np.float64).reshape(n, 2), 0.0)
+        action_noise = noise(2, params.actuation_noise)
+        result = core.transition(state, actions, params, space,
+                                 None if action_noise is None else action_noise * active[:, None],
+                                 noise(3, params.observation_noise))  # fmt: skip
+        obs = result.observation
+        u, w = result.linear_velocity, result.angular_velocity
+        live = active
+        peak_u = np.where(live, np.maximum(peak_u, np.abs(u)), peak_u)
+        peak_w = np.where(live, np.maximum(peak_w, np.abs(w)), peak_w)
+        path += np.where(live, np.abs(u) * params.dt, 0.0)
+        rate_sq += np.where(live, ((u - prev_u) ** 2 + (w - prev_w) ** 2) / params.dt**2, 0.0)
+        steps_taken += live
+        prev_u, prev_w = u, w
+        ret += np.where(live, result.reward, 0.0)
+        final_distance = np.where(live, result.coords.distance, final_distance)
+        final_heading = np.where(live, np.abs(result.coords.psi), final_heading)
+        final_energy = np.where(live, state.energy, final_energy)
+        ended = live & (result.terminated | result.truncated)
+        arrived_now = ended & result.is_success
+        time = state.step_count * params.dt
+        arrival_time = np.where(arrived_now, time, arrival_time)
+        success |= arrived_now & (time <= params.T_con + 1e-9)
+        left_arena |= ended & result.terminated & ~result.is_success
+        if record:
+            x, y, psi = state.world_pose()
+            for key, value in (("time", time), ("x", x), ("y", y), ("psi", psi), ("distance", result.coords.distance),
+                               ("orientation_error", result.coords.orientation_error), ("lyapunov", state.lyapunov),
+                               ("linear_velocity", u), ("angular_velocity", w)):  # fmt: skip
+                trajectory[key].append(np.array(value, dtype=np.float64))
+        active = active & ~ended
+        if not active.any():
+            break
+    return RolloutResult(
+        params=params,
+        success=success,
+        arrived=np.isfinite(arrival_time),
+        arrival_time=arrival_time,
+        final_distance=final_distance,
+        final_heading_error=final_heading,
+        peak_linear_velocity=peak_u,
+        peak_angular_velocity=peak_w,
+        energy=final_energy,
+        path_length=path,
+        command_rate_rms=np.sqrt(rate_sq / np.maximum(steps_taken, 1)),
+        episode_return=ret,
+        left_arena=left_arena,
+        trajectory={k: np.array(v) for k, v in trajectory.items()} if record else None,
+    )
+
+
+def evaluate(
+    policies: dict[str, Policy | str],
+    scenario: Scenario,
+    *,
+    record: bool = False,
+    seed: int = 0,
+    progress: bool = False,
+) -> dict[str, RolloutResult]:
+    """Run each policy on the scenario; a string value names a controller of :mod:`baselines`."""
+    params = EnvParams.from_kwargs(**scenario.env_kwargs)
+    results = {}
+    for label, policy in policies.items():
+        if isinstance(policy, str):
+            policy = ExpertPolicy(controller_for(policy, scenario, params), params.u_max, params.omega_max)
+        results[label] = rollout(
+            policy, params, scenario.starts, scenario.goals, record=record, seed=seed, progress=progress,
+            description=f"{scenario.name}: {label}",
+        )  # fmt: skip
+    return results
