@@ -209,6 +209,33 @@ def add_evaluate_parser(sub: Any) -> None:
     p.set_defaults(func=cmd_evaluate)  # fmt: skip
 
 
+def cmd_reproduce(args: argparse.Namespace) -> int:
+    """Regenerate the paper's figures and the report of its claims."""
+    from train.reproduce import reproduce
+
+    if not 0.0 < args.dt <= 0.1:
+        raise UsageError(f"--dt {args.dt} is invalid: expected a control period in (0, 0.1] s")
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError as error:
+        raise UsageError('matplotlib is not installed: pip install "dwr-gym[plots]"') from error
+    claims = reproduce(args.out, dt=args.dt, gif=not args.no_gif)
+    width = max(len(c.verdict) for c in claims)
+    for claim in claims:
+        print(f"[{claim.verdict:<{width}}] {claim.claim}\n    {claim.measured}")
+    print(f"wrote figures and report.md to {args.out}")
+    return 0
+
+
+def add_reproduce_parser(sub: Any) -> None:
+    """The ``reproduce`` subcommand."""
+    p = sub.add_parser("reproduce", help="regenerate the paper's Figures 5-9 and a report of its claims")
+    p.add_argument("--out", default="results/reproduce", help="output directory (default: results/reproduce)")
+    p.add_argument("--dt", type=float, default=0.01, help="control period of the simulation [s] (default: 0.01)")
+    p.add_argument("--no-gif", action="store_true", help="skip the animated GIF")
+    p.set_defaults(func=cmd_reproduce)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``dwr-gym``."""
     parser = argparse.ArgumentParser(prog="dwr-gym", description=__doc__.splitlines()[0])
@@ -216,6 +243,7 @@ def build_parser() -> argparse.ArgumentParser:
     info = sub.add_parser("info", help="versions, the registered env and its defaults")
     info.set_defaults(func=cmd_info)
     add_evaluate_parser(sub)
+    add_reproduce_parser(sub)
     return parser
 
 
