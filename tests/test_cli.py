@@ -1,0 +1,68 @@
+"""The dwr-gym command line, run in a subprocess exactly as a user runs it."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+
+def dwr_gym(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
+    env = {**os.environ, "SDL_VIDEODRIVER": "dummy", "MPLBACKEND": "Agg"}
+    return subprocess.run([sys.executable, "-m", "train.cli", *args], capture_output=True, text=True, cwd=cwd,
+                          env=env, timeout=600)  # fmt: skip
+
+
+def test_info_prints_versions_registration_and_defaults() -> None:
+    result = dwr_gym("info")
+    assert result.returncode == 0, result.stderr
+    for text in ("dwr-gym", "gymnasium", "DWRPointStabilization-v0", "T_con = 20.0", "max_episode_steps = 600"):
+        assert text in result.stdout
+
+
+def test_evaluate_end_to_end_writes_table_csv_and_json(tmp_path: Path) -> None:
+    result = dwr_gym("evaluate", "--controllers", "ptc", "astolfi", "--scenarios", "paper-fig5", "random",
+                     "--n", "20", "--out", str(tmp_path), "--no-progress")  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    assert "paper-fig5" in result.stdout and "astolfi" in result.stdout
+    rows = json.loads((tmp_path / "evaluation.json").read_text())
+    assert {(r["scenario"], r["policy"]) for r in rows} == {
+        ("paper-fig5", "ptc"), ("paper-fig5", "astolfi"), ("random", "ptc"), ("random", "astolfi")
+    }  # fmt: skip
+    ptc_random = next(r for r in rows if r["scenario"] == "random" and r["policy"] == "ptc")
+    assert ptc_random["n"] == 20 and ptc_random["success_rate"] == 1.0
+    assert (tmp_path / "evaluation.csv").read_text().startswith("scenario,policy,n,success_rate")
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["evaluate", "--controllers", "pid"], "--controllers 'pid' is invalid"),
+        (["evaluate", "--scenarios", "paper-fig99"], "--scenarios 'paper-fig99' is invalid"),
+        (["evaluate", "--n", "0"], "--n 0 is invalid"),
+        (["evaluate", "--env-kwargs", "T_con=-3"], "T_con=-3"),
+        (["evaluate", "--env-kwargs", "T_conn=3"], "unknown parameter"),
+        (["evaluate", "--env-kwargs", "T_con"], "expected KEY=VALUE"),
+        (["evaluate", "--agent", "no/such/agent.zip"], "no/such/agent.zip"),
+        (["reproduce", "--dt", "0"], "--dt 0.0 is invalid"),
+    ],
+)
+def test_bad_input_is_one_line_and_exit_code_2(args: list[str], message: str) -> None:
+    result = dwr_gym(*args)
+    assert result.returncode == 2
+    assert message in result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1
+
+
+def test_reproduce_end_to_end(tmp_path: Path) -> None:
+    result = dwr_gym("reproduce", "--out", str(tmp_path), "--dt", "0.05")
+    assert result.returncode == 0, result.stderr
+    for name in ("figure5.png", "figure6.png", "figure7.png", "figure8.png", "figure9.png", "figure5.gif"):
+        assert (tmp_path / name).stat().st_size > 10_000
+    report = (tmp_path / "report.md").read_text()
+    assert report.count("| **holds** |") + report.count("| **does not hold** |") == 8
+    assert "[holds" in result.stdout

@@ -1,0 +1,139 @@
+"""The native vector env against N single envs, and the stable-baselines3 adapter."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.vector import AutoresetMode, SyncVectorEnv
+
+import dwr_gym  # noqa: F401
+from dwr_gym.vector_env import DWRPointStabilizationVectorEnv
+
+ENV_ID = "DWRPointStabilization-v0"
+# Short episodes with many arrivals, so autoreset is exercised by both termination and truncation.
+KWARGS: dict[str, Any] = {"T_con": 2.0, "dt": 0.1, "goal_tolerance": 0.15, "start_distance": (0.2, 0.5)}
+
+
+def test_make_vec_returns_the_native_vector_env() -> None:
+    envs = gym.make_vec(ENV_ID, num_envs=8, T_con=25.0)
+    assert isinstance(envs, DWRPointStabilizationVectorEnv)
+    assert envs.params.T_con == 25.0
+    assert envs.metadata["autoreset_mode"] == AutoresetMode.SAME_STEP
+    assert envs.observation_space.shape == (8, 10) and envs.action_space.shape == (8, 2)
+
+
+@pytest.mark.parametrize("num_envs", [1, 5])
+def test_vector_env_matches_single_envs_step_by_step(num_envs: int) -> None:
+    """Gymnasium's test_cartpole_vector_equiv, for our env: same seeds, same actions, same everything."""
+    vec = gym.make_vec(ENV_ID, num_envs=num_envs, **KWARGS)
+    ref = SyncVectorEnv([lambda: gym.make(ENV_ID, **KWARGS) for _ in range(num_envs)],
+                        autoreset_mode=AutoresetMode.SAME_STEP)  # fmt: skip
+    obs, info = vec.reset(seed=123)
+    ref_obs, ref_info = ref.reset(seed=123)
+    np.testing.assert_array_equal(obs, ref_obs)
+    np.testing.assert_allclose(info["distance"], ref_info["distance"])
+    vec.action_space.seed(0)
+    dones = 0
+    for _ in range(200):
+        actions = vec.action_space.sample()
+        obs, rewards, terminated, truncated, info = vec.step(actions)
+        ref_obs, ref_rewards, ref_terminated, ref_truncated, ref_info = ref.step(actions)
+        np.testing.assert_allclose(obs, ref_obs, rtol=1e-6, atol=1e-6)
+        np.testing.assert_allclose(rewards, ref_rewards, rtol=1e-9, atol=1e-12)
+        np.testing.assert_array_equal(terminated, ref_terminated)
+        np.testing.assert_array_equal(truncated, ref_truncated)
+        for key in ("distance", "orientation_error", "heading_error", "time", "is_success", "energy", "pose"):
+            np.testing.assert_allclose(info[key], ref_info[key], rtol=1e-9, atol=1e-12, err_msg=key)
+        for term in ("progress", "time", "effort", "arrival", "late", "arena"):
+            np.testing.assert_allclose(info["reward_terms"][term], ref_info["reward_terms"][term], atol=1e-12)
+        done = terminated | truncated
+        if done.any():
+            dones += int(done.sum())
+            for i in np.flatnonzero(done):
+                np.testing.assert_allclose(info["final_obs"][i], ref_info["final_obs"][i], rtol=1e-6, atol=1e-6)
+                assert info["final_info"]["is_success"][i] == ref_info["final_info"]["is_success"][i]
+                assert info["final_info"]["distance"][i] == pytest.approx(ref_info["final_info"]["distance"][i])
+    assert dones > 2 * num_envs  # autoreset was exercised
+    assert terminated.dtype == bool
+
+
+def test_seeding_is_reproducible_and_per_env() -> None:
+    a = gym.make_vec(ENV_ID, num_envs=4)
+    b = gym.make_vec(ENV_ID, num_envs=4)
+    obs_a, _ = a.reset(seed=9)
+    obs_b, _ = b.reset(seed=9)
+    np.testing.assert_array_equal(obs_a, obs_b)
+    assert len({tuple(row) for row in obs_a}) == 4
+    obs_c, _ = b.reset(seed=[9, 10, 11, 12])
+    np.testing.assert_array_equal(obs_a, obs_c)
+
+
+def test_per_env_start_and_goal_options_and_reset_mask() -> None:
+    envs = gym.make_vec(ENV_ID, num_envs=3)
+    starts = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, np.pi / 2], [1.0, 1.0, 0.0]])
+    goals = np.array([[0.8, 0.0, 0.0], [0.0, 0.5, 0.0], [1.0, 2.0, 0.0]])
+    obs, info = envs.reset(options={"start": starts, "goal": goals})
+    np.testing.assert_allclose(info["distance"], [0.8, 0.5, 1.0])
+    np.testing.assert_allclose(info["pose"], starts)
+    envs.step(np.ones((3, 2), dtype=np.float32))
+    obs2, info2 = envs.reset(options={"start": (0.0, 0.0, 0.0), "reset_mask": np.array([True, False, False])})
+    assert info2["distance"][0] == pytest.approx(0.0)
+    assert info2["time"][1] > 0 and info2["time"][0] == 0
+    with pytest.raises(ValueError, match="start"):
+        envs.reset(options={"start": np.zeros((2, 3))})
+    with pytest.raises(ValueError, match="unknown reset option"):
+        envs.reset(options={"stat": np.zeros(3)})
+    with pytest.raises(ValueError, match="actions of shape"):
+        envs.step(np.zeros((2, 2), dtype=np.float32))
+    with pytest.raises(ValueError, match="num_envs"):
+        DWRPointStabilizationVectorEnv(num_envs=0)
+
+
+def test_vector_env_truncates_itself_at_the_horizon() -> None:
+    envs = gym.make_vec(ENV_ID, num_envs=2, T_con=1.0, dt=0.1, horizon_factor=2.0)
+    envs.reset(seed=0)
+    for step in range(1, 21):
+        _, _, terminated, truncated, info = envs.step(np.zeros((2, 2), dtype=np.float32))
+        assert not terminated.any()
+        assert truncated.all() == (step == 20)
+    assert np.all(info["time"] == 0.0)  # already the new episodes
+
+
+def test_vector_env_renders_sub_env_zero() -> None:
+    envs = gym.make_vec(ENV_ID, num_envs=4, render_mode="rgb_array")
+    envs.reset(seed=0)
+    envs.step(np.ones((4, 2), dtype=np.float32))
+    frame = envs.render()
+    assert frame is not None and frame.shape == (480, 480, 3) and frame.dtype == np.uint8
+
+
+def test_sb3_adapter_conventions_and_ppo_learns_on_the_native_batch() -> None:
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.vec_env import VecMonitor
+
+    from dwr_gym.sb3 import make_sb3_vec_env
+
+    venv = make_sb3_vec_env(num_envs=4, seed=0, **KWARGS)
+    obs = venv.reset()
+    assert obs.shape == (4, 10)
+    venv.action_space.seed(0)
+    seen_done = False
+    for _ in range(60):
+        obs, rewards, dones, infos = venv.step(np.stack([venv.action_space.sample() for _ in range(4)]))
+        assert isinstance(infos, list) and len(infos) == 4 and rewards.dtype == np.float32
+        for i in np.flatnonzero(dones):
+            seen_done = True
+            assert infos[i]["terminal_observation"].shape == (10,)
+            assert isinstance(infos[i]["TimeLimit.truncated"], bool)
+            assert not np.array_equal(infos[i]["terminal_observation"], obs[i])
+    assert seen_done
+    assert venv.get_attr("params")[0].T_con == 2.0
+
+    model = PPO("MlpPolicy", VecMonitor(make_sb3_vec_env(num_envs=8, seed=1)), n_steps=32, batch_size=64, seed=0)
+    before = [p.detach().clone() for p in model.policy.parameters()]
+    model.learn(total_timesteps=512)
+    assert model.num_timesteps >= 512
+    assert any(not np.allclose(a.numpy(), b.detach().numpy()) for a, b in zip(before, model.policy.parameters(), strict=True))
