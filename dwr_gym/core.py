@@ -85,6 +85,10 @@ class TaskState:
         state.goal_cos[:] = 1.0
         return state
 
+    def subset(self, index: NDArray[np.intp]) -> TaskState:
+        """A copy of the robots at ``index``."""
+        return TaskState(**{name: getattr(self, name)[index] for name in self.__dataclass_fields__})
+
     def coordinates(self, k: float) -> ErrorCoordinates:
         """Error coordinates of the current poses."""
         return error_coordinates(self.x, self.y, self.psi, k)

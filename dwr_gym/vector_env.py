@@ -139,15 +139,18 @@ class DWRPointStabilizationVectorEnv(VectorEnv):
             infos["final_obs"], infos["_final_obs"] = obs.copy(), done
             infos["final_info"] = {**infos, **{f"_{key}": done for key in (*core.INFO_KEYS, "reward_terms")}}
             infos["_final_info"] = done
-            self._reset_envs(np.flatnonzero(done))
-            coords = self._state.coordinates(self.params.k)
-            reset_obs = core.observe(self._state, coords, self.params, self.single_observation_space)
-            obs = np.where(done[:, None], reset_obs, obs)
-            reset_infos = core.infos(self._state, coords, self.params)
-            for key in core.INFO_KEYS:
-                infos[key] = np.where(done if infos[key].ndim == 1 else done[:, None], reset_infos[key], infos[key])
-            infos["reward_terms"] = {k: np.where(done, 0.0, v) if not k.startswith("_") else v
-                                     for k, v in infos["reward_terms"].items()}  # fmt: skip
+            index = np.flatnonzero(done)
+            self._reset_envs(index)
+            fresh = self._state.subset(index)
+            coords = fresh.coordinates(self.params.k)
+            obs[index] = core.observe(fresh, coords, self.params, self.single_observation_space)
+            for key, value in core.infos(fresh, coords, self.params).items():
+                infos[key] = {k: v.copy() for k, v in infos[key].items()} if key == "reward_terms" else infos[key].copy()
+                if key == "reward_terms":
+                    for term in core.REWARD_TERMS:
+                        infos[key][term][index] = 0.0
+                else:
+                    infos[key][index] = value
         if self.render_mode is not None:
             if done[0]:
                 self._trail = []

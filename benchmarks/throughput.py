@@ -1,0 +1,105 @@
+"""Throughput of DWRPointStabilization-v0 against Gymnasium's CartPole, measured in the same run.
+
+    python benchmarks/throughput.py            # everything (about 2 minutes on 2 cores)
+    python benchmarks/throughput.py --quick    # fewer repeats and sizes
+
+Prints, as medians of several repeats: the cost of one step of our single env and of CartPole-v1
+(both through gym.make, and both unwrapped); env-steps per second of our vector env, of Gymnasium's
+SyncVectorEnv over our single env, and of Gymnasium's CartPoleVectorEnv at N = 1, 64, 1024, 4096,
+16384; the ratios; and the time to evaluate the PTC law on the `random` set of 10,000 start poses.
+Timings on shared machines are noisy: compare ratios measured in one run, not absolute numbers.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+from collections.abc import Callable
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+import dwr_gym  # noqa: F401
+
+SIZES = (1, 64, 1024, 4096, 16384)
+
+
+def median_seconds(fn: Callable[[], Any], number: int, repeats: int) -> float:
+    """Median over ``repeats`` of the time per call of ``fn`` (called ``number`` times per repeat)."""
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        for _ in range(number):
+            fn()
+        times.append((time.perf_counter() - start) / number)
+    return statistics.median(times)
+
+
+def single_step_cost(env_id: str, wrapped: bool, repeats: int) -> float:
+    env = gym.make(env_id)
+    target = env if wrapped else env.unwrapped
+    env.reset(seed=0)
+    action = env.action_space.sample()
+
+    def step() -> None:
+        _, _, terminated, truncated, _ = target.step(action)
+        if terminated or truncated:
+            target.reset()
+
+    step()
+    return median_seconds(step, 2000, repeats)
+
+
+def vector_rate(envs: Any, n: int, repeats: int, steps: int) -> float:
+    envs.reset(seed=0)
+    rng = np.random.default_rng(0)
+    sample = envs.action_space.sample()
+    actions = rng.uniform(-1, 1, size=np.shape(sample)).astype(np.float32) if sample.dtype.kind == "f" else sample
+    envs.step(actions)
+    return n / median_seconds(lambda: envs.step(actions), steps, repeats)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="fewer repeats and sizes")
+    args = parser.parse_args()
+    repeats = 3 if args.quick else 7
+    sizes = (1, 1024, 4096) if args.quick else SIZES
+
+    print("== one step of a single env (median of", repeats, "repeats) ==")
+    for wrapped in (True, False):
+        ours = single_step_cost("DWRPointStabilization-v0", wrapped, repeats)
+        cart = single_step_cost("CartPole-v1", wrapped, repeats)
+        label = "gym.make" if wrapped else "unwrapped"
+        print(f"{label:>10}: ours {ours * 1e6:7.1f} us, CartPole-v1 {cart * 1e6:7.1f} us, ratio {ours / cart:5.2f}x")
+
+    print("\n== vector envs: env-steps per second (median) ==")
+    print(f"{'N':>6} {'ours (native)':>14} {'Sync(ours)':>12} {'CartPoleVec':>12} {'ours/CartPole':>14} {'ours/Sync':>10}")
+    for n in sizes:
+        steps = max(10, min(300, 400_000 // n))
+        ours = vector_rate(gym.make_vec("DWRPointStabilization-v0", num_envs=n), n, repeats, steps)
+        sync_steps = max(3, min(100, 20_000 // n))
+        sync = vector_rate(
+            gym.make_vec("DWRPointStabilization-v0", num_envs=n, vectorization_mode="sync"), n, 3, sync_steps
+        )
+        cart = vector_rate(gym.make_vec("CartPole-v1", num_envs=n, vectorization_mode="vector_entry_point"), n,
+                           repeats, steps)  # fmt: skip
+        print(f"{n:>6} {ours / 1e6:>12.2f} M {sync / 1e6:>10.3f} M {cart / 1e6:>10.2f} M {ours / cart:>14.2f} "
+              f"{ours / sync:>10.1f}")  # fmt: skip
+
+    print("\n== PTC law on the `random` scenario set (10,000 start poses, default T_con and dt) ==")
+    from train.evaluation import evaluate, make_scenario
+
+    scenario = make_scenario("random", n=10_000, seed=0)
+    times = []
+    for _ in range(3):
+        start = time.perf_counter()
+        result = evaluate({"ptc": "ptc"}, scenario)["ptc"]
+        times.append(time.perf_counter() - start)
+    print(f"median {statistics.median(times):.2f} s, success rate {result.success.mean():.4f}")
+
+
+if __name__ == "__main__":
+    main()
