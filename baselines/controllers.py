@@ -30,6 +30,7 @@ class ControllerInput(NamedTuple):
     time: FloatArray  # t since the episode start [s]
     initial_distance: FloatArray  # d_0 [m]
     initial_orientation_error: FloatArray  # e_psi0 [rad]
+    prescribed_time: FloatArray | None = None  # T_con [s] if known from the observation, else the law's own
 
     @classmethod
     def from_pose(
@@ -83,6 +84,11 @@ class Controller:
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.params})"
+
+
+def prescribed_time(inputs: ControllerInput, own: float) -> FloatArray | float:
+    """T_con from the input when the caller observed it (an expert acting on the env), else the law's own."""
+    return own if inputs.prescribed_time is None else inputs.prescribed_time
 
 
 def signed_power(x: ArrayLike, exponent: float) -> FloatArray:
@@ -172,10 +178,11 @@ class PTCController(Controller):
     def scaling(self, inputs: ControllerInput) -> FloatArray:
         """mu*(t, T_con) of eq. (17) with t_v from d_0 and e_psi0, capped at ``max_gain``."""
         p = self.params
+        T_con = prescribed_time(inputs, p.T_con)
         t_v = model.switching_time(
-            inputs.initial_distance, inputs.initial_orientation_error, p.T_con, p.beta, p.K, p.p_min
+            inputs.initial_distance, inputs.initial_orientation_error, T_con, p.beta, p.K, p.p_min
         )
-        return model.fractional_scaling(inputs.time, p.T_con, t_v, p.max_gain)
+        return model.fractional_scaling(inputs.time, T_con, t_v, p.max_gain)  # type: ignore[arg-type]
 
     def compute(self, inputs: ControllerInput) -> tuple[FloatArray, FloatArray]:
         p = self.params
@@ -229,8 +236,9 @@ class ConventionalPTCController(Controller):
     def scaling(self, inputs: ControllerInput) -> FloatArray:
         """mu(t, T_con) / T_con, eqs. (12)-(13): equal to 1 / T_con at t = 0 and unbounded toward T_con."""
         p = self.params
-        mu = model.conventional_scaling_power(inputs.time, p.T_con, p.power, 0, max_gain=p.max_gain * p.T_con)
-        return np.minimum(mu / p.T_con, p.max_gain)
+        T_con = prescribed_time(inputs, p.T_con)
+        mu = model.conventional_scaling_power(inputs.time, T_con, p.power, 0, max_gain=1e12)  # type: ignore[arg-type]
+        return np.minimum(mu / T_con, p.max_gain)
 
     def compute(self, inputs: ControllerInput) -> tuple[FloatArray, FloatArray]:
         p = self.params

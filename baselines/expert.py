@@ -13,7 +13,10 @@ from dwr_gym.params import EnvParams, check_range
 
 
 def controller_input_from_observation(obs: NDArray[np.floating]) -> ControllerInput:
-    """Decode a batch of observations (N, 10) of DWRPointStabilization-v0 into controller inputs."""
+    """Decode a batch of observations (N, 10) of DWRPointStabilization-v0 into controller inputs.
+
+    The prescribed time T_con is read from the observation too, so one expert serves envs of any T_con.
+    """
     obs = np.asarray(obs, dtype=np.float64)
     return ControllerInput(
         distance=obs[:, 0],
@@ -22,6 +25,7 @@ def controller_input_from_observation(obs: NDArray[np.floating]) -> ControllerIn
         time=obs[:, 6] * obs[:, 7],
         initial_distance=obs[:, 8],
         initial_orientation_error=obs[:, 9],
+        prescribed_time=obs[:, 7],
     )
 
 
@@ -42,7 +46,8 @@ class ExpertPolicy:
     """Wraps a controller into a policy with stable-baselines3's ``predict`` signature.
 
     Actions are the controller's (u, omega) divided by (u_max, omega_max) and clipped to [-1, 1],
-    as float32, for one observation (10,) or a batch (N, 10).
+    as float32, for one observation (10,) or a batch (N, 10). The prescribed-time laws take T_con
+    from the observation, so their own ``T_con`` parameter is not used here.
 
     >>> import gymnasium as gym, dwr_gym
     >>> from baselines import ExpertPolicy, PTCController

@@ -76,7 +76,9 @@ def main() -> None:
         print(f"{label:>10}: ours {ours * 1e6:7.1f} us, CartPole-v1 {cart * 1e6:7.1f} us, ratio {ours / cart:5.2f}x")
 
     print("\n== vector envs: env-steps per second (median) ==")
-    print(f"{'N':>6} {'ours (native)':>14} {'Sync(ours)':>12} {'CartPoleVec':>12} {'ours/CartPole':>14} {'ours/Sync':>10}")
+    print(
+        f"{'N':>6} {'ours (native)':>14} {'Sync(ours)':>12} {'CartPoleVec':>12} {'ours/CartPole':>14} {'ours/Sync':>10}"
+    )
     for n in sizes:
         steps = max(10, min(300, 400_000 // n))
         ours = vector_rate(gym.make_vec("DWRPointStabilization-v0", num_envs=n), n, repeats, steps)

@@ -32,7 +32,7 @@ OBSERVATION_NAMES: tuple[str, ...] = (
     "initial_distance",
     "initial_orientation_error",
 )
-REWARD_TERMS: tuple[str, ...] = ("progress", "time", "effort", "arrival", "late", "arena")
+REWARD_TERMS: tuple[str, ...] = ("progress", "time", "effort", "arrival", "heading", "late", "arena")
 #: Keys of the info dict besides "reward_terms".
 INFO_KEYS: tuple[str, ...] = ("distance", "orientation_error", "heading_error", "time", "is_success", "energy",
                               "linear_velocity", "angular_velocity", "pose")  # fmt: skip
@@ -263,6 +263,7 @@ def transition(
         * model.conventional_scaling(time, params.T_con, max_gain=params.time_gain_cap),
         "effort": -params.effort_weight * params.dt * np.einsum("ij,ij->i", applied, applied),
         "arrival": np.where(is_success & in_time, params.arrival_bonus, 0.0),
+        "heading": np.where(is_success, params.heading_weight * (np.cos(coords.psi) - 1.0), 0.0),
         "late": np.where(~is_success & ~in_time, -params.late_penalty * params.dt, 0.0),
         "arena": np.where(out_of_arena, -params.arena_penalty, 0.0),
     }  # fmt: skip

@@ -82,6 +82,8 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
     - time = -time_weight * dt * mu_1(t') * d(s'): the cost of still being away grows as T_con nears;
     - effort = -effort_weight * dt * (a_u^2 + a_omega^2);
     - arrival = +arrival_bonus on arrival at or before T_con (nothing for a late arrival);
+    - heading = heading_weight * (cos(psi - psi_d) - 1) on arrival (0 by default: the paper's task
+      ignores the final heading);
     - late = -late_penalty * dt for each step after T_con without arrival;
     - arena = -arena_penalty when the robot leaves the arena.
 
@@ -114,7 +116,7 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
     (0.8, (10,))
     >>> obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
     >>> sorted(info["reward_terms"])
-    ['arena', 'arrival', 'effort', 'late', 'progress', 'time']
+    ['arena', 'arrival', 'effort', 'heading', 'late', 'progress', 'time']
 
     ## Version History
     * v0: initial version.

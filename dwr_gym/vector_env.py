@@ -145,7 +145,9 @@ class DWRPointStabilizationVectorEnv(VectorEnv):
             coords = fresh.coordinates(self.params.k)
             obs[index] = core.observe(fresh, coords, self.params, self.single_observation_space)
             for key, value in core.infos(fresh, coords, self.params).items():
-                infos[key] = {k: v.copy() for k, v in infos[key].items()} if key == "reward_terms" else infos[key].copy()
+                infos[key] = (
+                    {k: v.copy() for k, v in infos[key].items()} if key == "reward_terms" else infos[key].copy()
+                )
                 if key == "reward_terms":
                     for term in core.REWARD_TERMS:
                         infos[key][term][index] = 0.0

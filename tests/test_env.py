@@ -137,7 +137,7 @@ def test_info_and_reward_terms() -> None:
     _, reward, _, _, info = env.step(np.array([0.4, 0.2], dtype=np.float32))
     for key in ("distance", "orientation_error", "heading_error", "time", "is_success", "energy", "reward_terms"):
         assert key in info
-    assert set(info["reward_terms"]) == {"progress", "time", "effort", "arrival", "late", "arena"}
+    assert set(info["reward_terms"]) == {"progress", "time", "effort", "arrival", "heading", "late", "arena"}
     assert reward == pytest.approx(sum(info["reward_terms"].values()))
     u, omega = 0.4 * 0.5, 0.2 * 2.0
     assert info["energy"] == pytest.approx((u**2 + omega**2) * 0.05)
@@ -185,6 +185,19 @@ def test_arrival_terminates_with_bonus_before_T_con_and_late_penalty_after() -> 
         assert terminated is False
         assert truncated == (step == 20)  # horizon = 2 T_con = 20 steps
     assert all(v == 0.0 for v in lates[:10]) and all(v == pytest.approx(-0.1) for v in lates[10:])
+
+
+def test_heading_term_is_paid_on_arrival_only() -> None:
+    env = make(goal_tolerance=0.05, heading_weight=2.0)
+    env.reset(options={"start": (-0.2, 0.0, math.pi / 2), "goal": (0.0, 0.0, 0.0)})
+    *_, info = env.step(np.zeros(2, dtype=np.float32))
+    assert info["reward_terms"]["heading"] == 0.0
+    env.reset(options={"start": (-0.06, 0.0, math.pi / 2), "goal": (0.0, 0.0, 0.0)})
+    _, _, terminated, _, info = env.step(np.array([0.0, 0.0], dtype=np.float32))
+    assert not terminated
+    env.reset(options={"start": (-0.03, 0.0, math.pi / 2), "goal": (0.0, 0.0, 0.0)})
+    _, _, terminated, _, info = env.step(np.array([0.0, 0.0], dtype=np.float32))
+    assert terminated and info["reward_terms"]["heading"] == pytest.approx(2.0 * (math.cos(math.pi / 2) - 1.0))
 
 
 def test_heading_tolerance_is_part_of_success_when_set() -> None:

@@ -14,7 +14,8 @@ from dwr_gym.vector_env import DWRPointStabilizationVectorEnv
 
 ENV_ID = "DWRPointStabilization-v0"
 # Short episodes with many arrivals, so autoreset is exercised by both termination and truncation.
-KWARGS: dict[str, Any] = {"T_con": 2.0, "dt": 0.1, "goal_tolerance": 0.15, "start_distance": (0.2, 0.5)}
+KWARGS: dict[str, Any] = {"T_con": 2.0, "dt": 0.1, "goal_tolerance": 0.15, "start_distance": (0.2, 0.5),
+                          "heading_weight": 1.0}  # fmt: skip
 
 
 def test_make_vec_returns_the_native_vector_env() -> None:
@@ -47,7 +48,7 @@ def test_vector_env_matches_single_envs_step_by_step(num_envs: int) -> None:
         np.testing.assert_array_equal(truncated, ref_truncated)
         for key in ("distance", "orientation_error", "heading_error", "time", "is_success", "energy", "pose"):
             np.testing.assert_allclose(info[key], ref_info[key], rtol=1e-9, atol=1e-12, err_msg=key)
-        for term in ("progress", "time", "effort", "arrival", "late", "arena"):
+        for term in ("progress", "time", "effort", "arrival", "heading", "late", "arena"):
             np.testing.assert_allclose(info["reward_terms"][term], ref_info["reward_terms"][term], atol=1e-12)
         done = terminated | truncated
         if done.any():
@@ -75,11 +76,11 @@ def test_per_env_start_and_goal_options_and_reset_mask() -> None:
     envs = gym.make_vec(ENV_ID, num_envs=3)
     starts = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, np.pi / 2], [1.0, 1.0, 0.0]])
     goals = np.array([[0.8, 0.0, 0.0], [0.0, 0.5, 0.0], [1.0, 2.0, 0.0]])
-    obs, info = envs.reset(options={"start": starts, "goal": goals})
+    _obs, info = envs.reset(options={"start": starts, "goal": goals})
     np.testing.assert_allclose(info["distance"], [0.8, 0.5, 1.0])
     np.testing.assert_allclose(info["pose"], starts)
     envs.step(np.ones((3, 2), dtype=np.float32))
-    obs2, info2 = envs.reset(options={"start": (0.0, 0.0, 0.0), "reset_mask": np.array([True, False, False])})
+    _obs2, info2 = envs.reset(options={"start": (0.0, 0.0, 0.0), "reset_mask": np.array([True, False, False])})
     assert info2["distance"][0] == pytest.approx(0.0)
     assert info2["time"][1] > 0 and info2["time"][0] == 0
     with pytest.raises(ValueError, match="start"):
@@ -136,4 +137,6 @@ def test_sb3_adapter_conventions_and_ppo_learns_on_the_native_batch() -> None:
     before = [p.detach().clone() for p in model.policy.parameters()]
     model.learn(total_timesteps=512)
     assert model.num_timesteps >= 512
-    assert any(not np.allclose(a.numpy(), b.detach().numpy()) for a, b in zip(before, model.policy.parameters(), strict=True))
+    assert any(
+        not np.allclose(a.numpy(), b.detach().numpy()) for a, b in zip(before, model.policy.parameters(), strict=True)
+    )

@@ -75,7 +75,7 @@ def controller_for(name: str, scenario: Scenario, params: EnvParams, **overrides
     """Controller ``name`` configured for a scenario: its T_con (and dt for the integral law), its presets."""
     kwargs: dict[str, Any] = {}
     if name in ("ptc", "conventional-ptc"):
-        kwargs["T_con"] = params.T_con
+        kwargs["T_con"] = params.T_con  # the expert reads T_con from the observation; this keeps repr honest
     if name == "fabregas":
         kwargs["dt"] = params.dt
     kwargs.update(scenario.controller_kwargs.get(name, {}))
