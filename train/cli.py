@@ -236,6 +236,160 @@ def add_reproduce_parser(sub: Any) -> None:
     p.set_defaults(func=cmd_reproduce)
 
 
+def add_train_parser(sub: Any) -> None:
+    """The ``train`` subcommand, generated from the fields of :class:`train.config.TrainConfig`."""
+    import dataclasses
+
+    from train.config import TrainConfig
+
+    p = sub.add_parser("train", help="train a PPO/SAC/TD3 agent, plain or residual on the PTC expert",
+                       description="Options left out take the YAML file's value, else the default shown.")  # fmt: skip
+    for f in dataclasses.fields(TrainConfig):
+        if f.metadata.get("cli") is False:
+            continue
+        flag = "--" + f.name.replace("_", "-")
+        default = f.default if f.default is not dataclasses.MISSING else "{}"
+        text = f"{f.metadata['help']} (default: {default})"
+        if f.name == "progress":
+            p.add_argument(
+                "--no-progress",
+                dest="progress",
+                action="store_false",
+                default=argparse.SUPPRESS,
+                help="no progress bar",
+            )
+        elif isinstance(f.default, bool):
+            p.add_argument(flag, action="store_true", default=argparse.SUPPRESS, help=text)
+        elif f.name == "env_kwargs":
+            p.add_argument(flag, nargs="*", metavar="KEY=VALUE", default=argparse.SUPPRESS, help=text)
+        else:
+            kind = {"int": int, "float": float}.get(type(f.default).__name__, str)
+            p.add_argument(flag, type=kind, default=argparse.SUPPRESS, help=text)
+    p.set_defaults(func=cmd_train)
+
+
+def cmd_train(args: argparse.Namespace) -> int:
+    """Train an agent; bad input ends before any training starts."""
+    from pathlib import Path
+
+    from train.config import ConfigError, TrainConfig, resolve_hyperparams
+
+    given = {k: v for k, v in vars(args).items() if k not in ("func", "command")}
+    if "env_kwargs" in given:
+        given["env_kwargs"] = parse_env_kwargs(given["env_kwargs"])
+    try:
+        import stable_baselines3  # noqa: F401
+    except ImportError as error:
+        raise UsageError('stable-baselines3 is not installed: pip install "dwr-gym[train]"') from error
+    from train.training import load_config, train
+
+    try:
+        if "resume" in given:
+            from train.agents import AgentLoadError, find_run_dir
+
+            checkpoint = Path(given["resume"])
+            if not checkpoint.is_file():
+                raise ConfigError(f"--resume {str(checkpoint)!r} is invalid: no such checkpoint file")
+            try:
+                run_dir = find_run_dir(checkpoint.parent)
+            except AgentLoadError as error:
+                raise ConfigError(str(error)) from error
+            config = load_config(run_dir)
+            for key in ("total_timesteps", "progress", "device"):
+                if key in given:
+                    setattr(config, key, given[key])
+            config.resume, config.run_dir = str(checkpoint), str(run_dir)
+        else:
+            config = TrainConfig(**given)
+        config.validate()
+        config = resolve_hyperparams(config, set(given))
+        config.validate()
+    except ConfigError as error:
+        raise UsageError(str(error)) from error
+    try:
+        train(config, command=["dwr-gym", *sys.argv[1:]])
+    except KeyboardInterrupt:
+        return 130
+    return 0
+
+
+def add_compare_parser(sub: Any) -> None:
+    """The ``compare`` subcommand."""
+    from baselines.controllers import CONTROLLERS
+    from train.evaluation import SCENARIO_SETS
+
+    p = sub.add_parser("compare", help="compare trained agents with the PTC expert and the other controllers")
+    p.add_argument(
+        "--agents",
+        nargs="+",
+        metavar="PATH",
+        help="run directories or model .zip files (default: the pretrained agents shipped with dwr-gym)",
+    )
+    p.add_argument(
+        "--controllers",
+        nargs="+",
+        default=list(CONTROLLERS),
+        metavar="NAME",
+        help=f"controllers to compare with (default: all of {', '.join(CONTROLLERS)})",
+    )
+    p.add_argument(
+        "--scenarios",
+        nargs="+",
+        default=list(SCENARIO_SETS),
+        metavar="SET",
+        help=f"scenario sets (default: {' '.join(SCENARIO_SETS)})",
+    )
+    p.add_argument("--n", type=int, default=1000, help="size of the random scenario set (default: 1000)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the random scenario set (default: 0)")
+    p.add_argument("--out", default="results/compare", help="directory for the table and plots")
+    p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    p.set_defaults(func=cmd_compare)  # fmt: skip
+
+
+def cmd_compare(args: argparse.Namespace) -> int:
+    """Evaluate agents and controllers on the same scenarios; print the table, write CSV, JSON and plots."""
+    from pathlib import Path
+
+    from baselines.controllers import CONTROLLERS
+    from train.evaluation import SCENARIO_SETS
+
+    for name in args.controllers:
+        if name not in CONTROLLERS:
+            raise UsageError(f"--controllers {name!r} is invalid: expected any of {', '.join(CONTROLLERS)}")
+    for name in args.scenarios:
+        if name not in SCENARIO_SETS:
+            raise UsageError(f"--scenarios {name!r} is invalid: expected any of {', '.join(SCENARIO_SETS)}")
+    if args.n < 1:
+        raise UsageError(f"--n {args.n} is invalid: expected an integer >= 1")
+    try:
+        import matplotlib  # noqa: F401
+        import stable_baselines3  # noqa: F401
+    except ImportError as error:
+        raise UsageError(f'{error.name} is not installed: pip install "dwr-gym[train,plots]"') from error
+    from train.agents import AgentLoadError, find_run_dir, pretrained_paths
+    from train.compare import compare
+
+    paths = [Path(p) for p in args.agents] if args.agents else list(pretrained_paths().values())
+    if not paths:
+        raise UsageError("no agents given and no pretrained agent is installed: pass --agents PATH")
+    agents = load_agents([str(p) for p in paths])
+    run_dirs = {}
+    for label, path in zip(agents, paths, strict=True):
+        try:
+            run_dirs[label] = find_run_dir(path if path.is_dir() else path.parent)
+        except AgentLoadError:
+            pass
+    rows = compare(agents, run_dirs, args.controllers, args.scenarios, args.n, args.seed, Path(args.out),
+                   progress=not args.no_progress)  # fmt: skip
+    print(format_table(rows, EVAL_COLUMNS))
+    for path in write_results(rows, args.out, "comparison"):
+        print(f"wrote {path}")
+    for name in ("trajectories.png", "time_series.png", "learning_curves.png"):
+        if (Path(args.out) / name).exists():
+            print(f"wrote {Path(args.out) / name}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``dwr-gym``."""
     parser = argparse.ArgumentParser(prog="dwr-gym", description=__doc__.splitlines()[0])
@@ -244,6 +398,8 @@ def build_parser() -> argparse.ArgumentParser:
     info.set_defaults(func=cmd_info)
     add_evaluate_parser(sub)
     add_reproduce_parser(sub)
+    add_train_parser(sub)
+    add_compare_parser(sub)
     return parser
 
 

@@ -1,0 +1,47 @@
+"""Loading trained agents (a run directory or its model .zip) as policies, and the shipped ones."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+PRETRAINED_DIR = Path(__file__).parent / "pretrained"
+PRETRAINED = {"residual-ppo": PRETRAINED_DIR / "residual_ppo", "ppo": PRETRAINED_DIR / "ppo"}
+
+
+class AgentLoadError(Exception):
+    """The agent file is missing or unreadable."""
+
+
+def find_run_dir(path: Path) -> Path:
+    """The run directory holding config.yaml for a model file, a checkpoint or a run directory."""
+    for candidate in (path, *path.parents[:3]):
+        if candidate.is_dir() and (candidate / "config.yaml").is_file():
+            return candidate
+    raise AgentLoadError(f"agent {str(path)!r} is invalid: no config.yaml found beside it or above it")
+
+
+def load_agent(path: str | Path) -> tuple[str, Any]:
+    """(label, policy) for a saved agent: a run directory (its model.zip) or a .zip inside a run."""
+    from train.config import ConfigError, algorithm_class
+    from train.training import MODEL_FILE, as_policy, load_config
+
+    path = Path(path)
+    if not path.exists():
+        raise AgentLoadError(f"agent {str(path)!r} is invalid: no such file or directory")
+    model_path = path / MODEL_FILE if path.is_dir() else path
+    if not model_path.is_file():
+        raise AgentLoadError(f"agent {str(path)!r} is invalid: no {MODEL_FILE} in it")
+    run_dir = find_run_dir(path if path.is_dir() else path.parent)
+    try:
+        config = load_config(run_dir)
+        model = algorithm_class(config.algo).load(model_path, device="cpu")
+    except (ConfigError, ValueError, KeyError, OSError) as error:
+        raise AgentLoadError(f"agent {str(path)!r} could not be loaded: {error}") from error
+    label = run_dir.name.replace("_", "-") if path.is_dir() else f"{run_dir.name}/{model_path.stem}"
+    return label, as_policy(model, config)
+
+
+def pretrained_paths() -> dict[str, Path]:
+    """The agents shipped with the package that are present in this installation."""
+    return {name: path for name, path in PRETRAINED.items() if (path / "model.zip").is_file()}

@@ -1,0 +1,115 @@
+"""``dwr-gym compare``: trained agents against the PTC expert and the other laws, on the same scenarios."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from train.evaluation import RolloutResult, evaluate, make_scenario
+
+TRAJECTORY_SCENARIO = "paper-fig5"
+TIME_SERIES_INDEX = 4  # psi0 = pi in paper-fig5, the hardest start
+
+
+def compare(
+    agents: dict[str, Any],
+    run_dirs: dict[str, Path],
+    controllers: list[str],
+    scenarios: list[str],
+    n: int,
+    seed: int,
+    out_dir: Path,
+    progress: bool = True,
+) -> list[dict[str, Any]]:
+    """Evaluate agents and controllers on each scenario set; write the plots; return the table rows."""
+    policies: dict[str, Any] = {**agents, **{name: name for name in controllers}}
+    rows = []
+    for name in scenarios:
+        scenario = make_scenario(name, n=n, seed=seed)
+        for label, result in evaluate(policies, scenario, seed=seed, progress=progress).items():
+            rows.append({"scenario": name, "policy": label, **result.summary()})
+    out_dir.mkdir(parents=True, exist_ok=True)
+    recorded = evaluate(policies, make_scenario(TRAJECTORY_SCENARIO), record=True)
+    plot_trajectories(recorded, out_dir / "trajectories.png")
+    plot_time_series(recorded, out_dir / "time_series.png")
+    if run_dirs:
+        plot_learning_curves(run_dirs, out_dir / "learning_curves.png")
+    return rows
+
+
+def _plt() -> Any:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def plot_trajectories(results: dict[str, RolloutResult], path: Path) -> None:
+    """One panel per policy: the eight Figure 5 rollouts."""
+    plt = _plt()
+    n = len(results)
+    cols = min(n, 4)
+    rows = int(np.ceil(n / cols))
+    fig, axes = plt.subplots(rows, cols, figsize=(4 * cols, 3.4 * rows), squeeze=False, sharex=True, sharey=True)
+    for ax, (label, result) in zip(axes.flat, results.items(), strict=False):
+        tr = result.trajectory
+        assert tr is not None
+        for i in range(tr["x"].shape[1]):
+            ax.plot(tr["x"][:, i], tr["y"][:, i], linewidth=1.2)
+        ax.plot([0.8], [0.0], "k*", markersize=10)
+        ax.set_title(f"{label}: {result.success.mean():.0%} before T_con", fontsize=9)
+        ax.set_aspect("equal")
+    for ax in list(axes.flat)[n:]:
+        ax.set_visible(False)
+    fig.suptitle("Trajectories from the eight Figure 5 headings (T_con = 20 s)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def plot_time_series(results: dict[str, RolloutResult], path: Path) -> None:
+    """Distance, linear and angular velocity over time from psi0 = pi, every policy on one axis each."""
+    plt = _plt()
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4))
+    i = TIME_SERIES_INDEX
+    for label, result in results.items():
+        tr = result.trajectory
+        assert tr is not None
+        axes[0].plot(tr["time"][:, i], tr["distance"][:, i], label=label)
+        axes[1].plot(tr["time"][1:, i], tr["linear_velocity"][:, i], label=label)
+        axes[2].plot(tr["time"][1:, i], tr["angular_velocity"][:, i], label=label)
+    for ax, unit in zip(axes, ("d [m]", "u [m/s]", "omega [rad/s]"), strict=True):
+        ax.axvline(20.0, color="k", linestyle="--", linewidth=1)
+        ax.set(xlabel="t [s]", ylabel=unit)
+    axes[0].legend(fontsize=8)
+    fig.suptitle("Start (0, 0, pi), goal (0.8, 0, 0), T_con = 20 s")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def plot_learning_curves(run_dirs: dict[str, Path], path: Path) -> None:
+    """Success rate, final heading error and return on the fixed evaluation set against training steps."""
+    plt = _plt()
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4))
+    for label, run_dir in run_dirs.items():
+        csv_path = run_dir / "evaluations.csv"
+        if not csv_path.is_file():
+            continue
+        with csv_path.open() as handle:
+            rows = list(csv.DictReader(handle))
+        steps = [float(r["timesteps"]) for r in rows]
+        for ax, key in zip(axes, ("success_rate", "final_heading_error_mean", "return_mean"), strict=True):
+            ax.plot(steps, [float(r[key]) for r in rows], marker="o", markersize=3, label=label)
+    for ax, title in zip(axes, ("success rate (arrival before T_con)", "final |psi - psi_d| [rad]", "return"),
+                         strict=True):  # fmt: skip
+        ax.set(xlabel="env steps", title=title)
+    axes[0].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
