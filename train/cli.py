@@ -308,6 +308,8 @@ def cmd_train(args: argparse.Namespace) -> int:
         raise UsageError(str(error)) from error
     try:
         train(config, command=["dwr-gym", *sys.argv[1:]])
+    except ConfigError as error:  # raised before any training starts, e.g. a run directory already used
+        raise UsageError(str(error)) from error
     except KeyboardInterrupt:
         return 130
     return 0

@@ -1,0 +1,211 @@
+"""Training: short runs of every algorithm, the residual wrapper, save/load/resume, and the CLI."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+from baselines import ExpertPolicy, PTCController
+from train.agents import load_agent, pretrained_paths
+from train.config import ConfigError, TrainConfig, parse_policy_kwargs, resolve_hyperparams
+from train.residual import ResidualActionWrapper, ResidualVecEnv, residual_action
+from train.training import train
+
+
+def dwr_gym(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
+    env = {**os.environ, "MPLBACKEND": "Agg", "OMP_NUM_THREADS": "1"}
+    return subprocess.run([sys.executable, "-m", "train.cli", *args], capture_output=True, text=True, cwd=cwd,
+                          env=env, timeout=600)  # fmt: skip
+
+
+def tiny(algo: str, residual: bool, run_dir: Path, **overrides: object) -> TrainConfig:
+    config = TrainConfig(algo=algo, residual=residual, total_timesteps=300, num_envs=4, eval_freq=200,
+                         eval_episodes=8, checkpoint_freq=200, run_dir=str(run_dir), progress=False)  # fmt: skip
+    for key, value in overrides.items():
+        setattr(config, key, value)
+    resolve_hyperparams(config, set())
+    if algo == "ppo":
+        config.algo_kwargs.update(n_steps=32, batch_size=64)
+    else:
+        config.algo_kwargs.update(learning_starts=50, buffer_size=1000, batch_size=32)
+    return config
+
+
+@pytest.mark.parametrize("residual", [False, True], ids=["plain", "residual"])
+@pytest.mark.parametrize("algo", ["ppo", "sac", "td3"])
+def test_short_training_run_of_each_algorithm(algo: str, residual: bool, tmp_path: Path) -> None:
+    run_dir = train(tiny(algo, residual, tmp_path / "run"))
+    for name in ("model.zip", "config.yaml", "evaluations.csv", "best_model.zip"):
+        assert (run_dir / name).is_file(), name
+    assert any((run_dir / "checkpoints").iterdir())
+    assert any((run_dir / "tb").rglob("events.out.tfevents.*"))
+    label, policy = load_agent(run_dir)
+    obs = np.zeros((3, 10), dtype=np.float32)
+    obs[:, 0], obs[:, 1], obs[:, 3], obs[:, 7], obs[:, 8] = 0.5, 1.0, 1.0, 20.0, 0.5
+    actions, _ = policy.predict(obs)
+    assert actions.shape == (3, 2) and np.all(np.abs(actions) <= 1.0)
+
+
+def test_residual_action_arithmetic_and_clipping() -> None:
+    expert = np.array([[0.2, -0.5], [0.9, 0.9], [-0.9, 0.0]], dtype=np.float32)
+    residual = np.array([[0.4, 0.2], [1.0, -1.0], [-1.0, 0.5]], dtype=np.float32)
+    out = residual_action(expert, residual, 0.5)
+    np.testing.assert_allclose(out, [[0.4, -0.4], [1.0, 0.4], [-1.0, 0.25]], atol=1e-7)
+    assert out.dtype == np.float32
+
+
+def test_residual_wrapper_logs_expert_and_residual_parts() -> None:
+    base = gym.make("DWRPointStabilization-v0")
+    expert = ExpertPolicy.from_env(base, PTCController())
+    env = ResidualActionWrapper(base, expert, scale=0.5)
+    obs, _ = env.reset(seed=0)
+    expected_expert, _ = expert.predict(obs)
+    _, _, _, _, info = env.step(np.array([3.0, -0.2], dtype=np.float32))  # the residual itself is clipped to [-1, 1]
+    np.testing.assert_allclose(info["expert_action"], expected_expert)
+    np.testing.assert_allclose(info["residual_action"], [0.5, -0.1], atol=1e-7)
+    applied = np.clip(expected_expert + np.array([0.5, -0.1]), -1, 1)
+    assert info["linear_velocity"] == pytest.approx(applied[0] * 0.5, abs=1e-6)
+    with pytest.raises(ValueError, match="residual_scale"):
+        ResidualActionWrapper(base, expert, scale=0.0)
+
+
+def test_residual_vec_env_with_zero_residual_is_the_expert() -> None:
+    from dwr_gym.sb3 import make_sb3_vec_env
+
+    plain = make_sb3_vec_env(4, seed=3)
+    venv = ResidualVecEnv(make_sb3_vec_env(4, seed=3), ExpertPolicy(PTCController(), 0.5, 2.0), scale=0.5)
+    obs_p, obs_r = plain.reset(), venv.reset()
+    expert = ExpertPolicy(PTCController(), 0.5, 2.0)
+    for _ in range(20):
+        obs_p, _, _, _ = plain.step(expert.predict(obs_p)[0])
+        obs_r, _, _, infos = venv.step(np.zeros((4, 2), dtype=np.float32))
+        np.testing.assert_array_equal(obs_p, obs_r)
+    assert infos[0]["residual_action"].tolist() == [0.0, 0.0]
+
+
+def test_residual_training_starts_from_the_expert(tmp_path: Path) -> None:
+    from train.residual import ResidualPolicy, zero_init_last_layer
+    from train.training import make_training_env
+
+    config = tiny("ppo", True, tmp_path / "r")
+    from stable_baselines3 import PPO
+
+    from train.config import build_algo_kwargs
+
+    model = PPO(env=make_training_env(config), seed=0, **build_algo_kwargs(config.algo_kwargs))
+    zero_init_last_layer(model)
+    expert = ExpertPolicy(PTCController(), 0.5, 2.0)
+    obs, _ = gym.make_vec("DWRPointStabilization-v0", num_envs=64).reset(seed=0)
+    combined, _ = ResidualPolicy(model, expert, 0.5).predict(obs)
+    np.testing.assert_allclose(combined, expert.predict(obs)[0], atol=1e-2)
+
+
+def test_save_load_and_resume_round_trip(tmp_path: Path) -> None:
+    from stable_baselines3 import PPO
+
+    config = tiny("ppo", False, tmp_path / "run", total_timesteps=256, checkpoint_freq=128)
+    run_dir = train(config)
+    model = PPO.load(run_dir / "model.zip")
+    _, policy = load_agent(run_dir / "model.zip")
+    obs = np.random.default_rng(0).uniform(-1, 1, (5, 10)).astype(np.float32)
+    np.testing.assert_array_equal(policy.predict(obs, deterministic=True)[0], model.predict(obs, deterministic=True)[0])
+    checkpoint = sorted((run_dir / "checkpoints").glob("*.zip"))[0]
+    resumed = tiny("ppo", False, run_dir, total_timesteps=512, resume=str(checkpoint))
+    train(resumed)
+    assert PPO.load(run_dir / "model.zip").num_timesteps >= 512
+    rows = (run_dir / "evaluations.csv").read_text().splitlines()
+    assert rows[0].startswith("timesteps") and len(rows) > 3  # the resumed run appended to the same curve
+
+
+def test_zoo_yaml_hyperparameters(tmp_path: Path) -> None:
+    yaml_path = tmp_path / "ppo.yml"
+    yaml_path.write_text(
+        "DWRPointStabilization-v0:\n  n_timesteps: !!float 1e3\n  n_envs: 2\n  policy: 'MlpPolicy'\n"
+        "  n_steps: 64\n  learning_rate: lin_1e-3\n  policy_kwargs: \"dict(net_arch=[32, 32], activation_fn=nn.Tanh)\"\n"
+    )
+    config = resolve_hyperparams(TrainConfig(hyperparams=str(yaml_path)), set())
+    assert config.total_timesteps == 1000 and config.num_envs == 2
+    assert config.algo_kwargs["policy_kwargs"] == {"net_arch": [32, 32], "activation_fn": "nn.Tanh"}
+    explicit = resolve_hyperparams(TrainConfig(hyperparams=str(yaml_path), total_timesteps=77), {"total_timesteps"})
+    assert explicit.total_timesteps == 77
+    yaml_path.write_text("DWRPointStabilization-v0:\n  n_stepz: 64\n")
+    with pytest.raises(ConfigError, match="n_stepz"):
+        resolve_hyperparams(TrainConfig(hyperparams=str(yaml_path)), set())
+    with pytest.raises(ConfigError, match="policy_kwargs"):
+        parse_policy_kwargs("__import__('os').system('true')")
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--algo", "dqn"], "--algo 'dqn' is invalid"),
+        (["--hyperparams", "missing.yml"], "--hyperparams 'missing.yml' is invalid: no such file"),
+        (["--resume", "missing.zip"], "--resume 'missing.zip' is invalid"),
+        (["--env-kwargs", "dt=-1"], "dt=-1"),
+        (["--env-kwargs", "T_conn=5"], "unknown parameter"),
+        (["--total-timesteps", "-5"], "--total-timesteps -5 is invalid"),
+        (["--num-envs", "0"], "--num-envs 0 is invalid"),
+        (["--residual-scale", "9"], "--residual-scale 9.0 is invalid"),
+        (["--expert", "pid"], "--expert 'pid' is invalid"),
+    ],
+)
+def test_train_bad_input_exits_2_before_training(args: list[str], message: str, tmp_path: Path) -> None:
+    result = dwr_gym("train", *args, "--run-dir", "run", cwd=tmp_path)
+    assert result.returncode == 2, result.stderr
+    assert message in result.stderr and len(result.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "run").exists()
+
+
+def test_train_cli_end_to_end_and_refuses_to_overwrite(tmp_path: Path) -> None:
+    yaml_path = tmp_path / "hp.yml"
+    yaml_path.write_text("DWRPointStabilization-v0:\n  n_steps: 32\n  batch_size: 64\n")
+    args = ["train", "--residual", "--total-timesteps", "256", "--num-envs", "4", "--eval-freq", "128",
+            "--eval-episodes", "8", "--hyperparams", str(yaml_path), "--run-dir", "run", "--no-progress"]  # fmt: skip
+    result = dwr_gym(*args, cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert "saved run/model.zip" in result.stdout
+    assert "n_steps: 32" in (tmp_path / "run" / "config.yaml").read_text()
+    again = dwr_gym(*args, cwd=tmp_path)
+    assert again.returncode == 2 and "already holds a trained model" in again.stderr
+
+
+def test_ctrl_c_saves_the_current_model(tmp_path: Path) -> None:
+    env = {**os.environ, "OMP_NUM_THREADS": "1"}
+    process = subprocess.Popen(
+        [sys.executable, "-m", "train.cli", "train", "--total-timesteps", "10000000", "--num-envs", "4",
+         "--eval-freq", "100000", "--eval-episodes", "4", "--run-dir", "run", "--no-progress"],
+        cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    deadline = time.time() + 120
+    while not (tmp_path / "run" / "evaluations.csv").exists() and time.time() < deadline:
+        time.sleep(0.2)
+    time.sleep(2.0)  # let it train a little
+    process.send_signal(signal.SIGINT)
+    _, stderr = process.communicate(timeout=120)
+    assert process.returncode == 130, stderr
+    assert "interrupted at" in stderr
+    assert (tmp_path / "run" / "model.zip").is_file()
+
+
+@pytest.mark.skipif(not pretrained_paths(), reason="no pretrained agent in this checkout")
+def test_compare_on_the_shipped_agents(tmp_path: Path) -> None:
+    result = dwr_gym("compare", "--scenarios", "paper-fig5", "random", "--n", "50", "--controllers", "ptc",
+                     "--out", "out", "--no-progress", cwd=tmp_path)  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    for label in pretrained_paths():
+        assert label in result.stdout.replace("_", "-")
+    for name in ("comparison.csv", "comparison.json", "trajectories.png", "time_series.png", "learning_curves.png"):
+        assert (tmp_path / "out" / name).is_file(), name
+
+
+def test_compare_bad_input(tmp_path: Path) -> None:
+    result = dwr_gym("compare", "--agents", "nowhere", cwd=tmp_path)
+    assert result.returncode == 2 and "nowhere" in result.stderr
