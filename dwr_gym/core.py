@@ -89,6 +89,11 @@ class TaskState:
         """A copy of the robots at ``index``."""
         return TaskState(**{name: getattr(self, name)[index] for name in self.__dataclass_fields__})
 
+    def assign(self, index: NDArray[np.intp] | slice, other: TaskState) -> None:
+        """Overwrite the robots at ``index`` with those of ``other``."""
+        for name in self.__dataclass_fields__:
+            getattr(self, name)[index] = getattr(other, name)
+
     def coordinates(self, k: float) -> ErrorCoordinates:
         """Error coordinates of the current poses."""
         return error_coordinates(self.x, self.y, self.psi, k)
@@ -122,19 +127,28 @@ def observe(
     space: spaces.Box,
     pose_noise: FloatArray | None = None,
 ) -> NDArray[np.float32]:
-    """Observation features (N, 10) of ``state``, whose true error coordinates are ``coords``.
+    """Observation features (N, 10) of ``state``, whose true error coordinates are ``coords``; (10,) for one robot.
 
-    With ``pose_noise`` (N, 3) of standard-normal samples, the features are those of the pose
-    measured with noise of standard deviation ``params.observation_noise``. Values are clipped to
-    the space's bounds.
+    With ``pose_noise`` (N, 3) (or (3,)) of standard-normal samples, the features are those of the
+    pose measured with noise of standard deviation ``params.observation_noise``. Values are clipped
+    to the space's bounds.
     """
     if pose_noise is not None:
         sigma = params.observation_noise
         coords = error_coordinates(
-            state.x + sigma * pose_noise[:, 0], state.y + sigma * pose_noise[:, 1],
-            model.wrap_angle(state.psi + sigma * pose_noise[:, 2]), params.k,
+            state.x + sigma * pose_noise[..., 0], state.y + sigma * pose_noise[..., 1],
+            model.wrap_angle(state.psi + sigma * pose_noise[..., 2]), params.k,
         )  # fmt: skip
     dist = coords.distance
+    if model.namespace(dist) is model.SCALAR_MATH:
+        # one robot: cos(alpha) and sin(alpha) of eq. (3) as -x/d and -y/d, (1, 0) at the goal
+        cos_alpha, sin_alpha = (-coords.x / dist, -coords.y / dist) if dist > 0.0 else (1.0, 0.0)
+        features = np.array(
+            [dist, cos_alpha, sin_alpha, math.cos(coords.psi), math.sin(coords.psi), coords.orientation_error,
+             state.step_count * (params.dt / params.T_con), params.T_con, state.initial_distance,
+             state.initial_orientation_error], dtype=np.float32,
+        )  # fmt: skip
+        return np.clip(features, space.low, space.high, out=features)
     at_goal = dist == 0.0
     safe = np.where(at_goal, 1.0, dist)
     features = np.empty((len(OBSERVATION_NAMES), dist.shape[0]), dtype=np.float32)  # filled row by row: contiguous
@@ -174,6 +188,24 @@ def parse_pose(name: str, value: object) -> tuple[float, float, float]:
     return pose  # type: ignore[return-value]
 
 
+def new_state(start: tuple[Any, Any, Any], goal: tuple[Any, Any, Any], params: EnvParams) -> TaskState:
+    """Robots at world poses ``start`` heading for world poses ``goal``: (N,) arrays, or floats for one robot."""
+    xp = model.namespace(*start, *goal)
+    x, y, psi = model.to_goal_frame(*start, *goal)
+    coords = error_coordinates(x, y, psi, params.k)
+    farthest = float(np.max(coords.distance))
+    if farthest > params.arena_radius:
+        raise ValueError(
+            f"start pose is {farthest:.3f} m from the goal, outside the arena: "
+            f"expected a distance <= arena_radius={params.arena_radius}"
+        )
+    zero = 0.0 * coords.distance
+    steps = 0 if xp is model.SCALAR_MATH else np.zeros(coords.distance.shape, np.int64)
+    return TaskState(x, y, psi, goal[0] + zero, goal[1] + zero, goal[2] + zero, steps, zero, coords.distance,
+                     coords.orientation_error, model.lyapunov(coords.distance, coords.orientation_error),
+                     xp.cos(goal[2]) + zero, xp.sin(goal[2]) + zero)  # fmt: skip
+
+
 def reset_robots(
     state: TaskState,
     index: NDArray[np.intp] | slice,
@@ -181,34 +213,27 @@ def reset_robots(
     goal: tuple[FloatArray, FloatArray, FloatArray],
     params: EnvParams,
 ) -> None:
-    """Place the robots at ``index`` at world poses ``start`` with goals at world poses ``goal``."""
-    x, y, psi = model.to_goal_frame(*start, *goal)
-    coords = error_coordinates(x, y, psi, params.k)
-    if np.any(coords.distance > params.arena_radius):
-        raise ValueError(
-            f"start pose is {float(np.max(coords.distance)):.3f} m from the goal, outside the arena: "
-            f"expected a distance <= arena_radius={params.arena_radius}"
-        )
-    state.x[index], state.y[index], state.psi[index] = x, y, psi
-    state.goal_x[index], state.goal_y[index], state.goal_psi[index] = goal
-    state.goal_cos[index], state.goal_sin[index] = np.cos(goal[2]), np.sin(goal[2])
-    state.step_count[index] = 0
-    state.energy[index] = 0.0
-    state.initial_distance[index] = coords.distance
-    state.initial_orientation_error[index] = coords.orientation_error
-    state.lyapunov[index] = model.lyapunov(coords.distance, coords.orientation_error)
+    """Place the robots at ``index`` of a batched state at world poses ``start`` with goals ``goal``."""
+    state.assign(index, new_state(start, goal, params))
 
 
-def commands_from_action(action: NDArray[np.floating], params: EnvParams) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """Clip normalised actions (N, 2) to [-1, 1] and scale them to (u [m/s], omega [rad/s])."""
+def commands_from_action(action: NDArray[np.floating], params: EnvParams) -> tuple[Any, Any, Any, Any]:
+    """Clip normalised actions to [-1, 1]: (a_u, a_omega, u [m/s], omega [rad/s]); (N, 2) or one action (2,)."""
+    if action.ndim == 1:
+        a_u, a_omega = float(action[0]), float(action[1])
+        if not (math.isfinite(a_u) and math.isfinite(a_omega)):
+            raise ValueError(f"action={action.tolist()!r} is invalid: expected finite numbers in [-1, 1]")
+        a_u, a_omega = min(max(a_u, -1.0), 1.0), min(max(a_omega, -1.0), 1.0)
+        return a_u, a_omega, a_u * params.u_max, a_omega * params.omega_max
     if not np.all(np.isfinite(action)):
         raise ValueError(f"action={np.asarray(action).tolist()!r} is invalid: expected finite numbers in [-1, 1]")
     clipped = np.clip(action, -1.0, 1.0).astype(np.float64)
-    return clipped, clipped[:, 0] * params.u_max, clipped[:, 1] * params.omega_max
+    a_u, a_omega = clipped[:, 0], clipped[:, 1]
+    return a_u, a_omega, a_u * params.u_max, a_omega * params.omega_max
 
 
 class StepResult(NamedTuple):
-    """What :func:`transition` returns for a batch (arrays of shape (N,), obs (N, 10))."""
+    """What :func:`transition` returns: arrays (N,) and obs (N, 10) for a batch; floats and obs (10,) for one robot."""
 
     observation: NDArray[np.float32]
     reward: FloatArray
@@ -231,12 +256,13 @@ def transition(
 ) -> StepResult:
     """Advance every robot by one control period and compute observation, reward and episode end.
 
-    ``state`` is updated in place. ``action_noise`` (N, 2) and ``pose_noise`` (N, 3) are pre-drawn
-    standard-normal samples (or None) so that this function stays free of random state.
+    ``state`` is updated in place; ``action`` is (N, 2) for a batched state and (2,) for a state of
+    floats (one robot). ``action_noise`` and ``pose_noise`` are pre-drawn standard-normal samples
+    ((N, 2) and (N, 3), or (2,) and (3,)) or None, so that this function stays free of random state.
     """
     if action_noise is not None:
         action = np.asarray(action, dtype=np.float64) + params.actuation_noise * action_noise
-    applied, u, omega = commands_from_action(action, params)
+    a_u, a_omega, u, omega = commands_from_action(action, params)
     state.x, state.y, state.psi = model.integrate_unicycle(
         state.x,
         state.y,
@@ -251,8 +277,9 @@ def transition(
     state.energy += (u * u + omega * omega) * params.dt
     coords = state.coordinates(params.k)
     time = state.step_count * params.dt
+    xp = model.namespace(coords.distance)
 
-    heading_ok = True if params.heading_tolerance is None else np.abs(coords.psi) <= params.heading_tolerance
+    heading_ok = True if params.heading_tolerance is None else xp.abs(coords.psi) <= params.heading_tolerance
     is_success = (coords.distance <= params.goal_tolerance) & heading_ok
     out_of_arena = coords.distance > params.arena_radius
     in_time = time <= params.T_con + 1e-9 * params.dt
@@ -261,15 +288,15 @@ def transition(
         "progress": params.progress_weight * (state.lyapunov - params.shaping_discount * lyapunov),
         "time": -params.time_weight * params.dt * coords.distance
         * model.conventional_scaling(time, params.T_con, max_gain=params.time_gain_cap),
-        "effort": -params.effort_weight * params.dt * np.einsum("ij,ij->i", applied, applied),
-        "arrival": np.where(is_success & in_time, params.arrival_bonus, 0.0),
-        "heading": np.where(is_success, params.heading_weight * (np.cos(coords.psi) - 1.0), 0.0),
-        "late": np.where(~is_success & ~in_time, -params.late_penalty * params.dt, 0.0),
-        "arena": np.where(out_of_arena, -params.arena_penalty, 0.0),
+        "effort": -params.effort_weight * params.dt * (a_u * a_u + a_omega * a_omega),
+        "arrival": xp.where(is_success & in_time, params.arrival_bonus, 0.0),
+        "heading": xp.where(is_success, params.heading_weight * (xp.cos(coords.psi) - 1.0), 0.0),
+        "late": xp.where(xp.logical_not(is_success | in_time), -params.late_penalty * params.dt, 0.0),
+        "arena": xp.where(out_of_arena, -params.arena_penalty, 0.0),
     }  # fmt: skip
     state.lyapunov = lyapunov
     terminated = is_success | out_of_arena
-    truncated = (state.step_count >= params.max_episode_steps) & ~terminated
+    truncated = (state.step_count >= params.max_episode_steps) & xp.logical_not(terminated)
 
     obs = observe(state, coords, params, space, pose_noise)
     reward = sum(terms.values())
@@ -279,18 +306,22 @@ def transition(
 def infos(
     state: TaskState, coords: ErrorCoordinates, params: EnvParams, result: StepResult | None = None
 ) -> dict[str, Any]:
-    """Info arrays of every robot after a reset (``result`` None) or a step; "pose" is the world pose (N, 3)."""
-    zeros = np.zeros(coords.distance.shape[0])
+    """Infos after a reset (``result`` None) or a step: arrays (N,) and "pose" (N, 3) for a batch, or
+    Python scalars and "pose" (3,) for one robot. "pose" is the world pose."""
+    xp = model.namespace(coords.distance)
+    zeros = 0.0 * coords.distance
     x, y, psi = state.world_pose()
+    is_success = (coords.distance <= params.goal_tolerance) if result is None else result.is_success
+    scalar = xp is model.SCALAR_MATH
     return {
         "distance": coords.distance,
         "orientation_error": coords.orientation_error,
         "heading_error": coords.psi,
         "time": state.step_count * params.dt,
-        "is_success": (coords.distance <= params.goal_tolerance) if result is None else result.is_success,
-        "energy": state.energy.copy(),
+        "is_success": bool(is_success) if scalar else is_success,
+        "energy": xp.copy(state.energy),
         "linear_velocity": zeros if result is None else result.linear_velocity,
         "angular_velocity": zeros if result is None else result.angular_velocity,
-        "pose": np.stack([x, y, psi], axis=1),
+        "pose": np.array([x, y, psi]) if scalar else np.stack([x, y, psi], axis=1),
         "reward_terms": {name: zeros for name in REWARD_TERMS} if result is None else result.reward_terms,
     }

@@ -30,15 +30,6 @@ def parse_reset_options(options: dict[str, Any] | None) -> dict[str, tuple[float
     return {name: core.parse_pose(name, value) for name, value in options.items()}
 
 
-def single_info(batch_infos: dict[str, Any], i: int = 0) -> dict[str, Any]:
-    """The info dict of robot ``i`` as Python scalars, from :func:`dwr_gym.core.infos`."""
-    info: dict[str, Any] = {key: float(batch_infos[key][i]) for key in core.INFO_KEYS if key != "pose"}
-    info["is_success"] = bool(batch_infos["is_success"][i])
-    info["pose"] = batch_infos["pose"][i]
-    info["reward_terms"] = {name: float(value[i]) for name, value in batch_infos["reward_terms"].items()}
-    return info
-
-
 class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     r"""Drive a differential wheeled robot to a goal within a prescribed time T_con.
 
@@ -130,13 +121,12 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
         self.render_mode = render_mode
         self.observation_space = core.observation_space(self.params)
         self.action_space = core.action_space()
-        self._state = core.TaskState.zeros(1)
+        self._state: core.TaskState | None = None  # a state of Python floats: one robot
         self._trail: list[tuple[float, float]] = []
         self._renderer: Any = None
-        self._has_reset = False
 
     def _noise(self, size: int, sigma: float) -> NDArray[np.float64] | None:
-        return self.np_random.standard_normal((1, size)) if sigma > 0 else None
+        return self.np_random.standard_normal(size) if sigma > 0 else None
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
@@ -149,43 +139,35 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
             if "start" in poses
             else model.from_goal_frame(*core.sample_start(self.np_random, self.params), *goal)
         )
-        as_arrays = [np.array([float(v)]) for v in (*start, *goal)]
-        core.reset_robots(self._state, slice(None), tuple(as_arrays[:3]), tuple(as_arrays[3:]), self.params)  # type: ignore[arg-type]
+        self._state = core.new_state(tuple(map(float, start)), tuple(map(float, goal)), self.params)  # type: ignore[arg-type]
         coords = self._state.coordinates(self.params.k)
         obs = core.observe(
             self._state, coords, self.params, self.observation_space, self._noise(3, self.params.observation_noise)
         )
-        info = single_info(core.infos(self._state, coords, self.params))
+        info = core.infos(self._state, coords, self.params)
         self._trail = [(float(info["pose"][0]), float(info["pose"][1]))]
-        self._has_reset = True
         if self.render_mode == "human":
             self.render()
-        return obs[0], info
+        return obs, info
 
     def step(
         self, action: NDArray[np.float32]
     ) -> tuple[NDArray[np.float32], SupportsFloat, bool, bool, dict[str, Any]]:
-        if not self._has_reset:
+        if self._state is None:
             raise gym.error.ResetNeeded("call reset() before step()")
-        batch = np.asarray(action, dtype=np.float64)
-        if batch.shape != (2,):
-            raise ValueError(f"action of shape {batch.shape} is invalid: expected shape (2,)")
+        action = np.asarray(action)
+        if action.shape != (2,):
+            raise ValueError(f"action of shape {action.shape} is invalid: expected shape (2,)")
         result = core.transition(
-            self._state, batch[None, :], self.params, self.observation_space,
+            self._state, action, self.params, self.observation_space,
             self._noise(2, self.params.actuation_noise), self._noise(3, self.params.observation_noise),
         )  # fmt: skip
-        info = single_info(core.infos(self._state, result.coords, self.params, result))
+        info = core.infos(self._state, result.coords, self.params, result)
         if self.render_mode is not None:
             self._trail.append((float(info["pose"][0]), float(info["pose"][1])))
             if self.render_mode == "human":
                 self.render()
-        return (
-            result.observation[0],
-            float(result.reward[0]),
-            bool(result.terminated[0]),
-            bool(result.truncated[0]),
-            info,
-        )
+        return result.observation, result.reward, bool(result.terminated), bool(result.truncated), info
 
     def render(self) -> NDArray[np.uint8] | None:
         if self.render_mode is None:
@@ -193,6 +175,8 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
                 'render() called without a render_mode; pass render_mode="rgb_array" or "human" to gym.make'
             )
             return None
+        if self._state is None:
+            raise gym.error.ResetNeeded("call reset() before render()")
         if self._renderer is None:
             from dwr_gym.rendering import Renderer
 
@@ -207,7 +191,7 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
     @property
     def time(self) -> float:
         """Elapsed time of the current episode [s]."""
-        return float(self._state.step_count[0] * self.params.dt)
+        return 0.0 if self._state is None else self._state.step_count * self.params.dt
 
     @property
     def prescribed_time_left(self) -> float:

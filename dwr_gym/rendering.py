@@ -109,9 +109,13 @@ class Renderer:
         self, state: TaskState, i: int, trail: list[tuple[float, float]], params: EnvParams
     ) -> NDArray[np.uint8] | None:
         """Draw robot ``i`` of a batched :class:`~dwr_gym.core.TaskState`."""
-        x, y, psi = (float(v[i]) for v in state.world_pose())
-        goal = (float(state.goal_x[i]), float(state.goal_y[i]), float(state.goal_psi[i]))
-        time = float(state.step_count[i] * params.dt)
+
+        def at(value: Any) -> float:
+            return float(value if np.ndim(value) == 0 else value[i])
+
+        x, y, psi = (at(v) for v in state.world_pose())
+        goal = (at(state.goal_x), at(state.goal_y), at(state.goal_psi))
+        time = at(state.step_count) * params.dt
         return self.draw((x, y, psi), goal, trail, time, params.T_con, params.goal_tolerance)
 
     def close(self) -> None:

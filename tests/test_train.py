@@ -47,7 +47,7 @@ def test_short_training_run_of_each_algorithm(algo: str, residual: bool, tmp_pat
         assert (run_dir / name).is_file(), name
     assert any((run_dir / "checkpoints").iterdir())
     assert any((run_dir / "tb").rglob("events.out.tfevents.*"))
-    label, policy = load_agent(run_dir)
+    _label, policy = load_agent(run_dir)
     obs = np.zeros((3, 10), dtype=np.float32)
     obs[:, 0], obs[:, 1], obs[:, 3], obs[:, 7], obs[:, 8] = 0.5, 1.0, 1.0, 20.0, 0.5
     actions, _ = policy.predict(obs)
@@ -129,7 +129,7 @@ def test_zoo_yaml_hyperparameters(tmp_path: Path) -> None:
     yaml_path = tmp_path / "ppo.yml"
     yaml_path.write_text(
         "DWRPointStabilization-v0:\n  n_timesteps: !!float 1e3\n  n_envs: 2\n  policy: 'MlpPolicy'\n"
-        "  n_steps: 64\n  learning_rate: lin_1e-3\n  policy_kwargs: \"dict(net_arch=[32, 32], activation_fn=nn.Tanh)\"\n"
+        '  n_steps: 64\n  learning_rate: lin_1e-3\n  policy_kwargs: "dict(net_arch=[32, 32], activation_fn=nn.Tanh)"\n'
     )
     config = resolve_hyperparams(TrainConfig(hyperparams=str(yaml_path)), set())
     assert config.total_timesteps == 1000 and config.num_envs == 2
