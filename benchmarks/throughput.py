@@ -4,7 +4,8 @@
     python benchmarks/throughput.py --quick    # fewer repeats and sizes
 
 Prints, as medians of several repeats: the cost of one step of our single env and of CartPole-v1
-(both through gym.make, and both unwrapped); env-steps per second of our vector env, of Gymnasium's
+(both through gym.make, and both unwrapped); env-steps per second of our vector env (float64, the
+default, and dtype="float32"), of Gymnasium's
 SyncVectorEnv over our single env, and of Gymnasium's CartPoleVectorEnv at N = 1, 64, 1024, 4096,
 16384; the ratios; and the time to evaluate the PTC law on the `random` set of 10,000 start poses.
 Timings on shared machines are noisy: compare ratios measured in one run, not absolute numbers.
@@ -76,20 +77,20 @@ def main() -> None:
         print(f"{label:>10}: ours {ours * 1e6:7.1f} us, CartPole-v1 {cart * 1e6:7.1f} us, ratio {ours / cart:5.2f}x")
 
     print("\n== vector envs: env-steps per second (median) ==")
-    print(
-        f"{'N':>6} {'ours (native)':>14} {'Sync(ours)':>12} {'CartPoleVec':>12} {'ours/CartPole':>14} {'ours/Sync':>10}"
-    )
+    print(f"{'N':>6} {'ours float64':>13} {'ours float32':>13} {'Sync(ours)':>11} {'CartPoleVec':>12} "
+          f"{'f64/CartPole':>13} {'f32/CartPole':>13} {'f64/Sync':>9}")  # fmt: skip
     for n in sizes:
         steps = max(10, min(300, 400_000 // n))
         ours = vector_rate(gym.make_vec("DWRPointStabilization-v0", num_envs=n), n, repeats, steps)
+        fast = vector_rate(gym.make_vec("DWRPointStabilization-v0", num_envs=n, dtype="float32"), n, repeats, steps)
         sync_steps = max(3, min(100, 20_000 // n))
         sync = vector_rate(
             gym.make_vec("DWRPointStabilization-v0", num_envs=n, vectorization_mode="sync"), n, 3, sync_steps
         )
         cart = vector_rate(gym.make_vec("CartPole-v1", num_envs=n, vectorization_mode="vector_entry_point"), n,
                            repeats, steps)  # fmt: skip
-        print(f"{n:>6} {ours / 1e6:>12.2f} M {sync / 1e6:>10.3f} M {cart / 1e6:>10.2f} M {ours / cart:>14.2f} "
-              f"{ours / sync:>10.1f}")  # fmt: skip
+        print(f"{n:>6} {ours / 1e6:>11.2f} M {fast / 1e6:>11.2f} M {sync / 1e6:>9.3f} M {cart / 1e6:>10.2f} M "
+              f"{ours / cart:>13.2f} {fast / cart:>13.2f} {ours / sync:>9.1f}")  # fmt: skip
 
     print("\n== PTC law on the `random` scenario set (10,000 start poses, default T_con and dt) ==")
     from train.evaluation import evaluate, make_scenario

@@ -79,9 +79,11 @@ class TaskState:
     goal_sin: FloatArray
 
     @classmethod
-    def zeros(cls, n: int) -> TaskState:
-        """A state of n robots at the goal."""
-        state = cls(*(np.zeros(n) for _ in range(6)), np.zeros(n, np.int64), *(np.zeros(n) for _ in range(6)))
+    def zeros(cls, n: int, dtype: type[np.floating] = np.float64) -> TaskState:
+        """A state of n robots at the goal, computed in ``dtype`` (float64, or float32 for speed)."""
+        state = cls(
+            *(np.zeros(n, dtype) for _ in range(6)), np.zeros(n, np.int64), *(np.zeros(n, dtype) for _ in range(6))
+        )
         state.goal_cos[:] = 1.0
         return state
 
@@ -217,8 +219,10 @@ def reset_robots(
     state.assign(index, new_state(start, goal, params))
 
 
-def commands_from_action(action: NDArray[np.floating], params: EnvParams) -> tuple[Any, Any, Any, Any]:
-    """Clip normalised actions to [-1, 1]: (a_u, a_omega, u [m/s], omega [rad/s]); (N, 2) or one action (2,)."""
+def commands_from_action(
+    action: NDArray[np.floating], params: EnvParams, dtype: type[np.floating] = np.float64
+) -> tuple[Any, Any, Any, Any]:
+    """Clip normalised actions to [-1, 1]: (a_u, a_omega, u [m/s], omega [rad/s]); (N, 2) in ``dtype``, or one action (2,)."""
     if action.ndim == 1:
         a_u, a_omega = float(action[0]), float(action[1])
         if not (math.isfinite(a_u) and math.isfinite(a_omega)):
@@ -227,7 +231,7 @@ def commands_from_action(action: NDArray[np.floating], params: EnvParams) -> tup
         return a_u, a_omega, a_u * params.u_max, a_omega * params.omega_max
     if not np.all(np.isfinite(action)):
         raise ValueError(f"action={np.asarray(action).tolist()!r} is invalid: expected finite numbers in [-1, 1]")
-    clipped = np.clip(action, -1.0, 1.0).astype(np.float64)
+    clipped = np.clip(action, -1.0, 1.0).astype(dtype, copy=False)
     a_u, a_omega = clipped[:, 0], clipped[:, 1]
     return a_u, a_omega, a_u * params.u_max, a_omega * params.omega_max
 
@@ -262,7 +266,7 @@ def transition(
     """
     if action_noise is not None:
         action = np.asarray(action, dtype=np.float64) + params.actuation_noise * action_noise
-    a_u, a_omega, u, omega = commands_from_action(action, params)
+    a_u, a_omega, u, omega = commands_from_action(action, params, getattr(state.x, "dtype", np.float64))
     state.x, state.y, state.psi = model.integrate_unicycle(
         state.x,
         state.y,
@@ -276,13 +280,17 @@ def transition(
     state.step_count += 1
     state.energy += (u * u + omega * omega) * params.dt
     coords = state.coordinates(params.k)
-    time = state.step_count * params.dt
     xp = model.namespace(coords.distance)
+    time = (
+        state.step_count * params.dt
+        if xp is model.SCALAR_MATH
+        else (state.step_count * params.dt).astype(state.x.dtype)
+    )
 
     heading_ok = True if params.heading_tolerance is None else xp.abs(coords.psi) <= params.heading_tolerance
     is_success = (coords.distance <= params.goal_tolerance) & heading_ok
     out_of_arena = coords.distance > params.arena_radius
-    in_time = time <= params.T_con + 1e-9 * params.dt
+    in_time = state.step_count <= params.prescribed_steps  # integer comparison: exact in any dtype
     lyapunov = model.lyapunov(coords.distance, coords.orientation_error)
     terms = {
         "progress": params.progress_weight * (state.lyapunov - params.shaping_discount * lyapunov),

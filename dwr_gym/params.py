@@ -163,6 +163,11 @@ class EnvParams:
         return self.horizon_factor * self.T_con
 
     @property
+    def prescribed_steps(self) -> int:
+        """Number of control periods within T_con: arriving at or before this step is in time."""
+        return math.floor(self.T_con / self.dt + 1e-9)
+
+    @property
     def max_episode_steps(self) -> int:
         """Number of control periods until truncation."""
         return math.ceil(self.horizon / self.dt - 1e-9)

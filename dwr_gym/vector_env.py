@@ -37,13 +37,22 @@ class DWRPointStabilizationVectorEnv(VectorEnv):
     optional boolean "reset_mask" (N,). Observation and actuation noise (off by default) are drawn
     from the vector env's own generator, so noisy rollouts do not match single envs draw for draw.
     Rendering shows sub-env 0.
+
+    ``dtype="float32"`` computes the whole batch in single precision: about 3x the throughput
+    (numpy's float32 transcendental functions are vectorised, its float64 ones are not), at a
+    position resolution of about 5e-7 m at 5 m; the default float64 matches the single env to 1e-9.
     """
 
     metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 20, "autoreset_mode": AutoresetMode.SAME_STEP}
 
-    def __init__(self, num_envs: int = 1, render_mode: str | None = None, **kwargs: Any) -> None:
+    def __init__(
+        self, num_envs: int = 1, render_mode: str | None = None, dtype: str = "float64", **kwargs: Any
+    ) -> None:
         if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
             raise ValueError(f"num_envs={num_envs!r} is invalid: expected an integer >= 1")
+        if dtype not in ("float64", "float32"):
+            raise ValueError(f"dtype={dtype!r} is invalid: expected 'float64' or 'float32'")
+        self.dtype = dtype
         self.params = EnvParams.from_kwargs(**kwargs)
         check_render_mode(render_mode)
         self.render_mode = render_mode
@@ -52,7 +61,7 @@ class DWRPointStabilizationVectorEnv(VectorEnv):
         self.single_action_space = core.action_space()
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
-        self._state = core.TaskState.zeros(self.num_envs)
+        self._state = core.TaskState.zeros(self.num_envs, np.dtype(dtype).type)
         self._rngs: list[np.random.Generator] = []
         self._all = np.ones(self.num_envs, dtype=bool)
         self._trail: list[tuple[float, float]] = []

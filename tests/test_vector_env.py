@@ -140,3 +140,21 @@ def test_sb3_adapter_conventions_and_ppo_learns_on_the_native_batch() -> None:
     assert any(
         not np.allclose(a.numpy(), b.detach().numpy()) for a, b in zip(before, model.policy.parameters(), strict=True)
     )
+
+
+def test_float32_mode_tracks_float64_and_keeps_its_dtype() -> None:
+    fast = gym.make_vec(ENV_ID, num_envs=64, dtype="float32")
+    exact = gym.make_vec(ENV_ID, num_envs=64)
+    obs_f, _ = fast.reset(seed=4)
+    obs_e, _ = exact.reset(seed=4)
+    np.testing.assert_allclose(obs_f, obs_e, atol=1e-6)
+    actions = np.tile(np.array([[0.3, 0.4]], dtype=np.float32), (64, 1))
+    for _ in range(100):
+        obs_f, rew_f, _term_f, _, info_f = fast.step(actions)
+        obs_e, rew_e, term_e, _, _info_e = exact.step(actions)
+        assert not term_e.any()
+        np.testing.assert_allclose(obs_f, obs_e, atol=2e-4)
+        np.testing.assert_allclose(rew_f, rew_e, atol=2e-4)
+    assert fast.unwrapped._state.x.dtype == np.float32 and info_f["distance"].dtype == np.float32
+    with pytest.raises(ValueError, match="dtype"):
+        DWRPointStabilizationVectorEnv(num_envs=2, dtype="float16")
