@@ -150,7 +150,7 @@ def observe(
              state.step_count * (params.dt / params.T_con), params.T_con, state.initial_distance,
              state.initial_orientation_error], dtype=np.float32,
         )  # fmt: skip
-        return np.clip(features, space.low, space.high, out=features)
+        return np.minimum(np.maximum(features, space.low, out=features), space.high, out=features)  # 2x np.clip's speed
     at_goal = dist == 0.0
     safe = np.where(at_goal, 1.0, dist)
     features = np.empty((len(OBSERVATION_NAMES), dist.shape[0]), dtype=np.float32)  # filled row by row: contiguous

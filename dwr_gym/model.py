@@ -56,7 +56,7 @@ SCALAR_MATH: Any = _ScalarMath
 def namespace(*values: Any) -> Any:
     """numpy if any value is an array, else :data:`SCALAR_MATH`."""
     for value in values:
-        if isinstance(value, np.ndarray):
+        if type(value) is not float and isinstance(value, np.ndarray):
             return np
     return SCALAR_MATH
 

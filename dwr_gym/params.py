@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 from dwr_gym.model import INTEGRATORS
@@ -162,12 +163,12 @@ class EnvParams:
         """Time at which an episode is truncated [s]."""
         return self.horizon_factor * self.T_con
 
-    @property
+    @cached_property
     def prescribed_steps(self) -> int:
         """Number of control periods within T_con: arriving at or before this step is in time."""
         return math.floor(self.T_con / self.dt + 1e-9)
 
-    @property
+    @cached_property
     def max_episode_steps(self) -> int:
         """Number of control periods until truncation."""
         return math.ceil(self.horizon / self.dt - 1e-9)
