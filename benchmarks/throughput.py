@@ -38,19 +38,29 @@ def median_seconds(fn: Callable[[], Any], number: int, repeats: int) -> float:
     return statistics.median(times)
 
 
-def single_step_cost(env_id: str, wrapped: bool, repeats: int) -> float:
-    env = gym.make(env_id)
-    target = env if wrapped else env.unwrapped
-    env.reset(seed=0)
-    action = env.action_space.sample()
+def single_step_costs(env_ids: tuple[str, str], wrapped: bool, repeats: int) -> tuple[float, float, float]:
+    """Median step cost of two envs, measured alternately (so drifts in machine load hit both), and the
+    median of the per-repeat ratios."""
+    steppers = []
+    for env_id in env_ids:
+        env = gym.make(env_id)
+        target = env if wrapped else env.unwrapped
+        env.reset(seed=0)
+        action = env.action_space.sample()
 
-    def step() -> None:
-        _, _, terminated, truncated, _ = target.step(action)
-        if terminated or truncated:
-            target.reset()
+        def step(target: Any = target, action: Any = action) -> None:
+            _, _, terminated, truncated, _ = target.step(action)
+            if terminated or truncated:
+                target.reset()
 
-    step()
-    return median_seconds(step, 2000, repeats)
+        step()
+        steppers.append(step)
+    costs: list[list[float]] = [[], []]
+    for _ in range(repeats):
+        for i, step in enumerate(steppers):
+            costs[i].append(median_seconds(step, 2000, 1))
+    ratios = [a / b for a, b in zip(costs[0], costs[1], strict=True)]
+    return statistics.median(costs[0]), statistics.median(costs[1]), statistics.median(ratios)
 
 
 def vector_rate(envs: Any, n: int, repeats: int, steps: int) -> float:
@@ -71,10 +81,9 @@ def main() -> None:
 
     print("== one step of a single env (median of", repeats, "repeats) ==")
     for wrapped in (True, False):
-        ours = single_step_cost("DWRPointStabilization-v0", wrapped, repeats)
-        cart = single_step_cost("CartPole-v1", wrapped, repeats)
+        ours, cart, ratio = single_step_costs(("DWRPointStabilization-v0", "CartPole-v1"), wrapped, 3 * repeats)
         label = "gym.make" if wrapped else "unwrapped"
-        print(f"{label:>10}: ours {ours * 1e6:7.1f} us, CartPole-v1 {cart * 1e6:7.1f} us, ratio {ours / cart:5.2f}x")
+        print(f"{label:>10}: ours {ours * 1e6:7.1f} us, CartPole-v1 {cart * 1e6:7.1f} us, ratio {ratio:5.2f}x")
 
     print("\n== vector envs: env-steps per second (median) ==")
     print(f"{'N':>6} {'ours float64':>13} {'ours float32':>13} {'Sync(ours)':>11} {'CartPoleVec':>12} "
