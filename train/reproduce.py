@@ -93,7 +93,7 @@ def reproduce(out_dir: str | Path = "results/reproduce", dt: float = 0.01, gif: 
     final_yaw = fig5.final_heading_error
     claims.append(Claim(
         "The yaw angle at the target goes to zero (Theorem 8, Remark 1).",
-        f"final |psi| at 1 cm over Fig. 5's headings: mean {np.mean(final_yaw):.3f} rad, max {np.max(final_yaw):.3f} rad "
+        f"final abs(psi) at 1 cm over Fig. 5's headings: mean {np.mean(final_yaw):.3f} rad, max {np.max(final_yaw):.3f} rad "
         f"({math.degrees(np.max(final_yaw)):.1f} deg)", bool(np.max(final_yaw) < math.radians(2.0)),
     ))  # fmt: skip
 
@@ -213,7 +213,7 @@ def reproduce(out_dir: str | Path = "results/reproduce", dt: float = 0.01, gif: 
     stuck = _single_start((0.0, 0.0, math.pi), 20.0, dt, "fabregas")
     ptc_pi = _single_start((0.0, 0.0, math.pi), 20.0, dt, "ptc")
     claims.append(Claim(
-        "With p of eq. (9), ref. [9]'s law stalls when |alpha - psi| = pi; p* of eq. (10) does not.",
+        "With p of eq. (9), ref. [9]'s law stalls when abs(alpha - psi) = pi; p* of eq. (10) does not.",
         f"from psi0 = pi, Fabregas [9] ends {float(stuck.final_distance[0]):.3f} m from the goal; "
         f"the PTC law arrives at {float(ptc_pi.arrival_time[0]):.2f} s",
         bool(stuck.final_distance[0] > 0.5 and ptc_pi.success[0]),
