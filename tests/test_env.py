@@ -192,9 +192,6 @@ def test_heading_term_is_paid_on_arrival_only() -> None:
     env.reset(options={"start": (-0.2, 0.0, math.pi / 2), "goal": (0.0, 0.0, 0.0)})
     *_, info = env.step(np.zeros(2, dtype=np.float32))
     assert info["reward_terms"]["heading"] == 0.0
-    env.reset(options={"start": (-0.06, 0.0, math.pi / 2), "goal": (0.0, 0.0, 0.0)})
-    _, _, terminated, _, info = env.step(np.array([0.0, 0.0], dtype=np.float32))
-    assert not terminated
     env.reset(options={"start": (-0.03, 0.0, math.pi / 2), "goal": (0.0, 0.0, 0.0)})
     _, _, terminated, _, info = env.step(np.array([0.0, 0.0], dtype=np.float32))
     assert terminated and info["reward_terms"]["heading"] == pytest.approx(2.0 * (math.cos(math.pi / 2) - 1.0))

@@ -139,13 +139,11 @@ def run_evaluation(
     return rows
 
 
-def cmd_evaluate(args: argparse.Namespace) -> int:
-    """Evaluate controllers (and saved agents) on named scenario sets."""
+def checked_selection(args: argparse.Namespace) -> list[str]:
+    """The controllers of ``--controllers`` ('all' expands); validates them, ``--scenarios`` and ``--n``."""
     from baselines.controllers import CONTROLLERS
     from train.evaluation import SCENARIO_SETS
 
-    env_kwargs = parse_env_kwargs(args.env_kwargs)
-    validated_env_params(env_kwargs)
     names = list(CONTROLLERS) if "all" in args.controllers else args.controllers
     for name in names:
         if name not in CONTROLLERS:
@@ -155,6 +153,39 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
             raise UsageError(f"--scenarios {name!r} is invalid: expected any of {', '.join(SCENARIO_SETS)}")
     if args.n < 1:
         raise UsageError(f"--n {args.n} is invalid: expected an integer >= 1")
+    return list(names)
+
+
+def add_scenario_arguments(p: argparse.ArgumentParser, out: str) -> None:
+    """The options shared by ``evaluate`` and ``compare``."""
+    from baselines.controllers import CONTROLLERS
+    from train.evaluation import SCENARIO_SETS
+
+    p.add_argument(
+        "--controllers",
+        nargs="+",
+        default=["all"],
+        metavar="NAME",
+        help=f"controllers: 'all' or any of {', '.join(CONTROLLERS)} (default: all)",
+    )
+    p.add_argument(
+        "--scenarios",
+        nargs="+",
+        default=list(SCENARIO_SETS),
+        metavar="SET",
+        help=f"scenario sets: any of {', '.join(SCENARIO_SETS)} (default: all)",
+    )
+    p.add_argument("--n", type=int, default=1000, help="number of random start poses for 'random' (default: 1000)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the random scenario set (default: 0)")
+    p.add_argument("--out", default=out, help=f"output directory (default: {out})")
+    p.add_argument("--no-progress", action="store_true", help="no progress bars")  # fmt: skip
+
+
+def cmd_evaluate(args: argparse.Namespace) -> int:
+    """Evaluate controllers (and saved agents) on named scenario sets."""
+    env_kwargs = parse_env_kwargs(args.env_kwargs)
+    validated_env_params(env_kwargs)
+    names = checked_selection(args)
     policies: dict[str, Any] = {name: name for name in names}
     policies.update(load_agents(args.agent))
     rows = run_evaluation(policies, args.scenarios, args.n, args.seed, env_kwargs, progress=not args.no_progress)
@@ -182,30 +213,11 @@ def load_agents(paths: Sequence[str] | None) -> dict[str, Any]:
 
 def add_evaluate_parser(sub: Any) -> None:
     """The ``evaluate`` subcommand."""
-    from baselines.controllers import CONTROLLERS
-    from train.evaluation import SCENARIO_SETS
 
     p = sub.add_parser("evaluate", help="evaluate controllers and agents on named scenario sets")
-    p.add_argument(
-        "--controllers",
-        nargs="+",
-        default=["all"],
-        metavar="NAME",
-        help=f"controllers to run: 'all' or any of {', '.join(CONTROLLERS)} (default: all)",
-    )
+    add_scenario_arguments(p, "results/evaluate")
     p.add_argument("--agent", action="append", metavar="PATH", help="a saved agent (.zip) to evaluate too; repeatable")
-    p.add_argument(
-        "--scenarios",
-        nargs="+",
-        default=list(SCENARIO_SETS),
-        metavar="SET",
-        help=f"scenario sets: any of {', '.join(SCENARIO_SETS)} (default: all)",
-    )
-    p.add_argument("--n", type=int, default=1000, help="number of random start poses for 'random' (default: 1000)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the random scenario set (default: 0)")
     p.add_argument("--env-kwargs", nargs="*", metavar="KEY=VALUE", help="env keywords, e.g. T_con=25 dt=0.02")
-    p.add_argument("--out", default="results/evaluate", help="directory for evaluation.csv and .json")
-    p.add_argument("--no-progress", action="store_true", help="no progress bars")
     p.set_defaults(func=cmd_evaluate)  # fmt: skip
 
 
@@ -317,34 +329,11 @@ def cmd_train(args: argparse.Namespace) -> int:
 
 def add_compare_parser(sub: Any) -> None:
     """The ``compare`` subcommand."""
-    from baselines.controllers import CONTROLLERS
-    from train.evaluation import SCENARIO_SETS
 
     p = sub.add_parser("compare", help="compare trained agents with the PTC expert and the other controllers")
-    p.add_argument(
-        "--agents",
-        nargs="+",
-        metavar="PATH",
-        help="run directories or model .zip files (default: the pretrained agents shipped with dwr-gym)",
-    )
-    p.add_argument(
-        "--controllers",
-        nargs="+",
-        default=list(CONTROLLERS),
-        metavar="NAME",
-        help=f"controllers to compare with (default: all of {', '.join(CONTROLLERS)})",
-    )
-    p.add_argument(
-        "--scenarios",
-        nargs="+",
-        default=list(SCENARIO_SETS),
-        metavar="SET",
-        help=f"scenario sets (default: {' '.join(SCENARIO_SETS)})",
-    )
-    p.add_argument("--n", type=int, default=1000, help="size of the random scenario set (default: 1000)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the random scenario set (default: 0)")
-    p.add_argument("--out", default="results/compare", help="directory for the table and plots")
-    p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    add_scenario_arguments(p, "results/compare")
+    p.add_argument("--agents", nargs="+", metavar="PATH",
+                   help="run directories or model .zip files (default: the pretrained agents shipped with dwr-gym)")  # fmt: skip
     p.set_defaults(func=cmd_compare)  # fmt: skip
 
 
@@ -352,17 +341,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
     """Evaluate agents and controllers on the same scenarios; print the table, write CSV, JSON and plots."""
     from pathlib import Path
 
-    from baselines.controllers import CONTROLLERS
-    from train.evaluation import SCENARIO_SETS
-
-    for name in args.controllers:
-        if name not in CONTROLLERS:
-            raise UsageError(f"--controllers {name!r} is invalid: expected any of {', '.join(CONTROLLERS)}")
-    for name in args.scenarios:
-        if name not in SCENARIO_SETS:
-            raise UsageError(f"--scenarios {name!r} is invalid: expected any of {', '.join(SCENARIO_SETS)}")
-    if args.n < 1:
-        raise UsageError(f"--n {args.n} is invalid: expected an integer >= 1")
+    controllers = checked_selection(args)
     try:
         import matplotlib  # noqa: F401
         import stable_baselines3  # noqa: F401
@@ -381,7 +360,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
             run_dirs[label] = find_run_dir(path if path.is_dir() else path.parent)
         except AgentLoadError:
             pass
-    rows = compare(agents, run_dirs, args.controllers, args.scenarios, args.n, args.seed, Path(args.out),
+    rows = compare(agents, run_dirs, controllers, args.scenarios, args.n, args.seed, Path(args.out),
                    progress=not args.no_progress)  # fmt: skip
     print(format_table(rows, EVAL_COLUMNS))
     for path in write_results(rows, args.out, "comparison"):
