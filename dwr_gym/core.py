@@ -1,8 +1,10 @@
 """The task on a batch of N robots: observation, reward, episode end.
 
-Both :class:`dwr_gym.env.DWRPointStabilizationEnv` (N = 1) and
-:class:`dwr_gym.vector_env.DWRPointStabilizationVectorEnv` (any N) keep a :class:`TaskState` and
-advance it with :func:`transition`; they differ only in bookkeeping (seeding, autoreset, rendering).
+Both :class:`dwr_gym.env.DWRPointStabilizationEnv` and
+:class:`dwr_gym.vector_env.DWRPointStabilizationVectorEnv` keep a :class:`TaskState` and advance it
+with :func:`transition`; they differ only in bookkeeping (seeding, autoreset, rendering). The vector
+env's state holds (N,) arrays; the single env's holds Python floats, for which the same functions run
+on the ``math`` module (see :func:`dwr_gym.model.namespace`).
 """
 
 from __future__ import annotations
@@ -58,7 +60,7 @@ def error_coordinates(x: FloatArray, y: FloatArray, psi: FloatArray, k: float) -
 
 @dataclass
 class TaskState:
-    """Batched state of N robots; every array has shape (N,).
+    """State of N robots: every field an array of shape (N,), or a Python number for one robot.
 
     The pose (x, y, psi) is kept in the goal's frame, where the task is defined; eq. (1) is
     invariant under the change of frame, so it is integrated there too. The goal's world pose maps it back.
@@ -75,7 +77,7 @@ class TaskState:
     initial_distance: FloatArray
     initial_orientation_error: FloatArray
     lyapunov: FloatArray  # eq. (21) at the current pose, kept for the next progress term
-    goal_cos: FloatArray  # cos(goal_psi), set with the goal by reset_robots so world_pose needs no trigonometry
+    goal_cos: FloatArray  # cos(goal_psi), set with the goal by new_state so world_pose needs no trigonometry
     goal_sin: FloatArray
 
     @classmethod

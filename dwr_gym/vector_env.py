@@ -132,7 +132,7 @@ class DWRPointStabilizationVectorEnv(VectorEnv):
     def step(
         self, actions: NDArray[np.float32]
     ) -> tuple[NDArray[np.float32], NDArray[np.float64], NDArray[np.bool_], NDArray[np.bool_], dict[str, Any]]:
-        actions = np.asarray(actions, dtype=np.float64)
+        actions = np.asarray(actions)
         if actions.shape != (self.num_envs, 2):
             raise ValueError(f"actions of shape {actions.shape} are invalid: expected ({self.num_envs}, 2)")
         result = core.transition(
@@ -153,15 +153,13 @@ class DWRPointStabilizationVectorEnv(VectorEnv):
             fresh = self._state.subset(index)
             coords = fresh.coordinates(self.params.k)
             obs[index] = core.observe(fresh, coords, self.params, self.single_observation_space)
-            for key, value in core.infos(fresh, coords, self.params).items():
-                infos[key] = (
-                    {k: v.copy() for k, v in infos[key].items()} if key == "reward_terms" else infos[key].copy()
-                )
-                if key == "reward_terms":
-                    for term in core.REWARD_TERMS:
-                        infos[key][term][index] = 0.0
-                else:
-                    infos[key][index] = value
+            reset_infos = core.infos(fresh, coords, self.params)
+            for key in core.INFO_KEYS:  # copies: final_info keeps the step's arrays
+                infos[key] = infos[key].copy()
+                infos[key][index] = reset_infos[key]
+            infos["reward_terms"] = {k: v.copy() for k, v in infos["reward_terms"].items()}
+            for term in core.REWARD_TERMS:
+                infos["reward_terms"][term][index] = 0.0
         if self.render_mode is not None:
             if done[0]:
                 self._trail = []
