@@ -210,7 +210,7 @@ def rollout(
         arrived_now = ended & result.is_success
         time = state.step_count * params.dt
         arrival_time = np.where(arrived_now, time, arrival_time)
-        success |= arrived_now & (time <= params.T_con + 1e-9)
+        success |= arrived_now & (state.step_count <= params.prescribed_steps)  # as the env counts "in time"
         left_arena |= ended & result.terminated & ~result.is_success
         if record:
             x, y, psi = state.world_pose()
