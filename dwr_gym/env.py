@@ -73,8 +73,9 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
     - time = -time_weight * dt * mu_1(t') * d(s'): the cost of still being away grows as T_con nears;
     - effort = -effort_weight * dt * (a_u^2 + a_omega^2);
     - arrival = +arrival_bonus on arrival at or before T_con (nothing for a late arrival);
-    - heading = heading_weight * (cos(psi - psi_d) - 1) on arrival (0 by default: the paper's task
-      ignores the final heading);
+    - heading = heading_weight * (cos(psi - psi_d) - 1) on arrival: the paper aims at a final yaw of
+      zero too (Theorem 8, Remark 1), though its success criterion is the position alone; set
+      ``heading_weight=0`` for a reward on the position only;
     - late = -late_penalty * dt for each step after T_con without arrival;
     - arena = -arena_penalty when the robot leaves the arena.
 

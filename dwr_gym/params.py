@@ -97,8 +97,8 @@ class EnvParams:
     """Weight of the control-effort term dt * (a_u^2 + a_omega^2) on normalised actions."""
     arrival_bonus: float = 10.0
     """Reward for arriving at or before T_con."""
-    heading_weight: float = 0.0
-    """Weight of the heading term heading_weight * (cos(psi - psi_d) - 1) paid on arrival; 0 is the paper's task."""
+    heading_weight: float = 5.0
+    """Weight of the heading term heading_weight * (cos(psi - psi_d) - 1) paid on arrival (Theorem 8's final yaw)."""
     late_penalty: float = 1.0  # [1/s]
     """Penalty per second after T_con without arrival."""
     arena_penalty: float = 10.0
