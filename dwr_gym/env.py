@@ -189,15 +189,5 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
             self._renderer.close()
             self._renderer = None
 
-    @property
-    def time(self) -> float:
-        """Elapsed time of the current episode [s]."""
-        return 0.0 if self._state is None else self._state.step_count * self.params.dt
-
-    @property
-    def prescribed_time_left(self) -> float:
-        """T_con minus the elapsed time [s] (negative once T_con has passed)."""
-        return self.params.T_con - self.time
-
 
 __all__ = ["DWRPointStabilizationEnv"]

@@ -32,8 +32,9 @@ def compare(
         for label, result in evaluate(policies, scenario, seed=seed, progress=progress).items():
             rows.append({"scenario": name, "policy": label, **result.summary()})
     out_dir.mkdir(parents=True, exist_ok=True)
-    recorded = evaluate(policies, make_scenario(TRAJECTORY_SCENARIO), record=True)
-    plot_trajectories(recorded, out_dir / "trajectories.png")
+    trajectory_scenario = make_scenario(TRAJECTORY_SCENARIO)
+    recorded = evaluate(policies, trajectory_scenario, record=True)
+    plot_trajectories(recorded, trajectory_scenario.labels, out_dir / "trajectories.png")
     plot_time_series(recorded, out_dir / "time_series.png")
     if run_dirs:
         plot_learning_curves(run_dirs, out_dir / "learning_curves.png")
@@ -49,8 +50,8 @@ def _plt() -> Any:
     return plt
 
 
-def plot_trajectories(results: dict[str, RolloutResult], path: Path) -> None:
-    """One panel per policy: the eight Figure 5 rollouts."""
+def plot_trajectories(results: dict[str, RolloutResult], labels: tuple[str, ...], path: Path) -> None:
+    """One panel per policy: the eight Figure 5 rollouts, labelled by their initial heading."""
     plt = _plt()
     n = len(results)
     cols = min(n, 4)
@@ -59,11 +60,12 @@ def plot_trajectories(results: dict[str, RolloutResult], path: Path) -> None:
     for ax, (label, result) in zip(axes.flat, results.items(), strict=False):
         tr = result.trajectory
         assert tr is not None
-        for i in range(tr["x"].shape[1]):
-            ax.plot(tr["x"][:, i], tr["y"][:, i], linewidth=1.2)
+        for i, start in enumerate(labels):
+            ax.plot(tr["x"][:, i], tr["y"][:, i], linewidth=1.2, label=start)
         ax.plot([0.8], [0.0], "k*", markersize=10)
         ax.set_title(f"{label}: {result.success.mean():.0%} before T_con", fontsize=9)
         ax.set_aspect("equal")
+    axes.flat[0].legend(fontsize=6, loc="lower left")
     for ax in list(axes.flat)[n:]:
         ax.set_visible(False)
     fig.suptitle("Trajectories from the eight Figure 5 headings (T_con = 20 s)")

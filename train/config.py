@@ -17,7 +17,6 @@ from typing import Any
 
 ALGORITHMS: tuple[str, ...] = ("ppo", "sac", "td3")
 ENV_ID = "DWRPointStabilization-v0"
-ZOO_KEYS_HANDLED = ("n_timesteps", "n_envs", "policy", "policy_kwargs", "learning_rate")
 ZOO_KEYS_UNSUPPORTED = ("normalize", "frame_stack", "env_wrapper", "callback", "vec_env_wrapper")
 
 
