@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from train.evaluation import RolloutResult, evaluate, make_scenario
+from train.plotting import pyplot, save
 
 TRAJECTORY_SCENARIO = "paper-fig5"
 TIME_SERIES_INDEX = 4  # psi0 = pi in paper-fig5, the hardest start
@@ -41,18 +42,9 @@ def compare(
     return rows
 
 
-def _plt() -> Any:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
 def plot_trajectories(results: dict[str, RolloutResult], labels: tuple[str, ...], path: Path) -> None:
     """One panel per policy: the eight Figure 5 rollouts, labelled by their initial heading."""
-    plt = _plt()
+    plt = pyplot()
     n = len(results)
     cols = min(n, 4)
     rows = int(np.ceil(n / cols))
@@ -69,14 +61,12 @@ def plot_trajectories(results: dict[str, RolloutResult], labels: tuple[str, ...]
     for ax in list(axes.flat)[n:]:
         ax.set_visible(False)
     fig.suptitle("Trajectories from the eight Figure 5 headings (T_con = 20 s)")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save(fig, path, dpi=110)
 
 
 def plot_time_series(results: dict[str, RolloutResult], path: Path) -> None:
     """Distance, linear and angular velocity over time from psi0 = pi, every policy on one axis each."""
-    plt = _plt()
+    plt = pyplot()
     fig, axes = plt.subplots(1, 3, figsize=(15, 4))
     i = TIME_SERIES_INDEX
     for label, result in results.items():
@@ -90,14 +80,12 @@ def plot_time_series(results: dict[str, RolloutResult], path: Path) -> None:
         ax.set(xlabel="t [s]", ylabel=unit)
     axes[0].legend(fontsize=8)
     fig.suptitle("Start (0, 0, pi), goal (0.8, 0, 0), T_con = 20 s")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save(fig, path, dpi=110)
 
 
 def plot_learning_curves(run_dirs: dict[str, Path], path: Path) -> None:
     """Success rate, final heading error and return on the fixed evaluation set against training steps."""
-    plt = _plt()
+    plt = pyplot()
     fig, axes = plt.subplots(1, 3, figsize=(15, 4))
     for label, run_dir in run_dirs.items():
         csv_path = run_dir / "evaluations.csv"
@@ -112,6 +100,4 @@ def plot_learning_curves(run_dirs: dict[str, Path], path: Path) -> None:
                          strict=True):  # fmt: skip
         ax.set(xlabel="env steps", title=title)
     axes[0].legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save(fig, path, dpi=110)

@@ -16,6 +16,7 @@ import numpy as np
 from baselines.controllers import PTCParams
 from dwr_gym import model
 from train.evaluation import FIG5_HEADINGS, RolloutResult, evaluate, make_scenario
+from train.plotting import pyplot, save
 
 FIG6_T_CON = (20.0, 25.0, 30.0, 35.0)
 FIG8_T_CON = (25.0, 50.0)
@@ -35,17 +36,6 @@ class Claim:
         return "holds" if self.holds else "does not hold"
 
 
-def _plt() -> Any:
-    try:
-        import matplotlib
-    except ImportError as error:
-        raise ImportError('matplotlib is needed for figures: pip install "dwr-gym[plots]"') from error
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
 def _run(name: str, policies: dict[str, Any], dt: float, **env_kwargs: Any) -> dict[str, RolloutResult]:
     scenario = make_scenario(name, env_kwargs={"dt": dt, **env_kwargs})
     return evaluate(policies, scenario, record=True)
@@ -61,7 +51,7 @@ def _single_start(start: tuple[float, float, float], T_con: float, dt: float, po
 
 def reproduce(out_dir: str | Path = "results/reproduce", dt: float = 0.01, gif: bool = True) -> list[Claim]:
     """Write figure5.png ... figure9.png, figure5.gif and report.md into ``out_dir``; return the claims."""
-    plt = _plt()
+    plt = pyplot()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     claims: list[Claim] = []
@@ -81,9 +71,7 @@ def reproduce(out_dir: str | Path = "results/reproduce", dt: float = 0.01, gif: 
     ax_b.set(xlabel="t [s]", ylabel="e_psi [rad]", title="(b) orientation error (6)")
     ax_a.legend(fontsize=7)
     fig.suptitle("Figure 5: any initial yaw angle, PTC with K1=2, K2=10, T_con=20 s")
-    fig.tight_layout()
-    fig.savefig(out / "figure5.png", dpi=120)
-    plt.close(fig)
+    save(fig, out / "figure5.png")
     worst = float(np.nanmax(fig5.arrival_time))
     claims.append(Claim(
         "The robot reaches the target before T_con = 20 s from any initial yaw angle (Fig. 5).",
@@ -113,9 +101,7 @@ def reproduce(out_dir: str | Path = "results/reproduce", dt: float = 0.01, gif: 
     ax_b.set(xlabel="t [s]", ylabel="L", title="(b) Lyapunov function (21)")
     ax_a.legend()
     fig.suptitle("Figure 6: different prescribed times, psi0 = pi")
-    fig.tight_layout()
-    fig.savefig(out / "figure6.png", dpi=120)
-    plt.close(fig)
+    save(fig, out / "figure6.png")
     arr = np.array(arrivals)
     ratios = arr / np.array(FIG6_T_CON)
     claims.append(Claim(
@@ -139,9 +125,7 @@ def reproduce(out_dir: str | Path = "results/reproduce", dt: float = 0.01, gif: 
         ax.set(xlabel="t [s]", ylabel=unit, title=title)
     axes[0].legend()
     fig.suptitle("Figure 7: start (-0.4, 0), psi0 = -178 deg, goal (0.8, 0), T_con = 70 s")
-    fig.tight_layout()
-    fig.savefig(out / "figure7.png", dpi=120)
-    plt.close(fig)
+    save(fig, out / "figure7.png")
     peaks = {name: float(r.peak_linear_velocity[0]) for name, r in fig7.items()}
     energies = {name: float(r.energy[0]) for name, r in fig7.items()}
     settle = {name: float(r.arrival_time[0]) for name, r in fig7.items()}
@@ -169,9 +153,7 @@ def reproduce(out_dir: str | Path = "results/reproduce", dt: float = 0.01, gif: 
     ax_b.set(xlabel="t [s]", ylabel="integral of u^2 + omega^2", title="(b) energy")
     ax_a.legend()
     fig.suptitle("Figure 9: trajectory and energy consumption")
-    fig.tight_layout()
-    fig.savefig(out / "figure9.png", dpi=120)
-    plt.close(fig)
+    save(fig, out / "figure9.png")
 
     # Figure 8: fractional against conventional PTC
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.5))
@@ -189,9 +171,7 @@ def reproduce(out_dir: str | Path = "results/reproduce", dt: float = 0.01, gif: 
         ax.set(xlabel="t [s]", ylabel="d [m]", title=f"T_con = {T_con:.0f} s")
         ax.legend(fontsize=8)
     fig.suptitle("Figure 8: settling time, fractional against conventional PTC (psi0 = pi)")
-    fig.tight_layout()
-    fig.savefig(out / "figure8.png", dpi=120)
-    plt.close(fig)
+    save(fig, out / "figure8.png")
     claims.append(Claim(
         "The fractional law settles before the conventional one (Fig. 8).",
         "; ".join(f"T_con {T:.0f}: fractional {t['ptc']:.2f} s, conventional {t['conventional-ptc']:.2f} s"
@@ -227,7 +207,7 @@ def reproduce(out_dir: str | Path = "results/reproduce", dt: float = 0.01, gif: 
 
 def animate_fig5(result: RolloutResult, path: Path, fps: int = 12) -> None:
     """An animated GIF of the Figure 5 rollouts, one frame every 0.5 s of simulated time."""
-    plt = _plt()
+    plt = pyplot()
     from matplotlib.animation import FuncAnimation, PillowWriter
 
     tr = result.trajectory
