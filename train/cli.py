@@ -93,6 +93,7 @@ def format_table(rows: list[dict[str, Any]], columns: list[tuple[str, str, str]]
 
 EVAL_COLUMNS = [
     ("scenario", "scenario", ""),
+    ("T_con", "T_con", ".0f"),
     ("policy", "policy", ""),
     ("n", "n", ".0f"),
     ("success_rate", "success", ".3f"),
@@ -104,6 +105,8 @@ EVAL_COLUMNS = [
     ("peak_u_max", "peak u", ".3f"),
     ("peak_omega_max", "peak w", ".3f"),
     ("energy_mean", "energy", ".3f"),
+    ("energy_ratio_mean", "E/opt mean", ".2f"),
+    ("energy_ratio_max", "E/opt max", ".2f"),
     ("path_length_mean", "path", ".3f"),
     ("command_rate_rms_mean", "rate rms", ".3f"),
 ]
@@ -125,29 +128,51 @@ def write_results(rows: list[dict[str, Any]], out_dir: str, stem: str) -> list[s
     return [str(csv_path), str(json_path)]
 
 
-def run_evaluation(
-    policies: dict[str, Any], scenarios: Sequence[str], n: int, seed: int, env_kwargs: dict[str, Any], progress: bool
-) -> list[dict[str, Any]]:
-    """Evaluate policies (controller names or objects with ``predict``) on named scenario sets."""
-    from train.evaluation import evaluate, make_scenario
+def print_blocks(rows: list[dict[str, Any]], columns: list[tuple[str, str, str]]) -> None:
+    """The table, one block per (scenario, T_con), with a note under policies that fail by design."""
+    blocks: dict[tuple[str, float], list[dict[str, Any]]] = {}
+    for row in rows:
+        blocks.setdefault((row["scenario"], row["T_con"]), []).append(row)
+    for (scenario, T_con), block in blocks.items():
+        print(f"\n{scenario}, T_con = {T_con:g} s")
+        print(format_table(block, columns))
+    if any(row.get("planner_failures") for row in rows):
+        print("note: the optimal controller found no plan for some robots (planner_failures in the JSON); "
+              "they stood still and count as failures")  # fmt: skip
+    if any(row["optimal_energy_mean"] == row["optimal_energy_mean"] for row in rows):  # not NaN
+        print("E/opt: energy / minimum energy to the goal pose by T_con, over the episodes that succeeded")
 
-    rows = []
-    for name in scenarios:
-        scenario = make_scenario(name, n=n, seed=seed, env_kwargs=env_kwargs)
-        for label, result in evaluate(policies, scenario, seed=seed, progress=progress).items():
-            rows.append({"scenario": name, "policy": label, **result.summary()})
-    return rows
+
+def checked_optimum(args: argparse.Namespace) -> str:
+    """``--optimum``, turned off with a notice when CasADi is not installed."""
+    from train.optimum import casadi_available
+
+    if args.optimum != "none" and not casadi_available():
+        print('note: energy / optimal needs CasADi: pip install "dwr-gym[optimal]"; skipped', file=sys.stderr)
+        return "none"
+    return str(args.optimum)
 
 
 def checked_selection(args: argparse.Namespace) -> list[str]:
     """The controllers of ``--controllers`` ('all' expands); validates them, ``--scenarios`` and ``--n``."""
-    from baselines.controllers import CONTROLLERS
+    from baselines.controllers import CONTROLLER_NAMES, CONTROLLERS
     from train.evaluation import SCENARIO_SETS
+    from train.optimum import casadi_available
 
-    names = list(CONTROLLERS) if "all" in args.controllers else args.controllers
+    if "all" in args.controllers:
+        names = [*CONTROLLERS, *(["optimal"] if casadi_available() else [])]
+    else:
+        names = args.controllers
     for name in names:
-        if name not in CONTROLLERS:
-            raise UsageError(f"--controllers {name!r} is invalid: expected 'all' or any of {', '.join(CONTROLLERS)}")
+        if name not in CONTROLLER_NAMES:
+            raise UsageError(
+                f"--controllers {name!r} is invalid: expected 'all' or any of {', '.join(CONTROLLER_NAMES)}"
+            )
+        if name == "optimal" and not casadi_available():
+            raise UsageError('--controllers optimal needs CasADi: pip install "dwr-gym[optimal]"')
+    for T_con in args.T_con or ():
+        if not 0.0 < T_con <= 1e6:
+            raise UsageError(f"--T-con {T_con} is invalid: expected prescribed times in (0, 1e6] s")
     for name in args.scenarios:
         if name not in SCENARIO_SETS:
             raise UsageError(f"--scenarios {name!r} is invalid: expected any of {', '.join(SCENARIO_SETS)}")
@@ -158,16 +183,28 @@ def checked_selection(args: argparse.Namespace) -> list[str]:
 
 def add_scenario_arguments(p: argparse.ArgumentParser, out: str) -> None:
     """The options shared by ``evaluate`` and ``compare``."""
-    from baselines.controllers import CONTROLLERS
+    from baselines.controllers import CONTROLLER_NAMES
     from train.evaluation import SCENARIO_SETS
+    from train.optimum import OPTIMA
 
     p.add_argument(
         "--controllers",
         nargs="+",
         default=["all"],
         metavar="NAME",
-        help=f"controllers: 'all' or any of {', '.join(CONTROLLERS)} (default: all)",
+        help=f"controllers: 'all' or any of {', '.join(CONTROLLER_NAMES)} "
+        "(default: all; 'optimal' needs the optimal extra)",
     )
+    p.add_argument(
+        "--T-con",
+        type=float,
+        nargs="+",
+        metavar="SECONDS",
+        help="evaluate at each of these prescribed times, one block each (default: the scenario's own)",
+    )
+    p.add_argument("--optimum", choices=OPTIMA, default="pose",
+                   help="the optimum of the E/opt columns: minimum energy to the goal 'pose' (default), to the "
+                   "'position' only, or 'none'; solved once per episode with CasADi and cached")  # fmt: skip
     p.add_argument(
         "--scenarios",
         nargs="+",
@@ -188,8 +225,11 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     names = checked_selection(args)
     policies: dict[str, Any] = {name: name for name in names}
     policies.update(load_agents(args.agent))
-    rows = run_evaluation(policies, args.scenarios, args.n, args.seed, env_kwargs, progress=not args.no_progress)
-    print(format_table(rows, EVAL_COLUMNS))
+    from train.evaluation import evaluate_sets
+
+    rows = evaluate_sets(policies, args.scenarios, args.n, args.seed, env_kwargs, progress=not args.no_progress,
+                          optimum=checked_optimum(args), T_cons=args.T_con)  # fmt: skip
+    print_blocks(rows, EVAL_COLUMNS)
     for path in write_results(rows, args.out, "evaluation"):
         print(f"wrote {path}")
     return 0
@@ -361,8 +401,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
         except AgentLoadError:
             pass
     rows = compare(agents, run_dirs, controllers, args.scenarios, args.n, args.seed, Path(args.out),
-                   progress=not args.no_progress)  # fmt: skip
-    print(format_table(rows, EVAL_COLUMNS))
+                   progress=not args.no_progress, optimum=checked_optimum(args), T_cons=args.T_con)  # fmt: skip
+    print_blocks(rows, EVAL_COLUMNS)
     for path in write_results(rows, args.out, "comparison"):
         print(f"wrote {path}")
     for name in ("trajectories.png", "time_series.png", "learning_curves.png"):

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from train.evaluation import RolloutResult, evaluate, make_scenario
+from train.evaluation import RolloutResult, evaluate, evaluate_sets, make_scenario
 from train.plotting import pyplot, save
 
 TRAJECTORY_SCENARIO = "paper-fig5"
@@ -24,14 +24,12 @@ def compare(
     seed: int,
     out_dir: Path,
     progress: bool = True,
+    optimum: str = "none",
+    T_cons: list[float] | None = None,
 ) -> list[dict[str, Any]]:
-    """Evaluate agents and controllers on each scenario set; write the plots; return the table rows."""
+    """Evaluate agents and controllers on each scenario set (at each T_con); write the plots; return the rows."""
     policies: dict[str, Any] = {**agents, **{name: name for name in controllers}}
-    rows = []
-    for name in scenarios:
-        scenario = make_scenario(name, n=n, seed=seed)
-        for label, result in evaluate(policies, scenario, seed=seed, progress=progress).items():
-            rows.append({"scenario": name, "policy": label, **result.summary()})
+    rows = evaluate_sets(policies, scenarios, n, seed, {}, progress, optimum=optimum, T_cons=T_cons)
     out_dir.mkdir(parents=True, exist_ok=True)
     trajectory_scenario = make_scenario(TRAJECTORY_SCENARIO)
     recorded = evaluate(policies, trajectory_scenario, record=True)

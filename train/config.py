@@ -39,7 +39,7 @@ class TrainConfig:
     seed: int = option(0, "seed of the env, the network initialisation and the sampling")
     residual: bool = option(False, "learn a residual on the expert: action = clip(expert + scale * residual)")
     residual_scale: float = option(0.5, "scale of the residual action, in (0, 2]")
-    expert: str = option("ptc", "controller under the residual: ptc, conventional-ptc, fabregas, fixed-time, astolfi")
+    expert: str = option("ptc", "controller under the residual: any of evaluate --controllers")
     env_kwargs: dict[str, Any] = field(
         default_factory=dict, metadata={"help": "env keywords KEY=VALUE, e.g. T_con=25 heading_weight=5"}
     )
@@ -67,10 +67,10 @@ class TrainConfig:
                 raise ConfigError(f"--{name.replace('_', '-')} {value!r} is invalid: expected a positive integer")
         if not (isinstance(self.residual_scale, (int, float)) and 0 < self.residual_scale <= 2):
             raise ConfigError(f"--residual-scale {self.residual_scale!r} is invalid: expected a number in (0, 2]")
-        from baselines.controllers import CONTROLLERS
+        from baselines.controllers import CONTROLLER_NAMES
 
-        if self.expert not in CONTROLLERS:
-            raise ConfigError(f"--expert {self.expert!r} is invalid: expected one of {', '.join(CONTROLLERS)}")
+        if self.expert not in CONTROLLER_NAMES:
+            raise ConfigError(f"--expert {self.expert!r} is invalid: expected one of {', '.join(CONTROLLER_NAMES)}")
         from dwr_gym.params import EnvParams
 
         try:

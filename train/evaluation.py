@@ -18,6 +18,7 @@ from baselines.controllers import Controller, make_controller
 from baselines.expert import ExpertPolicy
 from dwr_gym import core
 from dwr_gym.params import EnvParams
+from train.optimum import OPTIMA, optimal_energies
 
 SCENARIO_SETS: tuple[str, ...] = ("paper-fig5", "paper-fig7", "random")
 FIG5_HEADINGS = (0.0, -math.pi / 4, -math.pi / 2, -3 * math.pi / 4, math.pi, 3 * math.pi / 4, math.pi / 2, math.pi / 4)
@@ -78,6 +79,8 @@ def controller_for(name: str, scenario: Scenario, params: EnvParams, **overrides
         kwargs["T_con"] = params.T_con  # the expert reads T_con from the observation; this keeps repr honest
     if name == "fabregas":
         kwargs["dt"] = params.dt
+    if name == "optimal":
+        kwargs.update(T_con=params.T_con, dt=params.dt, u_max=params.u_max, omega_max=params.omega_max)
     kwargs.update(scenario.controller_kwargs.get(name, {}))
     kwargs.update(overrides)
     return make_controller(name, **kwargs)
@@ -103,11 +106,23 @@ class RolloutResult:
     trajectory: dict[str, NDArray[np.float64]] | None = None
     """With ``record=True``: arrays (steps + 1, N) of time, x, y, psi, distance, orientation_error,
     lyapunov, and (steps, N) of linear_velocity, angular_velocity."""
+    optimal_energy: NDArray[np.float64] | None = None
+    """The minimum energy of each episode (NaN where there is none), when the optimum was asked for."""
+    planner_failures: int = 0
+    """Plans the ``optimal`` controller could not find (those robots stood still)."""
+
+    def energy_ratio(self) -> NDArray[np.float64]:
+        """energy / optimal energy per episode, NaN where the episode failed or has no optimum."""
+        if self.optimal_energy is None:
+            return np.full(self.success.shape, np.nan)
+        valid = self.success & np.isfinite(self.optimal_energy) & (self.optimal_energy > 0.0)
+        return np.where(valid, self.energy / np.where(valid, self.optimal_energy, 1.0), np.nan)
 
     def summary(self) -> dict[str, float]:
         """Aggregate metrics over the N robots (means and worst cases)."""
         T = self.params.T_con
         arrival = self.arrival_time[np.isfinite(self.arrival_time)]
+        ratio = self.energy_ratio()
 
         def stat(values: NDArray[np.float64], fn: Callable[..., Any]) -> float:
             return float(fn(values)) if values.size else float("nan")
@@ -131,7 +146,12 @@ class RolloutResult:
             "path_length_mean": float(np.mean(self.path_length)),
             "command_rate_rms_mean": float(np.mean(self.command_rate_rms)),
             "return_mean": float(np.mean(self.episode_return)),
-        }
+            "energy_ratio_mean": stat(ratio[np.isfinite(ratio)], np.mean),
+            "energy_ratio_max": stat(ratio[np.isfinite(ratio)], np.max),
+            "optimal_energy_mean": float("nan") if self.optimal_energy is None
+            else stat(self.optimal_energy[np.isfinite(self.optimal_energy)], np.mean),
+            "planner_failures": float(self.planner_failures),
+        }  # fmt: skip
 
 
 def rollout(
@@ -246,15 +266,58 @@ def evaluate(
     record: bool = False,
     seed: int = 0,
     progress: bool = False,
+    optimum: str = "none",
 ) -> dict[str, RolloutResult]:
-    """Run each policy on the scenario; a string value names a controller of :mod:`baselines`."""
+    """Run each policy on the scenario; a string value names a controller of :mod:`baselines`.
+
+    ``optimum`` "pose" (or "position") also solves, or reads from the cache, the minimum energy of
+    each episode to the goal pose (or position) by T_con, for the energy / optimal ratios.
+    """
+    if optimum not in OPTIMA:
+        raise ValueError(f"optimum={optimum!r} is invalid: expected one of {', '.join(OPTIMA)}")
     params = EnvParams.from_kwargs(**scenario.env_kwargs)
+    optimal_energy = None
+    if optimum != "none":
+        optimal_energy, _ = optimal_energies(params, scenario.starts, scenario.goals, heading=optimum == "pose",
+                                             progress=progress, description=f"{scenario.name}: optimum")  # fmt: skip
     results = {}
     for label, policy in policies.items():
         if isinstance(policy, str):
             policy = ExpertPolicy(controller_for(policy, scenario, params), params.u_max, params.omega_max)
-        results[label] = rollout(
+        result = rollout(
             policy, params, scenario.starts, scenario.goals, record=record, seed=seed, progress=progress,
             description=f"{scenario.name}: {label}",
         )  # fmt: skip
+        result.optimal_energy = optimal_energy
+        controller = getattr(policy, "controller", None)
+        result.planner_failures = len(getattr(controller, "failures", ()))
+        if hasattr(controller, "close"):
+            controller.close()
+        results[label] = result
     return results
+
+
+def evaluate_sets(
+    policies: dict[str, Policy | str],
+    scenarios: list[str] | tuple[str, ...],
+    n: int,
+    seed: int,
+    env_kwargs: dict[str, Any],
+    progress: bool = False,
+    optimum: str = "none",
+    T_cons: list[float] | None = None,
+) -> list[dict[str, Any]]:
+    """Evaluate policies on named scenario sets, at each prescribed time of ``T_cons`` (default: the set's own).
+
+    Returns one row per (scenario, T_con, policy): the keys ``scenario``, ``T_con``, ``policy`` and
+    those of :meth:`RolloutResult.summary`.
+    """
+    rows = []
+    for name in scenarios:
+        for T_con in T_cons or [None]:
+            kwargs = env_kwargs if T_con is None else {**env_kwargs, "T_con": T_con}
+            scenario = make_scenario(name, n=n, seed=seed, env_kwargs=kwargs)
+            results = evaluate(policies, scenario, seed=seed, progress=progress, optimum=optimum)
+            for label, result in results.items():
+                rows.append({"scenario": name, "T_con": result.params.T_con, "policy": label, **result.summary()})
+    return rows

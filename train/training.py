@@ -52,7 +52,10 @@ def make_expert(config: TrainConfig) -> Any:
     from dwr_gym.params import EnvParams
 
     params = EnvParams.from_kwargs(**config.env_kwargs)
-    return ExpertPolicy(make_controller(config.expert), params.u_max, params.omega_max)
+    kwargs = {}
+    if config.expert == "optimal":  # the planner must know the env's grid and limits
+        kwargs = {"T_con": params.T_con, "dt": params.dt, "u_max": params.u_max, "omega_max": params.omega_max}
+    return ExpertPolicy(make_controller(config.expert, **kwargs), params.u_max, params.omega_max)
 
 
 def make_training_env(config: TrainConfig) -> Any:
