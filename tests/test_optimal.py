@@ -156,3 +156,22 @@ def test_bad_parameters_and_a_missing_casadi_give_clear_errors(monkeypatch: pyte
     monkeypatch.setitem(sys.modules, "casadi", None)
     with pytest.raises(ImportError, match=r'pip install "dwr-gym\[optimal\]"'):
         make_controller("optimal")
+
+
+def test_cli_with_an_infeasible_T_con_reports_it_and_still_writes_the_table(tmp_path: object) -> None:
+    import json
+    import os
+    import subprocess
+    from pathlib import Path
+
+    out = Path(str(tmp_path))
+    result = subprocess.run(
+        [sys.executable, "-m", "train.cli", "evaluate", "--controllers", "optimal", "ptc", "--scenarios", "paper-fig5",
+         "--env-kwargs", "T_con=1", "--out", str(out), "--no-progress"],
+        capture_output=True, text=True, env={**os.environ, "MPLBACKEND": "Agg"}, timeout=600,
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    assert "episode(s) have no optimum" in result.stdout and "T_con=1 s is infeasible" in result.stdout
+    assert "Traceback" not in result.stdout + result.stderr and "Ipopt" not in result.stdout + result.stderr
+    rows = json.loads((out / "evaluation.json").read_text())
+    assert {r["policy"]: r["success_rate"] for r in rows} == {"optimal": 0.0, "ptc": 0.0}

@@ -136,6 +136,10 @@ def print_blocks(rows: list[dict[str, Any]], columns: list[tuple[str, str, str]]
     for (scenario, T_con), block in blocks.items():
         print(f"\n{scenario}, T_con = {T_con:g} s")
         print(format_table(block, columns))
+    noted = {(r["scenario"], r["T_con"]): r for r in rows if r.get("optimum_failures")}
+    for (scenario, T_con), row in noted.items():
+        print(f"note: {scenario}, T_con = {T_con:g} s: {row['optimum_failures']:.0f} episode(s) have no optimum "
+              f"(E/opt is nan there); the first: {row['optimum_note']}")  # fmt: skip
     if any(row.get("planner_failures") for row in rows):
         print("note: the optimal controller found no plan for some robots (planner_failures in the JSON); "
               "they stood still and count as failures")  # fmt: skip

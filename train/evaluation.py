@@ -110,6 +110,8 @@ class RolloutResult:
     """The minimum energy of each episode (NaN where there is none), when the optimum was asked for."""
     planner_failures: int = 0
     """Plans the ``optimal`` controller could not find (those robots stood still)."""
+    optimum_failures: list[str] = field(default_factory=list)
+    """Why some episodes have no optimum (an infeasible T_con, an IPOPT failure), one message each."""
 
     def energy_ratio(self) -> NDArray[np.float64]:
         """energy / optimal energy per episode, NaN where the episode failed or has no optimum."""
@@ -151,6 +153,7 @@ class RolloutResult:
             "optimal_energy_mean": float("nan") if self.optimal_energy is None
             else stat(self.optimal_energy[np.isfinite(self.optimal_energy)], np.mean),
             "planner_failures": float(self.planner_failures),
+            "optimum_failures": float(len(self.optimum_failures)),
         }  # fmt: skip
 
 
@@ -276,9 +279,9 @@ def evaluate(
     if optimum not in OPTIMA:
         raise ValueError(f"optimum={optimum!r} is invalid: expected one of {', '.join(OPTIMA)}")
     params = EnvParams.from_kwargs(**scenario.env_kwargs)
-    optimal_energy = None
+    optimal_energy, optimum_failures = None, []
     if optimum != "none":
-        optimal_energy, _ = optimal_energies(params, scenario.starts, scenario.goals, heading=optimum == "pose",
+        optimal_energy, optimum_failures = optimal_energies(params, scenario.starts, scenario.goals, heading=optimum == "pose",
                                              progress=progress, description=f"{scenario.name}: optimum")  # fmt: skip
     results = {}
     for label, policy in policies.items():
@@ -288,7 +291,7 @@ def evaluate(
             policy, params, scenario.starts, scenario.goals, record=record, seed=seed, progress=progress,
             description=f"{scenario.name}: {label}",
         )  # fmt: skip
-        result.optimal_energy = optimal_energy
+        result.optimal_energy, result.optimum_failures = optimal_energy, optimum_failures
         controller = getattr(policy, "controller", None)
         result.planner_failures = len(getattr(controller, "failures", ()))
         if hasattr(controller, "close"):
@@ -309,8 +312,8 @@ def evaluate_sets(
 ) -> list[dict[str, Any]]:
     """Evaluate policies on named scenario sets, at each prescribed time of ``T_cons`` (default: the set's own).
 
-    Returns one row per (scenario, T_con, policy): the keys ``scenario``, ``T_con``, ``policy`` and
-    those of :meth:`RolloutResult.summary`.
+    Returns one row per (scenario, T_con, policy): the keys ``scenario``, ``T_con``, ``policy``, those
+    of :meth:`RolloutResult.summary`, and ``optimum_note``, why the first episode without an optimum has none.
     """
     rows = []
     for name in scenarios:
@@ -319,5 +322,7 @@ def evaluate_sets(
             scenario = make_scenario(name, n=n, seed=seed, env_kwargs=kwargs)
             results = evaluate(policies, scenario, seed=seed, progress=progress, optimum=optimum)
             for label, result in results.items():
-                rows.append({"scenario": name, "T_con": result.params.T_con, "policy": label, **result.summary()})
+                note = result.optimum_failures[0] if result.optimum_failures else ""
+                rows.append({"scenario": name, "T_con": result.params.T_con, "policy": label, **result.summary(),
+                             "optimum_note": note})  # fmt: skip
     return rows
