@@ -222,6 +222,9 @@ class OptimalController(Controller):
                     self._next_replan[i] = step[i] + max(self.params.replan_every, 1)
                 else:
                     self._fail(i, late)
+            elif isinstance(result, OptimalControlError) and "warm_start" in job:
+                # A failed re-plan keeps the previous plan, which is still feasible without disturbances.
+                self._next_replan[i] = step[i] + max(self.params.replan_every, 1)
             else:
                 self._fail(i, result)
 

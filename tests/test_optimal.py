@@ -114,6 +114,24 @@ def test_a_failed_scenario_is_a_failure_in_the_table_not_a_crash(monkeypatch: py
     assert summary["energy_ratio_mean"] == pytest.approx(result.energy[0] / result.optimal_energy[0])  # type: ignore[index]
 
 
+def test_a_failed_replan_keeps_the_previous_plan(monkeypatch: pytest.MonkeyPatch) -> None:
+    import baselines.nmpc as nmpc
+
+    real = nmpc.solve_minimum_energy
+
+    def cold_only(**job: object) -> object:
+        if job.get("warm_start") is not None:
+            raise OptimalControlError("IPOPT found no plan (injected)")
+        return real(**job)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(nmpc, "solve_minimum_energy", cold_only)
+    scenario = make_scenario("paper-fig5", env_kwargs={"actuation_noise": 0.02})  # noise: re-plans are attempted
+    policy = ExpertPolicy(make_controller("optimal"), 0.5, 2.0)
+    result = evaluate({"optimal": policy}, scenario)["optimal"]
+    assert result.planner_failures == 0
+    assert result.final_distance.max() < 0.1  # it went on open loop on its first plan (from 0.8 m), not stopped
+
+
 def test_optimal_controller_on_paper_fig5_reaches_the_pose_with_less_energy_than_ptc() -> None:
     results = evaluate({"optimal": "optimal", "ptc": "ptc"}, make_scenario("paper-fig5"), optimum="pose")
     optimal, ptc = results["optimal"].summary(), results["ptc"].summary()
