@@ -248,7 +248,9 @@ class DWRPointStabilizationVectorEnv(VectorEnv):
         if self.render_mode == "human":
             self._renderer.draw_robot(self._state, 0, self._trails[0], self.params)
             return None
-        return tuple(self._renderer.draw_robot(self._state, i, self._trails[i], self.params) for i in range(self.num_envs))
+        return tuple(
+            self._renderer.draw_robot(self._state, i, self._trails[i], self.params) for i in range(self.num_envs)
+        )
 
     def close_extras(self, **kwargs: Any) -> None:
         if self._renderer is not None:
