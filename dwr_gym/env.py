@@ -129,13 +129,19 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
     ['arena', 'arrival', 'effort', 'heading', 'late', 'progress', 'time']
 
     ## Version History
-    * v0: initial version. ``spec.max_episode_steps`` now reports the horizon the env already truncated
-      at (the returns are unchanged).
+    * v0: initial version. Later, with unchanged returns: ``spec.max_episode_steps`` reports the horizon
+      the env truncates at; the native vector env takes ``autoreset_mode`` and defaults to NEXT_STEP, as
+      Gymnasium's own vector envs (it used SAME_STEP before: pass ``autoreset_mode="same_step"`` for that).
     """
 
     metadata = {"render_modes": list(RENDER_MODES), "render_fps": 20}
 
     def __init__(self, render_mode: str | None = None, **kwargs: Any) -> None:
+        if "autoreset_mode" in kwargs:  # reaches the single env through gym.make_vec(..., vectorization_mode="sync")
+            raise ValueError(
+                f"autoreset_mode={kwargs['autoreset_mode']!r} is a keyword of vector envs, not of the single env: "
+                "with vectorization_mode 'sync' or 'async' pass vector_kwargs={'autoreset_mode': ...}"
+            )
         self.params = EnvParams.from_kwargs(**kwargs)
         check_render_mode(render_mode)
         self.render_mode = render_mode

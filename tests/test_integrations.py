@@ -111,7 +111,9 @@ SINGLE_WRAPPERS: dict[str, Factory] = {
     "OrderEnforcing": lambda env, _: wrappers.OrderEnforcing(env),
     "PassiveEnvChecker": lambda env, _: wrappers.PassiveEnvChecker(env),
     "RecordEpisodeStatistics": lambda env, _: wrappers.RecordEpisodeStatistics(env),
-    "RecordVideo": lambda env, folder: wrappers.RecordVideo(env, str(folder), episode_trigger=lambda e: e == 0),
+    "RecordVideo": lambda env, folder: wrappers.RecordVideo(
+        env, str(folder / "videos"), episode_trigger=lambda e: e == 0
+    ),
     "RenderCollection": lambda env, _: wrappers.RenderCollection(env),
     "RepeatAction": lambda env, _: wrappers.RepeatAction(env, 2),
     "RescaleAction": lambda env, _: wrappers.RescaleAction(env, -2.0, 2.0),
@@ -138,7 +140,7 @@ VECTOR_WRAPPERS: dict[str, Factory] = {
     "NormalizeReward": lambda envs, _: vector.NormalizeReward(envs),
     "RecordEpisodeStatistics": lambda envs, _: vector.RecordEpisodeStatistics(envs),
     "RecordVideo": lambda envs, folder: vector.RecordVideo(
-        envs, str(folder), step_trigger=lambda s: s == 0, video_length=10
+        envs, str(folder / "videos"), step_trigger=lambda s: s == 0, video_length=10
     ),
     "RescaleAction": lambda envs, _: vector.RescaleAction(envs, -2.0, 2.0),
     "RescaleObservation": lambda envs, _: vector.RescaleObservation(envs, -1.0, 1.0),
@@ -193,7 +195,7 @@ def test_gymnasium_wrapper_on_the_single_env(name: str, tmp_path: Path) -> None:
     assert ends >= 1
     env.close()
     if name == "RecordVideo":
-        assert list(tmp_path.glob("*.mp4"))
+        assert list((tmp_path / "videos").glob("*.mp4"))
 
 
 @pytest.mark.parametrize("name", sorted(VECTOR_WRAPPERS))
@@ -212,7 +214,7 @@ def test_gymnasium_vector_wrapper_on_make_vec(name: str, tmp_path: Path) -> None
     assert ends >= 3
     wrapped.close()
     if name == "RecordVideo":
-        assert list(tmp_path.glob("*.mp4"))
+        assert list((tmp_path / "videos").glob("*.mp4"))
 
 
 # -- CleanRL's PPO (continuous) -----------------------------------------------------------------------

@@ -38,6 +38,14 @@ def test_make_vec_takes_the_autoreset_mode_and_reports_it(mode: Any) -> None:
         gym.make_vec(ENV_ID, num_envs=2, autoreset_mode="sometimes")
 
 
+def test_sync_and_async_vectorization_take_the_autoreset_mode_in_vector_kwargs() -> None:
+    envs = gym.make_vec(ENV_ID, num_envs=2, vectorization_mode="sync",
+                        vector_kwargs={"autoreset_mode": AutoresetMode.SAME_STEP})  # fmt: skip
+    assert isinstance(envs, SyncVectorEnv) and envs.metadata["autoreset_mode"] is AutoresetMode.SAME_STEP
+    with pytest.raises(ValueError, match="vector_kwargs"):  # a keyword there would reach the single envs
+        gym.make_vec(ENV_ID, num_envs=2, vectorization_mode="sync", autoreset_mode="same_step")
+
+
 def assert_infos_match(info: dict[str, Any], ref_info: dict[str, Any], rows: Any) -> None:
     """Every info key of the single env, and every reward term, equal on ``rows``."""
     for key in ("distance", "orientation_error", "heading_error", "time", "is_success", "energy", "pose",
