@@ -29,7 +29,8 @@ def register_envs() -> None:
             id=ENV_ID,
             entry_point="dwr_gym.env:DWRPointStabilizationEnv",
             vector_entry_point="dwr_gym.vector_env:DWRPointStabilizationVectorEnv",
-            # The env truncates itself at horizon_factor * T_con, which depends on its keywords.
+            # The env truncates itself at horizon_factor * T_con, which depends on its keywords, and reports
+            # that number of steps as env.spec.max_episode_steps (see dwr_gym.env.spec_with_horizon).
             max_episode_steps=None,
         )
 

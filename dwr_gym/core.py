@@ -326,7 +326,7 @@ def infos(
     return {
         "distance": coords.distance,
         "orientation_error": coords.orientation_error,
-        "heading_error": coords.psi,
+        "heading_error": xp.copy(coords.psi),  # coords.psi is the state's own array, which resets overwrite
         "time": state.step_count * params.dt,
         "is_success": bool(is_success) if scalar else is_success,
         "energy": xp.copy(state.energy),

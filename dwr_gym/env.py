@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any, SupportsFloat
 
 import gymnasium as gym
 import numpy as np
+from gymnasium.envs.registration import EnvSpec
 from numpy.typing import NDArray
 
 from dwr_gym import core, model
@@ -28,6 +30,20 @@ def parse_reset_options(options: dict[str, Any] | None) -> dict[str, tuple[float
     if unknown:
         raise ValueError(f"unknown reset option(s) {unknown}; allowed: 'start', 'goal'")
     return {name: core.parse_pose(name, value) for name, value in options.items()}
+
+
+def spec_with_horizon(spec: EnvSpec | None, params: EnvParams) -> EnvSpec | None:
+    """``spec`` with ``max_episode_steps`` the number of steps after which an env of ``params`` truncates.
+
+    Registration cannot know it (it depends on the keywords T_con, dt and horizon_factor), so the env
+    fills it in when ``gymnasium.make`` sets its spec; wrappers that read the horizon from the spec
+    (``TimeAwareObservation``) then see it, and ``gymnasium.make(env.spec)`` adds a ``TimeLimit`` that
+    truncates at the very step the env does. A smaller limit set by the user is kept.
+    """
+    if spec is None:
+        return None
+    steps = params.max_episode_steps
+    return dataclasses.replace(spec, max_episode_steps=min(spec.max_episode_steps or steps, steps))
 
 
 class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
@@ -91,7 +107,9 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
     Terminated on arrival (d <= ``goal_tolerance``, and |psi - psi_d| <= ``heading_tolerance`` when
     that is set) or on leaving the arena (d > ``arena_radius``). Truncated at the horizon
     ``horizon_factor * T_con`` (30 s by default), past T_con so that late arrivals are observable.
-    The env truncates itself because the horizon depends on the keywords ``T_con`` and ``dt``.
+    The env truncates itself, because the horizon depends on the keywords ``T_con``, ``dt`` and
+    ``horizon_factor``, and reports the number of steps in ``env.spec.max_episode_steps`` (600 by
+    default), where ``TimeLimit``-aware wrappers such as ``TimeAwareObservation`` look for it.
 
     ## Arguments
     Every field of :class:`dwr_gym.params.EnvParams` is a keyword (``T_con``, ``dt``, ``u_max``,
@@ -111,12 +129,19 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
     ['arena', 'arrival', 'effort', 'heading', 'late', 'progress', 'time']
 
     ## Version History
-    * v0: initial version.
+    * v0: initial version. Later, with unchanged returns: ``spec.max_episode_steps`` reports the horizon
+      the env truncates at; the native vector env takes ``autoreset_mode`` and defaults to NEXT_STEP, as
+      Gymnasium's own vector envs (it used SAME_STEP before: pass ``autoreset_mode="same_step"`` for that).
     """
 
     metadata = {"render_modes": list(RENDER_MODES), "render_fps": 20}
 
     def __init__(self, render_mode: str | None = None, **kwargs: Any) -> None:
+        if "autoreset_mode" in kwargs:  # reaches the single env through gym.make_vec(..., vectorization_mode="sync")
+            raise ValueError(
+                f"autoreset_mode={kwargs['autoreset_mode']!r} is a keyword of vector envs, not of the single env: "
+                "with vectorization_mode 'sync' or 'async' pass vector_kwargs={'autoreset_mode': ...}"
+            )
         self.params = EnvParams.from_kwargs(**kwargs)
         check_render_mode(render_mode)
         self.render_mode = render_mode
@@ -125,6 +150,16 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
         self._state: core.TaskState | None = None  # a state of Python floats: one robot
         self._trail: list[tuple[float, float]] = []
         self._renderer: Any = None
+        self._spec: EnvSpec | None = None
+
+    @property  # type: ignore[override]
+    def spec(self) -> EnvSpec | None:
+        """The registration, with ``max_episode_steps`` the number of steps after which this env truncates."""
+        return self._spec
+
+    @spec.setter
+    def spec(self, spec: EnvSpec | None) -> None:
+        self._spec = spec_with_horizon(spec, self.params)
 
     def _noise(self, size: int, sigma: float) -> NDArray[np.float64] | None:
         return self.np_random.standard_normal(size) if sigma > 0 else None
@@ -190,4 +225,4 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
             self._renderer = None
 
 
-__all__ = ["DWRPointStabilizationEnv"]
+__all__ = ["DWRPointStabilizationEnv", "spec_with_horizon"]

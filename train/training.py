@@ -59,16 +59,15 @@ def make_expert(config: TrainConfig) -> Any:
 
 
 def make_training_env(config: TrainConfig) -> Any:
-    """The native vector env behind SB3's VecEnv API (residual-wrapped if asked), with episode statistics."""
-    from stable_baselines3.common.vec_env import VecMonitor
-
+    """The native vector env behind SB3's VecEnv API (residual-wrapped if asked); the adapter reports the
+    episode statistics (``ep_rew_mean``, ``ep_len_mean``, ``success_rate``) itself, as a Monitor would."""
     from dwr_gym.sb3 import make_sb3_vec_env
     from train.residual import ResidualVecEnv
 
     venv: Any = make_sb3_vec_env(config.num_envs, seed=config.seed, **config.env_kwargs)
     if config.residual:
         venv = ResidualVecEnv(venv, make_expert(config), config.residual_scale)
-    return VecMonitor(venv, info_keywords=("is_success",))
+    return venv
 
 
 def as_policy(model: Any, config: TrainConfig) -> Any:
