@@ -3,8 +3,8 @@
     python benchmarks/training_time.py                    # PPO and residual PPO on PTC, 16 envs, 65,536 steps
     python benchmarks/training_time.py --steps 200000 --num-envs 64
 
-It trains with the same pieces as ``dwr-gym train`` (the native vector env behind the SB3 adapter,
-VecMonitor, the residual wrapper) and times, with a wrapper around each: the env's ``step_wait``,
+It trains with the same pieces as ``dwr-gym train`` (the native vector env behind the SB3 adapter, which keeps
+the episode statistics, and the residual wrapper) and times, with a wrapper around each: the env's ``step_wait``,
 the expert's ``predict``, the whole rollout collection (whose remainder is the policy's forward pass and
 SB3's buffer bookkeeping) and ``train`` (the gradient updates). It prints steps per second and each
 part's share, so a user sees whether the env is ever the bottleneck. Timings depend on the machine and
@@ -23,7 +23,7 @@ from typing import Any
 
 import torch
 from stable_baselines3 import PPO
-from stable_baselines3.common.vec_env import VecEnvWrapper, VecMonitor
+from stable_baselines3.common.vec_env import VecEnvWrapper
 
 from baselines.controllers import make_controller
 from baselines.expert import ExpertPolicy
@@ -64,7 +64,7 @@ def profile(residual: bool, steps: int, num_envs: int) -> dict[str, float]:
         expert = ExpertPolicy(make_controller("ptc"), 0.5, 2.0)
         expert.predict = timed("expert", expert.predict)  # type: ignore[method-assign]
         venv = ResidualVecEnv(venv, expert, 0.5)
-    model = PPO("MlpPolicy", VecMonitor(venv), n_steps=1024, batch_size=256, seed=0, device="cpu", verbose=0)
+    model = PPO("MlpPolicy", venv, n_steps=1024, batch_size=256, seed=0, device="cpu", verbose=0)
     model.collect_rollouts = timed("rollout collection", model.collect_rollouts)  # type: ignore[method-assign]
     model.train = timed("update (backward)", model.train)  # type: ignore[method-assign]
     began = time.perf_counter()
