@@ -12,7 +12,7 @@ from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
 from dwr_gym import core, model
-from dwr_gym.env import check_render_mode, parse_reset_options, spec_with_horizon
+from dwr_gym.env import check_render_mode, parse_reset_options, parse_T_con_option, spec_with_horizon
 from dwr_gym.params import EnvParams
 
 Trail = list[tuple[float, float]]
@@ -129,14 +129,18 @@ class DWRPointStabilizationVectorEnv(VectorEnv):
         index: NDArray[np.intp],
         start: tuple[NDArray[np.float64], ...] | None = None,
         goal: tuple[NDArray[np.float64], ...] | None = None,
+        T_con: NDArray[np.float64] | None = None,
     ) -> None:
-        """Reset the sub-envs in ``index``: given poses, else the default goal and starts drawn per env."""
+        """Reset the sub-envs in ``index``: given poses and T_con, else the default goal, and starts and
+        prescribed times drawn per env (in the order a single env draws them)."""
         n = index.size
         goal = goal if goal is not None else (np.zeros(n), np.zeros(n), np.zeros(n))
         if start is None:
             local = np.array([core.sample_start(self._rngs[i], self.params) for i in index]).reshape(n, 3)
             start = model.from_goal_frame(local[:, 0], local[:, 1], local[:, 2], *goal)
-        core.reset_robots(self._state, index, start, goal, self.params)  # type: ignore[arg-type]
+        if T_con is None:
+            T_con = np.array([core.sample_T_con(self._rngs[i], self.params) for i in index], dtype=np.float64)
+        core.reset_robots(self._state, index, start, goal, self.params, T_con)  # type: ignore[arg-type]
 
     def _noise(self, size: int, sigma: float) -> NDArray[np.float64] | None:
         return self.np_random.standard_normal((self.num_envs, size)) if sigma > 0 else None
@@ -154,10 +158,19 @@ class DWRPointStabilizationVectorEnv(VectorEnv):
         index = np.flatnonzero(mask)
         start = _pose_batch("start", options["start"], self.num_envs) if "start" in options else None
         goal = _pose_batch("goal", options["goal"], self.num_envs) if "goal" in options else None
+        T_con = None
+        if "T_con" in options:
+            T_con = parse_T_con_option(options["T_con"], self.params)
+            if T_con.shape not in ((), (self.num_envs,)):
+                raise ValueError(
+                    f"options['T_con'] of shape {T_con.shape} is invalid: expected one number or ({self.num_envs},)"
+                )
+            T_con = np.broadcast_to(T_con, (self.num_envs,))[index]
         self._reset_envs(
             index,
             None if start is None else tuple(a[index] for a in start),
             None if goal is None else tuple(a[index] for a in goal),
+            T_con,
         )
         coords = self._state.coordinates(self.params.k)
         obs = core.observe(self._state, coords, self.params, self.single_observation_space,

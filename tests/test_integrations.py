@@ -56,7 +56,7 @@ def test_spec_max_episode_steps_is_the_step_the_env_truncates_at(kwargs: dict[st
 
 @pytest.mark.parametrize("env_id", DWR_IDS)
 def test_time_aware_observation_works_on_every_registered_id(env_id: str) -> None:
-    env = wrappers.TimeAwareObservation(gym.make(env_id, T_con=3.0, dt=0.1))
+    env = wrappers.TimeAwareObservation(gym.make(env_id, T_con=3.0, T_con_range=None, dt=0.1))
     assert env.observation_space.shape == (11,) and env.observation_space.high[-1] == 45
     obs, _ = env.reset(seed=0, options={"start": (1.0, 0.0, 0.0)})
     assert obs[-1] == 0

@@ -43,6 +43,8 @@ class Scenario:
     controller_kwargs: dict[str, dict[str, Any]] = field(default_factory=dict)
     """Per-controller keyword overrides, e.g. the paper's gains for its figure."""
     labels: tuple[str, ...] = ()
+    T_cons: NDArray[np.float64] | None = None
+    """Each episode's prescribed time (N,) when the env draws T_con per episode (``T_con_range``)."""
 
     @property
     def size(self) -> int:
@@ -68,7 +70,8 @@ def make_scenario(name: str, n: int = 100, seed: int = 0, env_kwargs: dict[str, 
         params = EnvParams.from_kwargs(**env_kwargs)
         rng = np.random.default_rng(seed)
         local = np.array([core.sample_start(rng, params) for _ in range(n)])
-        return Scenario(name, local, np.zeros((n, 3)), env_kwargs, {}, ())
+        T_cons = None if params.T_con_range is None else rng.uniform(*params.T_con_range, size=n)
+        return Scenario(name, local, np.zeros((n, 3)), env_kwargs, {}, (), T_cons)
     raise ValueError(f"scenario={name!r} is invalid: expected one of {', '.join(SCENARIO_SETS)}")
 
 
@@ -91,6 +94,7 @@ class RolloutResult:
     """Per-robot outcomes of a batched rollout (arrays of shape (N,)) and, if recorded, trajectories."""
 
     params: EnvParams
+    T_con: NDArray[np.float64]  # each episode's prescribed time [s]
     success: NDArray[np.bool_]  # arrived (within the tolerances) at or before T_con
     arrived: NDArray[np.bool_]  # arrived at any time before the horizon
     arrival_time: NDArray[np.float64]  # [s], NaN where the robot did not arrive
@@ -122,8 +126,9 @@ class RolloutResult:
 
     def summary(self) -> dict[str, float]:
         """Aggregate metrics over the N robots (means and worst cases)."""
-        T = self.params.T_con
-        arrival = self.arrival_time[np.isfinite(self.arrival_time)]
+        arrived = np.isfinite(self.arrival_time)
+        arrival = self.arrival_time[arrived]
+        T = self.T_con[arrived]
         ratio = self.energy_ratio()
 
         def stat(values: NDArray[np.float64], fn: Callable[..., Any]) -> float:
@@ -167,10 +172,12 @@ def rollout(
     seed: int = 0,
     progress: bool = False,
     description: str = "rollout",
+    T_con: NDArray[np.float64] | None = None,
 ) -> RolloutResult:
     """Run ``policy`` from N start poses to N goals (world frame, (N, 3)) until every episode ends.
 
-    Robots that have terminated are held still with zero actions and no longer counted.
+    ``T_con`` (N,) gives each episode its prescribed time (default: ``params.T_con``). Robots that
+    have terminated are held still with zero actions and no longer counted.
     """
     starts, goals = np.asarray(starts, dtype=np.float64), np.asarray(goals, dtype=np.float64)
     if starts.ndim != 2 or starts.shape[1] != 3 or goals.shape != starts.shape:
@@ -178,7 +185,7 @@ def rollout(
     n = starts.shape[0]
     space = core.observation_space(params)
     state = core.TaskState.zeros(n)
-    core.reset_robots(state, slice(None), tuple(starts.T), tuple(goals.T), params)  # type: ignore[arg-type]
+    core.reset_robots(state, slice(None), tuple(starts.T), tuple(goals.T), params, T_con)  # type: ignore[arg-type]
     rng = np.random.default_rng(seed)
 
     def noise(size: int, sigma: float) -> NDArray[np.float64] | None:
@@ -202,7 +209,7 @@ def rollout(
                       "orientation_error": [coords.orientation_error], "lyapunov": [state.lyapunov.copy()],
                       "linear_velocity": [], "angular_velocity": []}  # fmt: skip
 
-    steps = range(params.max_episode_steps)
+    steps = range(int(state.max_steps.max()))
     if progress:
         from tqdm.auto import tqdm
 
@@ -233,7 +240,7 @@ def rollout(
         arrived_now = ended & result.is_success
         time = state.step_count * params.dt
         arrival_time = np.where(arrived_now, time, arrival_time)
-        success |= arrived_now & (state.step_count <= params.prescribed_steps)  # as the env counts "in time"
+        success |= arrived_now & (state.step_count <= state.prescribed_steps)  # as the env counts "in time"
         left_arena |= ended & result.terminated & ~result.is_success
         if record:
             x, y, psi = state.world_pose()
@@ -246,6 +253,7 @@ def rollout(
             break
     return RolloutResult(
         params=params,
+        T_con=state.T_con.copy(),
         success=success,
         arrived=np.isfinite(arrival_time),
         arrival_time=arrival_time,
@@ -281,7 +289,8 @@ def evaluate(
     params = EnvParams.from_kwargs(**scenario.env_kwargs)
     optimal_energy, optimum_failures = None, []
     if optimum != "none":
-        optimal_energy, optimum_failures = optimal_energies(params, scenario.starts, scenario.goals, heading=optimum == "pose",
+        optimal_energy, optimum_failures = optimal_energies(params, scenario.starts, scenario.goals, scenario.T_cons,
+                                                             heading=optimum == "pose",
                                              progress=progress, description=f"{scenario.name}: optimum")  # fmt: skip
     results = {}
     for label, policy in policies.items():
@@ -289,7 +298,7 @@ def evaluate(
             policy = ExpertPolicy(controller_for(policy, scenario, params), params.u_max, params.omega_max)
         result = rollout(
             policy, params, scenario.starts, scenario.goals, record=record, seed=seed, progress=progress,
-            description=f"{scenario.name}: {label}",
+            description=f"{scenario.name}: {label}", T_con=scenario.T_cons,
         )  # fmt: skip
         result.optimal_energy, result.optimum_failures = optimal_energy, optimum_failures
         controller = getattr(policy, "controller", None)
@@ -323,6 +332,7 @@ def evaluate_sets(
             results = evaluate(policies, scenario, seed=seed, progress=progress, optimum=optimum)
             for label, result in results.items():
                 note = result.optimum_failures[0] if result.optimum_failures else ""
-                rows.append({"scenario": name, "T_con": result.params.T_con, "policy": label, **result.summary(),
+                T_row = float("nan") if scenario.T_cons is not None else result.params.T_con  # nan: per episode
+                rows.append({"scenario": name, "T_con": T_row, "policy": label, **result.summary(),
                              "optimum_note": note})  # fmt: skip
     return rows

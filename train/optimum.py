@@ -27,7 +27,7 @@ from dwr_gym import model
 from dwr_gym.params import EnvParams
 
 #: Bump when the problem or the solver settings change, so that stale optima are not reused.
-CACHE_VERSION = 1
+CACHE_VERSION = 2
 OPTIMA = ("pose", "position", "none")
 
 
@@ -46,12 +46,12 @@ def casadi_available() -> bool:
 
 
 def _cache_file(params: EnvParams, heading: bool) -> Path:
-    key = json.dumps([CACHE_VERSION, params.T_con, params.dt, params.u_max, params.omega_max, heading])
+    key = json.dumps([CACHE_VERSION, params.dt, params.u_max, params.omega_max, heading])
     return cache_dir() / f"optimal-energy-{hashlib.sha256(key.encode()).hexdigest()[:16]}.json"
 
 
-def _start_key(start: NDArray[np.float64]) -> str:
-    return ",".join(f"{v:.12e}" for v in start)
+def _start_key(start: NDArray[np.float64], T_con: float) -> str:
+    return ",".join(f"{v:.12e}" for v in (*start, T_con))
 
 
 def _solve_energy(job: tuple[tuple[float, float, float], float, float, float, float, bool]) -> float | str:
@@ -75,13 +75,15 @@ def optimal_energies(
     params: EnvParams,
     starts: NDArray[np.float64],
     goals: NDArray[np.float64],
+    T_cons: NDArray[np.float64] | None = None,
     *,
     heading: bool = True,
     workers: int = 0,
     progress: bool = False,
     description: str = "optimum",
 ) -> tuple[NDArray[np.float64], list[str]]:
-    """Minimum energy to reach each goal (the pose, or the position when ``heading`` is False) by T_con.
+    """Minimum energy to reach each goal (the pose, or the position when ``heading`` is False) by T_con
+    (each episode's ``T_cons``, default ``params.T_con``).
 
     Returns the energies (N,) and the messages of the episodes without an optimum (infeasible T_con
     or an IPOPT failure), whose energy is NaN. Solved in ``workers`` processes (0: every core, at
@@ -93,10 +95,11 @@ def optimal_energies(
         cache: dict[str, float | str] = json.loads(path.read_text())
     except (OSError, ValueError):
         cache = {}
-    keys = [_start_key(s) for s in local]
+    T_cons = np.full(len(local), params.T_con) if T_cons is None else np.asarray(T_cons, dtype=np.float64)
+    keys = [_start_key(s, T) for s, T in zip(local, T_cons, strict=True)]
     missing = sorted({k: i for i, k in enumerate(keys) if k not in cache}.values())
     if missing:
-        jobs = [(tuple(map(float, local[i])), params.T_con, params.dt, params.u_max, params.omega_max, heading)
+        jobs = [(tuple(map(float, local[i])), float(T_cons[i]), params.dt, params.u_max, params.omega_max, heading)
                 for i in missing]  # fmt: skip
         results = _map(jobs, workers, progress, description)
         cache.update({keys[i]: result for i, result in zip(missing, results, strict=True)})
