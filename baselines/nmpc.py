@@ -37,6 +37,8 @@ from dwr_gym.params import check_range
 
 #: Batches with fewer plans to solve than this are solved in this process.
 PARALLEL_THRESHOLD = 8
+#: A re-plan on the episode's grid needs at least this many intervals left (fewer: the plan is kept).
+MIN_REPLAN_INTERVALS = 4
 
 
 def check_count(name: str, value: Any, low: int, high: int) -> int:
@@ -62,6 +64,8 @@ class OptimalParams(ControllerParams):
     """Reach the goal heading too (Theorem 8's final yaw); False is the paper's position-only task."""
     arrival_time: float | None = None  # [s]
     """Plan to arrive at this time instead of T_con (None: at T_con, the minimum-energy choice)."""
+    arrival_fraction: float = 1.0
+    """Without ``arrival_time``, plan to arrive at this fraction of each episode's T_con (below 1: a margin)."""
     hold_steps: int = 5
     """Plan grid: each planned command is held for this many control periods (5 x 0.05 s = 0.25 s)."""
     replan_every: int = 20
@@ -78,6 +82,7 @@ class OptimalParams(ControllerParams):
             raise ValueError(f"heading={self.heading!r} is invalid: expected True or False")
         if self.arrival_time is not None:
             check_range("arrival_time", self.arrival_time, 0.0, 1e6, low_inclusive=False)
+        check_range("arrival_fraction", self.arrival_fraction, 0.0, 1.0, low_inclusive=False)
         check_count("hold_steps", self.hold_steps, 1, 10_000)
         check_count("replan_every", self.replan_every, 0, 1_000_000)
         if self.replan_every % self.hold_steps:
@@ -118,6 +123,13 @@ class OptimalController(Controller):
             self._plans[i] = None
             self._failed[i] = False
             self._last_step[i] = -1
+            self._frozen[i] = False
+
+    def freeze(self, mask: ArrayLike) -> None:
+        """Neither plan for nor command the robots in ``mask`` (their episodes ended) until their next reset."""
+        mask = np.asarray(mask, dtype=bool)
+        if mask.shape == (self._size,):
+            self._frozen |= mask
 
     def _resize(self, n: int) -> None:
         self._size = n
@@ -126,6 +138,7 @@ class OptimalController(Controller):
         self._next_replan = np.zeros(n, dtype=np.int64)
         self._failed = np.zeros(n, dtype=bool)
         self._last_step = np.full(n, -1, dtype=np.int64)
+        self._frozen = np.zeros(n, dtype=bool)
 
     def compute(self, inputs: ControllerInput) -> tuple[FloatArray, FloatArray]:
         p = self.params
@@ -133,17 +146,24 @@ class OptimalController(Controller):
         if n != self._size:
             self._resize(n)
         step = np.rint(np.asarray(inputs.time, dtype=np.float64) / p.dt).astype(np.int64)
-        # A robot whose clock went back started a new episode, even if the caller did not say so.
-        self.reset(step <= self._last_step)
+        # A robot whose clock went back started a new episode, even if the caller did not say so. (The clock
+        # stands still past horizon_factor * T_con, where the observation's time fraction is clipped.)
+        self.reset(step < self._last_step)
         self._last_step = step
         T_con = np.broadcast_to(np.asarray(prescribed_time(inputs, p.T_con), dtype=np.float64), (n,))
         x = -inputs.distance * np.cos(inputs.azimuth)  # goal-frame position from eq. (2)-(3): alpha = atan2(-y, -x)
         y = -inputs.distance * np.sin(inputs.azimuth)
         jobs: dict[int, dict[str, Any]] = {}
         for i in range(n):
-            if self._failed[i]:
+            if self._failed[i] or self._frozen[i]:
                 continue
             plan = self._plans[i]
+            if (
+                plan is not None
+                and step[i] == 0
+                and not self._on_plan(i, (float(x[i]), float(y[i]), float(inputs.heading[i])), 0)
+            ):
+                plan = self._plans[i] = None  # reset twice without a step: a new start, a new plan
             end = -1 if plan is None else self._origin[i] + plan.intervals * p.hold_steps
             if plan is not None and step[i] < end and (p.replan_every == 0 or step[i] < self._next_replan[i]):
                 continue
@@ -151,13 +171,17 @@ class OptimalController(Controller):
             if plan is not None and step[i] < end and self._on_plan(i, start, int(step[i])):
                 self._next_replan[i] = step[i] + p.replan_every
                 continue
-            jobs[i] = self._job(i, start, int(step[i]), float(T_con[i]), plan)
+            job = self._job(i, start, int(step[i]), float(T_con[i]), plan)
+            if job is None:
+                self._next_replan[i] = step[i] + p.replan_every
+            else:
+                jobs[i] = job
         if jobs:
             self._run(jobs, step)
         u, omega = np.zeros(n), np.zeros(n)
         for i in range(n):
             plan = self._plans[i]
-            if plan is None or self._failed[i]:
+            if plan is None or self._failed[i] or self._frozen[i]:
                 continue
             k = (step[i] - self._origin[i]) // p.hold_steps
             if 0 <= k < plan.intervals:
@@ -177,17 +201,21 @@ class OptimalController(Controller):
 
     def _job(
         self, i: int, start: tuple[float, float, float], step: int, T_con: float, plan: Plan | None
-    ) -> dict[str, Any]:
+    ) -> dict[str, Any] | None:
         """The solve that re-plans robot i at control period ``step``: on the episode's grid if time is left, else late."""
         p = self.params
-        arrival = p.arrival_time if p.arrival_time is not None else T_con
+        arrival = p.arrival_time if p.arrival_time is not None else T_con * p.arrival_fraction
         job: dict[str, Any] = {"start": start, "arrival_time": arrival, "dt": p.dt, "u_max": p.u_max,
                                "omega_max": p.omega_max, "heading": p.heading, "hold_steps": p.hold_steps}  # fmt: skip
         h = p.dt * p.hold_steps
         least = least_arrival_time(start, p.u_max, p.omega_max, p.heading)
-        if plan is not None and (step - self._origin[i]) % p.hold_steps == 0:
+        running = plan is not None and step < self._origin[i] + plan.intervals * p.hold_steps
+        if plan is not None and running and (step - self._origin[i]) % p.hold_steps == 0:
             frozen = int((step - self._origin[i]) // p.hold_steps)
-            if (plan.intervals - frozen) * h >= least * 1.05 + h:  # time is left on the same grid: shrink the horizon
+            moving = plan.intervals - frozen
+            if moving < MIN_REPLAN_INTERVALS:
+                return None  # too close to the plan's end for a re-plan to change anything: keep the plan
+            if moving * h >= least * 1.05 + h:  # time is left on the same grid: shrink the horizon
                 guess = plan.solution.copy()
                 guess[: 3 * (frozen + 1)] = np.tile(start, frozen + 1)
                 n_states = 3 * (plan.intervals + 1)
@@ -195,7 +223,7 @@ class OptimalController(Controller):
                 job.update(intervals=plan.intervals, frozen=frozen, warm_start=guess)
                 job["origin"] = int(self._origin[i])
                 return job
-        # A new grid from now: the first plan of an episode, or after T_con (arrive as soon as is cheap).
+        # A new grid from now: the first plan of an episode, or once a plan ran out before arrival (noise), late.
         remaining = arrival - step * p.dt
         if remaining < least * 1.05 + h:
             remaining = max(1.5 * least + h, 20.0 * p.dt)

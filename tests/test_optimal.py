@@ -193,3 +193,19 @@ def test_cli_with_an_infeasible_T_con_reports_it_and_still_writes_the_table(tmp_
     assert "Traceback" not in result.stdout + result.stderr and "Ipopt" not in result.stdout + result.stderr
     rows = json.loads((out / "evaluation.json").read_text())
     assert {r["policy"]: r["success_rate"] for r in rows} == {"optimal": 0.0, "ptc": 0.0}
+
+
+def test_a_second_reset_without_a_step_gets_a_new_plan_and_a_finished_robot_no_more_solves() -> None:
+    env = gym.make("DWRPointStabilization-v1")
+    controller = make_controller("optimal")
+    expert = ExpertPolicy(controller, 0.5, 2.0)
+    first, _ = env.reset(seed=0, options={"start": (-1.0, 0.0, 0.0), "T_con": 20.0})
+    assert expert.predict(first)[0][0] > 0  # drive forward to the goal ahead
+    second, _ = env.reset(seed=0, options={"start": (1.0, 0.0, 0.0), "T_con": 20.0})
+    assert expert.predict(second)[0][0] < 0  # a new plan: reverse to the goal behind
+    solves = controller.solves
+    clipped = second.copy()
+    clipped[6] = 1.5  # past the horizon the observed time fraction is clipped: the clock stands still
+    for _ in range(5):
+        expert.predict(clipped)
+    assert controller.solves <= solves + 1  # no re-planning on every call

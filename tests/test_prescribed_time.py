@@ -146,3 +146,30 @@ def test_v1_defaults_are_registered() -> None:
     params = env.unwrapped.params  # type: ignore[attr-defined]
     for key, value in dwr_gym.V1_DEFAULTS.items():
         assert getattr(params, key) == value
+
+
+def test_imitate_clones_the_optimal_planner_into_a_loadable_agent(tmp_path: object) -> None:
+    pytest.importorskip("casadi")
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from train.agents import load_agent
+
+    run_dir = Path(str(tmp_path)) / "bc"
+    command = [sys.executable, "-m", "train.cli", "imitate", "--episodes", "4", "--T-con-range", "2", "3",
+               "--start-distance", "0.2", "0.3", "--epochs", "2", "--eval-every", "1", "--eval-episodes", "4",
+               "--batch-size", "256", "--net-arch", "16", "--run-dir", str(run_dir), "--no-progress"]  # fmt: skip
+    env = {**os.environ, "MPLBACKEND": "Agg"}
+    result = subprocess.run(command, capture_output=True, text=True, env=env, timeout=600)
+    assert result.returncode == 0, result.stderr
+    assert "recorded" in result.stdout and (run_dir / "model.zip").is_file()
+    rows = (run_dir / "evaluations.csv").read_text().splitlines()
+    assert rows[0].startswith("epoch,samples") and len(rows) == 3
+    label, policy = load_agent(run_dir)
+    obs, _ = make(V1).reset(seed=0)
+    action, _ = policy.predict(obs, deterministic=True)
+    assert label == "bc" and action.shape == (2,) and np.all(np.abs(action) <= 1.0)
+    again = subprocess.run(command, capture_output=True, text=True, env=env, timeout=600)
+    assert again.returncode == 2 and "already holds a model.zip" in again.stderr

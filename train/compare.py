@@ -91,6 +91,8 @@ def plot_learning_curves(run_dirs: dict[str, Path], path: Path) -> None:
             continue
         with csv_path.open() as handle:
             rows = list(csv.DictReader(handle))
+        if not rows or "timesteps" not in rows[0]:  # a cloned agent's curve is over epochs: its own learning_curve.png
+            continue
         steps = [float(r["timesteps"]) for r in rows]
         for ax, key in zip(axes, ("success_rate", "final_heading_error_mean", "return_mean"), strict=True):
             ax.plot(steps, [float(r[key]) for r in rows], marker="o", markersize=3, label=label)

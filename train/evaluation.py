@@ -249,6 +249,9 @@ def rollout(
                                ("linear_velocity", u), ("angular_velocity", w)):  # fmt: skip
                 trajectory[key].append(np.array(value, dtype=np.float64))
         active = active & ~ended
+        freeze = getattr(getattr(policy, "controller", None), "freeze", None)
+        if freeze is not None:  # a planning controller need not plan for robots whose episodes ended
+            freeze(~active)
         if not active.any():
             break
     return RolloutResult(
