@@ -20,6 +20,7 @@ except PackageNotFoundError:  # running from a source tree that is not installed
     __version__ = "0.0.0+unknown"
 
 ENV_ID = "DWRPointStabilization-v0"
+GOAL_ENV_ID = "DWRPointStabilizationGoal-v0"
 
 
 def register_envs() -> None:
@@ -32,8 +33,10 @@ def register_envs() -> None:
             # The env truncates itself at horizon_factor * T_con, which depends on its keywords.
             max_episode_steps=None,
         )
+    if GOAL_ENV_ID not in gymnasium.registry:  # the goal-conditioned task for HER (dwr_gym/goal_env.py)
+        gymnasium.register(id=GOAL_ENV_ID, entry_point="dwr_gym.goal_env:DWRPointStabilizationGoalEnv")
 
 
 register_envs()
 
-__all__ = ["ENV_ID", "DWRPointStabilizationEnv", "EnvParams", "__version__", "register_envs"]
+__all__ = ["ENV_ID", "GOAL_ENV_ID", "DWRPointStabilizationEnv", "EnvParams", "__version__", "register_envs"]
