@@ -153,7 +153,7 @@ def trainable(trial: dict[str, Any]) -> None:
 
     trial = trial.get("trial", trial)  # grid/random: the grid_search over explicit trials
     out = Path(trial["out"])
-    hp = {k: v for k, v in trial.items() if k not in ("out", "base", "seeds", "seed", "config_id")}
+    hp = {k: v for k, v in trial.items() if k not in ("out", "base", "seeds", "seed", "config_id", "name")}
     config_id = trial.get("config_id") or f"t{tune.get_context().get_trial_id()}"
     seeds = trial["seeds"] if "seeds" in trial else [trial["seed"]]
     finals: list[dict[str, float]] = []
@@ -162,7 +162,8 @@ def trainable(trial: dict[str, Any]) -> None:
         def report(row: dict[str, Any], seed: int = seed) -> None:
             tune.report({**{k: float(row[k]) for k in METRICS}, "timesteps": int(row["timesteps"]), "seed": seed})
 
-        finals.append(run_one(trial["base"], hp, seed, out / "runs" / f"{config_id}-seed{seed}", config_id, report))
+        run_dir = out / "runs" / f"{trial['name']}-{config_id}-seed{seed}"
+        finals.append(run_one(trial["base"], hp, seed, run_dir, config_id, report))
     # the configuration's score over its seeds, last: what a searcher (Optuna) compares
     tune.report({**{k: float(np.mean([f[k] for f in finals])) for k in METRICS}, "seed": -1,
                  "timesteps": int(finals[-1]["timesteps"])})  # fmt: skip
@@ -303,6 +304,11 @@ def add_sweep_parser(sub: Any) -> None:
     p.add_argument("--address", help="join a running Ray cluster (e.g. auto or ray://host:10001); default: local Ray")
     p.add_argument("--resources-per-trial", default="cpu=1", help="Ray resources of one trial (default: cpu=1)")
     p.add_argument("--out", default="results/sweep", help="output directory (default: results/sweep)")
+    p.add_argument(
+        "--name",
+        help="prefix of the run directories <out>/runs/<name>-<config>-seed<seed>, which label "
+        "the agents in `dwr-gym compare` (default: ppo, ppo-residual, ...)",
+    )
     p.add_argument("--resume", action="store_true", help="continue an interrupted sweep in --out")
     p.set_defaults(func=cmd_sweep)  # fmt: skip
 
@@ -340,6 +346,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     except ConfigError as error:
         raise UsageError(str(error)) from error
     experiment = out / "ray"
+    name = args.name or f"{args.algo}{'-residual' if args.residual else ''}"
     if not args.resume and (out / "runs").exists():
         raise UsageError(f"--out {str(out)!r} already holds a sweep: use --resume to continue it, or another --out")
     ray.init(address=args.address, include_dashboard=False, configure_logging=False, log_to_driver=False)
@@ -354,13 +361,13 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
         tuner = tune.Tuner(
             run,
-            param_space={**optuna_space(space), "out": str(out), "base": base, "seeds": seeds},
+            param_space={**optuna_space(space), "out": str(out), "base": base, "seeds": seeds, "name": name},
             tune_config=tune.TuneConfig(num_samples=args.num_samples, metric=metric, mode=mode,
                                         search_alg=OptunaSearch(sampler=TPESampler(seed=args.search_seed))),
             run_config=tune.RunConfig(name="sweep", storage_path=str(experiment), verbose=1),
         )  # fmt: skip
     else:
-        trials = [{**hp, "config_id": f"c{i:03d}", "seed": seed, "out": str(out), "base": base}
+        trials = [{**hp, "config_id": f"c{i:03d}", "seed": seed, "out": str(out), "base": base, "name": name}
                   for i, hp in enumerate(configs) for seed in seeds]  # fmt: skip
         tuner = tune.Tuner(
             run,
