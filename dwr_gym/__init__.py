@@ -23,6 +23,7 @@ except PackageNotFoundError:  # running from a source tree that is not installed
 
 ENV_ID = "DWRPointStabilization-v0"
 ENV_ID_V1 = "DWRPointStabilization-v1"
+GOAL_ENV_ID = "DWRPointStabilizationGoal-v0"
 #: The keywords that make v1 of the same env class: any T_con in [10, 60] s, starts 0.3-3 m away, and a
 #: reward that pays for arriving by T_con with the heading, charges the energy, and pays nothing for
 #: arriving earlier than needed (no prescribed-time term, shaping that telescopes exactly).
@@ -50,6 +51,8 @@ def register_envs() -> None:
                 max_episode_steps=None,
                 kwargs=dict(defaults),
             )
+    if GOAL_ENV_ID not in gymnasium.registry:  # the goal-conditioned task for HER (dwr_gym/goal_env.py)
+        gymnasium.register(id=GOAL_ENV_ID, entry_point="dwr_gym.goal_env:DWRPointStabilizationGoalEnv")
 
 
 register_envs()
@@ -57,6 +60,7 @@ register_envs()
 __all__ = [
     "ENV_ID",
     "ENV_ID_V1",
+    "GOAL_ENV_ID",
     "V1_DEFAULTS",
     "DWRPointStabilizationEnv",
     "EnvParams",

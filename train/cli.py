@@ -507,6 +507,9 @@ def build_parser() -> argparse.ArgumentParser:
     add_train_parser(sub)
     add_compare_parser(sub)
     add_imitate_parser(sub)
+    from train.sweep import add_sweep_parser  # dwr-gym sweep on Ray Tune (train/sweep.py)
+
+    add_sweep_parser(sub)
     return parser
 
 

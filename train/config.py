@@ -97,22 +97,34 @@ class TrainConfig:
         return cls(**data)
 
 
+HYPERPARAMS_DIR = Path(__file__).parent / "hyperparams"
+
+
+def hyperparams_file(algo: str, residual: bool) -> Path:
+    """The shipped rl-zoo3 YAML of tuned settings: train/hyperparams/[residual_]<algo>.yml."""
+    return HYPERPARAMS_DIR / f"{'residual_' if residual else ''}{algo}.yml"
+
+
 def default_hyperparams(algo: str, residual: bool) -> dict[str, Any]:
-    """Defaults that train well on this env on 2 CPU cores; the residual variants explore less."""
-    if algo == "ppo":
-        params: dict[str, Any] = {"policy": "MlpPolicy", "n_steps": 256, "batch_size": 512, "n_epochs": 10,
-                                  "gamma": 0.99, "gae_lambda": 0.95, "learning_rate": 3e-4, "ent_coef": 0.0,
-                                  "policy_kwargs": {"net_arch": [64, 64]}}  # fmt: skip
-        if residual:
-            params["policy_kwargs"] = {"net_arch": [64, 64], "log_std_init": -1.5}
-        return params
-    if algo == "sac":
-        return {"policy": "MlpPolicy", "learning_rate": 3e-4, "buffer_size": 200_000, "batch_size": 256,
-                "learning_starts": 2_000, "gamma": 0.99, "train_freq": 1, "gradient_steps": 1,
-                "policy_kwargs": {"net_arch": [128, 128]}}  # fmt: skip
-    return {"policy": "MlpPolicy", "learning_rate": 1e-3, "buffer_size": 200_000, "batch_size": 256,
-            "learning_starts": 2_000, "gamma": 0.99, "train_freq": 1, "gradient_steps": 1,
-            "action_noise_sigma": 0.1 if not residual else 0.05, "policy_kwargs": {"net_arch": [128, 128]}}  # fmt: skip
+    """Defaults that train well on this env on 2 CPU cores, read from the shipped rl-zoo3 YAML (the residual
+    variants explore less); n_envs and n_timesteps there equal the defaults of TrainConfig."""
+    params = zoo_to_sb3(load_zoo_yaml(str(hyperparams_file(algo, residual))), str(hyperparams_file(algo, residual)))
+    params.pop("n_timesteps", None)
+    params.pop("n_envs", None)
+    return params
+
+
+def zoo_to_sb3(zoo: dict[str, Any], path: str) -> dict[str, Any]:
+    """rl-zoo3's spellings as ours: policy_kwargs "dict(...)" parsed, noise_type/noise_std as action_noise_sigma."""
+    zoo = dict(zoo)
+    if isinstance(zoo.get("policy_kwargs"), str):
+        zoo["policy_kwargs"] = parse_policy_kwargs(zoo["policy_kwargs"])
+    noise_type = zoo.pop("noise_type", None)
+    if noise_type not in (None, "normal"):
+        raise ConfigError(f"--hyperparams {path!r}: noise_type {noise_type!r} is invalid: expected 'normal'")
+    if "noise_std" in zoo:
+        zoo["action_noise_sigma"] = float(zoo.pop("noise_std"))
+    return zoo
 
 
 _SAFE_NAMES = {"True": True, "False": False, "None": None}
@@ -190,9 +202,7 @@ def resolve_hyperparams(config: TrainConfig, explicit: set[str]) -> TrainConfig:
         if "n_envs" in zoo and "num_envs" not in explicit:
             config.num_envs = int(zoo.pop("n_envs"))
         zoo.pop("n_envs", None)
-        if isinstance(zoo.get("policy_kwargs"), str):
-            zoo["policy_kwargs"] = parse_policy_kwargs(zoo["policy_kwargs"])
-        params.update(zoo)
+        params.update(zoo_to_sb3(zoo, config.hyperparams))
     check_algo_kwargs(config.algo, params)
     config.algo_kwargs = params
     return config

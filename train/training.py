@@ -6,6 +6,7 @@ import csv
 import json
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -79,8 +80,11 @@ def as_policy(model: Any, config: TrainConfig) -> Any:
     return ResidualPolicy(model, make_expert(config), config.residual_scale)
 
 
-def make_eval_callback(config: TrainConfig, run_dir: Path) -> Any:
-    """A callback that evaluates on a fixed seeded scenario set, logs to TensorBoard and evaluations.csv."""
+def make_eval_callback(
+    config: TrainConfig, run_dir: Path, on_evaluation: Callable[[dict[str, Any]], None] | None = None
+) -> Any:
+    """A callback that evaluates on a fixed seeded scenario set, logs to TensorBoard and evaluations.csv,
+    and hands each evaluation's row to ``on_evaluation`` (how ``dwr-gym sweep`` reports to Ray Tune)."""
     from stable_baselines3.common.callbacks import BaseCallback
 
     from dwr_gym.params import EnvParams
@@ -120,6 +124,8 @@ def make_eval_callback(config: TrainConfig, run_dir: Path) -> Any:
             if score > self.best:
                 self.best = score
                 self.model.save(run_dir / "best_model.zip")
+            if on_evaluation is not None:
+                on_evaluation(row)
 
     return ScenarioEvalCallback()
 
@@ -133,8 +139,15 @@ def prepare_run_dir(config: TrainConfig) -> Path:
     return run_dir
 
 
-def train(config: TrainConfig, command: list[str] | None = None) -> Path:
-    """Train as configured; returns the run directory. Ctrl-C saves the current model and re-raises."""
+def train(
+    config: TrainConfig,
+    command: list[str] | None = None,
+    on_evaluation: Callable[[dict[str, Any]], None] | None = None,
+) -> Path:
+    """Train as configured; returns the run directory. Ctrl-C saves the current model and re-raises.
+
+    ``on_evaluation`` receives each periodic evaluation as a dict of EVAL_FIELDS (e.g. to report it to a tuner).
+    """
     from stable_baselines3.common.callbacks import CallbackList, CheckpointCallback
 
     config.validate()
@@ -154,7 +167,7 @@ def train(config: TrainConfig, command: list[str] | None = None) -> Path:
             zero_init_last_layer(model)
     save_config(config, run_dir, {"command": command or sys.argv})
     callbacks = CallbackList([
-        make_eval_callback(config, run_dir),
+        make_eval_callback(config, run_dir, on_evaluation),
         CheckpointCallback(max(1, config.checkpoint_freq // config.num_envs), str(run_dir / "checkpoints"),
                            name_prefix=config.algo),
     ])  # fmt: skip

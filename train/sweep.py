@@ -1,0 +1,403 @@
+"""``dwr-gym sweep``: seeds and hyperparameter searches on Ray Tune, each trial the training of ``dwr-gym train``.
+
+A trial calls :func:`train.training.train` (the function behind ``dwr-gym train``) and reports each of
+its evaluations to Tune through ``train``'s ``on_evaluation`` hook; ``train`` knows nothing of Tune.
+Every run writes its own run directory under ``<out>/runs/``, from which the table of trials (mean +- sd
+over seeds), the best configuration as an rl-zoo3 YAML and the learning curves are built.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import itertools
+import json
+import math
+import shutil
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from train.config import ENV_ID, ConfigError, TrainConfig, check_algo_kwargs, resolve_hyperparams
+
+SEARCHES = ("grid", "random", "optuna")
+DISTRIBUTIONS = ("uniform", "loguniform", "int")
+METRICS = ("return_mean", "success_rate", "energy_mean", "arrival_time_mean", "final_distance_mean")
+PARAMS_FILE = "sweep_params.json"
+TABLE_COLUMNS = ("success_rate", "return_mean", "energy_mean", "arrival_time_mean")
+
+
+def parse_value(text: str) -> Any:
+    """A number, bool or string as YAML reads it ("3e-4" -> 0.0003, "[64, 64]" -> a list)."""
+    import yaml
+
+    value = yaml.safe_load(text)
+    if isinstance(value, str):
+        try:
+            return float(value)
+        except ValueError:
+            return value
+    return value
+
+
+def parse_param(item: str) -> tuple[str, dict[str, Any]]:
+    """``KEY=v1,v2,...`` (choices) or ``KEY=uniform|loguniform|int:LOW:HIGH`` (a range) as (key, spec)."""
+    key, sep, text = item.partition("=")
+    if not sep or not key or not text:
+        raise ConfigError(f"--param {item!r} is invalid: expected KEY=v1,v2,... or KEY=uniform|loguniform|int:LOW:HIGH")
+    kind, _, bounds = text.partition(":")
+    if kind in DISTRIBUTIONS:
+        parts = bounds.split(":")
+        try:
+            low, high = (float(v) for v in parts)
+        except ValueError:
+            low = high = math.nan
+        if (
+            len(parts) != 2
+            or not (math.isfinite(low) and math.isfinite(high) and low < high)
+            or (kind == "loguniform" and low <= 0)
+        ):
+            raise ConfigError(f"--param {item!r} is invalid: expected {kind}:LOW:HIGH with finite LOW < HIGH"
+                              + (" and LOW > 0" if kind == "loguniform" else ""))  # fmt: skip
+        return key, {"kind": kind, "low": low, "high": high}
+    if text.startswith("["):  # one list-valued choice, e.g. net_arch=[64, 64]
+        return key, {"kind": "choice", "values": [parse_value(text)]}
+    return key, {"kind": "choice", "values": [parse_value(v) for v in text.split(",")]}
+
+
+def sample_configurations(space: dict[str, dict[str, Any]], search: str, n: int, seed: int) -> list[dict[str, Any]]:
+    """The configurations of a grid (every combination of the choices) or n random draws (seeded)."""
+    if search == "grid":
+        ranges = [k for k, s in space.items() if s["kind"] != "choice"]
+        if ranges:
+            raise ConfigError(f"--search grid needs choices (KEY=v1,v2), not ranges: {', '.join(ranges)}")
+        keys = list(space)
+        return [dict(zip(keys, combo, strict=True)) for combo in itertools.product(*(space[k]["values"] for k in keys))]
+    rng = np.random.default_rng(seed)
+    configs = []
+    for _ in range(n):
+        config: dict[str, Any] = {}
+        for key, spec in space.items():
+            if spec["kind"] == "choice":
+                config[key] = spec["values"][rng.integers(len(spec["values"]))]
+            elif spec["kind"] == "uniform":
+                config[key] = float(rng.uniform(spec["low"], spec["high"]))
+            elif spec["kind"] == "loguniform":
+                config[key] = float(math.exp(rng.uniform(math.log(spec["low"]), math.log(spec["high"]))))
+            else:
+                config[key] = int(rng.integers(int(spec["low"]), int(spec["high"]) + 1))
+        configs.append(config)
+    return configs
+
+
+def optuna_space(space: dict[str, dict[str, Any]]) -> dict[str, Any]:
+    """The search space in Ray Tune's terms, for OptunaSearch."""
+    from ray import tune
+
+    def convert(spec: dict[str, Any]) -> Any:
+        if spec["kind"] == "choice":
+            return tune.choice(spec["values"])
+        if spec["kind"] == "uniform":
+            return tune.uniform(spec["low"], spec["high"])
+        if spec["kind"] == "loguniform":
+            return tune.loguniform(spec["low"], spec["high"])
+        return tune.randint(int(spec["low"]), int(spec["high"]) + 1)
+
+    return {key: convert(spec) for key, spec in space.items()}
+
+
+def trial_config(base: dict[str, Any], hp: dict[str, Any], seed: int, run_dir: Path) -> TrainConfig:
+    """The TrainConfig of one run: the sweep's base options, this seed, the defaults/YAML, then ``hp``."""
+    config = TrainConfig(**{**base, "seed": seed, "run_dir": str(run_dir), "progress": False})
+    config = resolve_hyperparams(config, set(base))
+    config.algo_kwargs.update(hp)
+    check_algo_kwargs(config.algo, config.algo_kwargs)
+    config.validate()
+    return config
+
+
+def last_evaluation(run_dir: Path) -> dict[str, float] | None:
+    """The final row of a run's evaluations.csv, or None."""
+    rows = read_evaluations(run_dir)
+    return rows[-1] if rows else None
+
+
+def read_evaluations(run_dir: Path) -> list[dict[str, float]]:
+    path = run_dir / "evaluations.csv"
+    if not path.is_file():
+        return []
+    with path.open() as handle:
+        return [{k: float(v) for k, v in row.items()} for row in csv.DictReader(handle)]
+
+
+def run_one(base: dict[str, Any], hp: dict[str, Any], seed: int, run_dir: Path, config_id: str, report: Any) -> dict:
+    """Train one seed of one configuration (or reuse a finished run: an interrupted sweep resumes)."""
+    from train.training import MODEL_FILE, train
+
+    finished = (run_dir / MODEL_FILE).is_file() and last_evaluation(run_dir) is not None
+    if not finished:
+        shutil.rmtree(run_dir, ignore_errors=True)  # a run cut off mid-way starts again from scratch
+        config = trial_config(base, hp, seed, run_dir)
+        run_dir.mkdir(parents=True, exist_ok=True)
+        (run_dir / PARAMS_FILE).write_text(json.dumps({"config_id": config_id, "seed": seed, "hyperparams": hp}))
+        train(config, command=["dwr-gym", "sweep"], on_evaluation=report)
+    row = last_evaluation(run_dir)
+    assert row is not None
+    return row
+
+
+def trainable(trial: dict[str, Any]) -> None:
+    """A Ray Tune trial: train the seed(s) of one configuration, reporting every evaluation to Tune."""
+    from ray import tune
+
+    trial = trial.get("trial", trial)  # grid/random: the grid_search over explicit trials
+    out = Path(trial["out"])
+    hp = {k: v for k, v in trial.items() if k not in ("out", "base", "seeds", "seed", "config_id", "name")}
+    config_id = trial.get("config_id") or f"t{tune.get_context().get_trial_id()}"
+    seeds = trial["seeds"] if "seeds" in trial else [trial["seed"]]
+    finals: list[dict[str, float]] = []
+    for seed in seeds:
+
+        def report(row: dict[str, Any], seed: int = seed) -> None:
+            tune.report({**{k: float(row[k]) for k in METRICS}, "timesteps": int(row["timesteps"]), "seed": seed})
+
+        run_dir = out / "runs" / f"{trial['name']}-{config_id}-seed{seed}"
+        finals.append(run_one(trial["base"], hp, seed, run_dir, config_id, report))
+    # the configuration's score over its seeds, last: what a searcher (Optuna) compares
+    tune.report({**{k: float(np.mean([f[k] for f in finals])) for k in METRICS}, "seed": -1,
+                 "timesteps": int(finals[-1]["timesteps"])})  # fmt: skip
+
+
+def collect(out: Path) -> dict[str, dict[str, Any]]:
+    """Every run under ``out/runs``, grouped by configuration: hyperparameters, seeds, evaluations."""
+    groups: dict[str, dict[str, Any]] = {}
+    for params_path in sorted(out.glob(f"runs/*/{PARAMS_FILE}")):
+        meta = json.loads(params_path.read_text())
+        rows = read_evaluations(params_path.parent)
+        if not rows:
+            continue
+        group = groups.setdefault(meta["config_id"], {"hyperparams": meta["hyperparams"], "runs": {}})
+        group["runs"][meta["seed"]] = rows
+    return groups
+
+
+def summarize(groups: dict[str, dict[str, Any]], metric: str) -> list[dict[str, Any]]:
+    """One row per configuration: mean and sd over seeds of the final evaluation, best first."""
+    table = []
+    for config_id, group in groups.items():
+        finals = [rows[-1] for rows in group["runs"].values()]
+        row: dict[str, Any] = {"config": config_id, "seeds": len(finals), "hyperparams": group["hyperparams"]}
+        for key in TABLE_COLUMNS + ((metric,) if metric not in TABLE_COLUMNS else ()):
+            values = np.array([f[key] for f in finals])
+            row[f"{key}_mean"] = float(np.nanmean(values)) if np.isfinite(values).any() else math.nan
+            row[f"{key}_sd"] = float(np.nanstd(values, ddof=1)) if np.isfinite(values).sum() > 1 else 0.0
+        table.append(row)
+    sign = -1.0 if metric in ("return_mean", "success_rate") else 1.0
+    return sorted(table, key=lambda r: sign * r[f"{metric}_mean"] if math.isfinite(r[f"{metric}_mean"]) else math.inf)
+
+
+def format_table(table: list[dict[str, Any]]) -> str:
+    lines = [f"{'config':<10} {'seeds':>5} " + " ".join(f"{c:>22}" for c in TABLE_COLUMNS) + "  hyperparameters"]
+    for row in table:
+        cells = " ".join(f"{row[c + '_mean']:>12.3f} +- {row[c + '_sd']:<6.3f}" for c in TABLE_COLUMNS)
+        lines.append(f"{row['config']:<10} {row['seeds']:>5} {cells}  {json.dumps(row['hyperparams'])}")
+    return "\n".join(lines)
+
+
+def zoo_yaml(config: TrainConfig) -> str:
+    """A resolved configuration in rl-zoo3's YAML format, readable by rl-zoo3 and ``dwr-gym train --hyperparams``."""
+    import yaml
+
+    section: dict[str, Any] = {"n_envs": config.num_envs, "n_timesteps": config.total_timesteps}
+    for key, value in config.algo_kwargs.items():
+        if key == "policy_kwargs":
+            inner = ", ".join(f"{k}={v if isinstance(v, str) and v.startswith('nn.') else repr(v)}"
+                              for k, v in value.items())  # fmt: skip
+            section[key] = f"dict({inner})"
+        elif key == "action_noise_sigma":
+            section["noise_type"], section["noise_std"] = "normal", value
+        else:
+            section[key] = value
+    header = "# best configuration of a dwr-gym sweep" + (
+        " (residual on the PTC expert: dwr-gym train only)\n" if config.residual else "\n"
+    )
+    if config.env_kwargs:
+        section["env_kwargs"] = dict(config.env_kwargs)
+    return header + yaml.safe_dump({ENV_ID: section}, sort_keys=False)
+
+
+def plot_curves(groups: dict[str, dict[str, Any]], path: Path, metrics: tuple[str, ...]) -> None:
+    """Learning curves: per configuration, the mean over seeds with a +- sd band."""
+    from train.plotting import pyplot, save
+
+    plt = pyplot()
+    fig, axes = plt.subplots(1, len(metrics), figsize=(6 * len(metrics), 4), squeeze=False)
+    for config_id, group in groups.items():
+        runs = list(group["runs"].values())
+        length = min(len(r) for r in runs)
+        steps = np.array([r["timesteps"] for r in runs[0][:length]])
+        for ax, metric in zip(axes[0], metrics, strict=True):
+            values = np.array([[row[metric] for row in r[:length]] for r in runs])
+            mean = np.nanmean(values, axis=0)
+            sd = np.nanstd(values, axis=0, ddof=1) if len(runs) > 1 else np.zeros_like(mean)
+            (line,) = ax.plot(steps, mean, label=f"{config_id} ({len(runs)} seeds)")
+            ax.fill_between(steps, mean - sd, mean + sd, color=line.get_color(), alpha=0.2)
+    for ax, metric in zip(axes[0], metrics, strict=True):
+        ax.set_xlabel("environment steps")
+        ax.set_ylabel(metric)
+        ax.grid(alpha=0.3)
+    axes[0][0].legend(fontsize=7)
+    save(fig, path)
+
+
+def parse_resources(text: str) -> dict[str, float]:
+    """``cpu=1,gpu=0.5`` as Ray's resource dict."""
+    resources: dict[str, float] = {}
+    for item in text.split(","):
+        key, _, value = item.partition("=")
+        try:
+            amount = float(value)
+        except ValueError:
+            amount = -1.0
+        if not key or not math.isfinite(amount) or amount < 0:
+            raise ConfigError(f"--resources-per-trial {text!r} is invalid: expected e.g. cpu=1 or cpu=2,gpu=0.5")
+        resources[key.strip()] = amount
+    return resources
+
+
+def add_sweep_parser(sub: Any) -> None:
+    """The ``sweep`` subcommand."""
+    p = sub.add_parser("sweep", help="seeds and hyperparameter searches on Ray Tune (local, or a cluster)",
+                       description="Each trial runs the training of `dwr-gym train`; needs the extra [sweep].")  # fmt: skip
+    p.add_argument("--algo", default="ppo", help="algorithm: ppo, sac or td3 (default: ppo)")
+    p.add_argument("--residual", action="store_true", help="residual agents on the PTC expert")
+    p.add_argument("--total-timesteps", type=int, default=200_000, help="env steps per run (default: 200000)")
+    p.add_argument("--num-envs", type=int, default=16, help="robots per vector env (default: 16)")
+    p.add_argument("--env-kwargs", nargs="*", metavar="KEY=VALUE", default=[], help="env keywords, e.g. T_con=25")
+    p.add_argument("--hyperparams", help="rl-zoo3 YAML the configurations start from (default: train/hyperparams/)")
+    p.add_argument("--eval-freq", type=int, default=20_000, help="evaluate every this many env steps (default: 20000)")
+    p.add_argument("--eval-episodes", type=int, default=100, help="scenarios per evaluation (default: 100)")
+    p.add_argument("--seeds", type=int, default=3, help="seeds per configuration: 0 .. N-1 (default: 3)")
+    p.add_argument(
+        "--param",
+        action="append",
+        default=[],
+        metavar="KEY=SPEC",
+        help="a hyperparameter to search: KEY=v1,v2,... or KEY=uniform|loguniform|int:LOW:HIGH; repeatable",
+    )
+    p.add_argument(
+        "--search",
+        choices=SEARCHES,
+        default="grid",
+        help="grid: every combination of choices; random: --num-samples draws; optuna: Optuna's TPE "
+        "through Ray Tune, each trial training all its seeds (default: grid)",
+    )
+    p.add_argument("--num-samples", type=int, default=8, help="configurations drawn by random/optuna (default: 8)")
+    p.add_argument("--search-seed", type=int, default=0, help="seed of the random/optuna search (default: 0)")
+    p.add_argument(
+        "--metric",
+        choices=METRICS,
+        default="return_mean",
+        help="what the best configuration maximises (minimises for energy/time/distance)",
+    )
+    p.add_argument("--address", help="join a running Ray cluster (e.g. auto or ray://host:10001); default: local Ray")
+    p.add_argument("--resources-per-trial", default="cpu=1", help="Ray resources of one trial (default: cpu=1)")
+    p.add_argument("--out", default="results/sweep", help="output directory (default: results/sweep)")
+    p.add_argument(
+        "--name",
+        help="prefix of the run directories <out>/runs/<name>-<config>-seed<seed>, which label "
+        "the agents in `dwr-gym compare` (default: ppo, ppo-residual, ...)",
+    )
+    p.add_argument("--resume", action="store_true", help="continue an interrupted sweep in --out")
+    p.set_defaults(func=cmd_sweep)  # fmt: skip
+
+
+def cmd_sweep(args: argparse.Namespace) -> int:
+    """Run the sweep, then write trials.csv, best.yml and learning_curves.png in --out."""
+    from train.cli import UsageError, parse_env_kwargs
+
+    try:
+        import ray
+        from ray import tune
+    except ImportError as error:
+        raise UsageError('Ray Tune is not installed: pip install "dwr-gym[sweep]"') from error
+    out = Path(args.out).resolve()
+    base = {"algo": args.algo, "residual": args.residual, "total_timesteps": args.total_timesteps,
+            "num_envs": args.num_envs, "env_kwargs": parse_env_kwargs(args.env_kwargs),
+            "eval_freq": args.eval_freq, "eval_episodes": args.eval_episodes}  # fmt: skip
+    if args.hyperparams:
+        base["hyperparams"] = str(Path(args.hyperparams).resolve())
+    try:
+        for name in ("seeds", "num_samples"):
+            if getattr(args, name) < 1:
+                raise ConfigError(f"--{name.replace('_', '-')} {getattr(args, name)!r} is invalid: expected >= 1")
+        space = dict(parse_param(item) for item in args.param)
+        resources = parse_resources(args.resources_per_trial)
+        seeds = list(range(args.seeds))
+        if args.search == "optuna":
+            if not space:
+                raise ConfigError("--search optuna needs at least one --param")
+            configs = sample_configurations(space, "random", 1, args.search_seed)  # to validate the keys
+        else:
+            configs = sample_configurations(space, args.search, args.num_samples, args.search_seed) if space else [{}]
+        for hp in configs:
+            trial_config(base, hp, 0, out / "runs" / "check")
+    except ConfigError as error:
+        raise UsageError(str(error)) from error
+    experiment = out / "ray"
+    name = args.name or f"{args.algo}{'-residual' if args.residual else ''}"
+    if not args.resume and (out / "runs").exists():
+        raise UsageError(f"--out {str(out)!r} already holds a sweep: use --resume to continue it, or another --out")
+    ray.init(address=args.address, include_dashboard=False, configure_logging=False, log_to_driver=False)
+    metric = args.metric
+    mode = "max" if metric in ("return_mean", "success_rate") else "min"
+    run = tune.with_resources(trainable, resources)
+    if args.resume and tune.Tuner.can_restore(str(experiment / "sweep")):
+        tuner = tune.Tuner.restore(str(experiment / "sweep"), run, resume_unfinished=True, resume_errored=True)
+    elif args.search == "optuna":
+        from optuna.samplers import TPESampler
+        from ray.tune.search.optuna import OptunaSearch
+
+        tuner = tune.Tuner(
+            run,
+            param_space={**optuna_space(space), "out": str(out), "base": base, "seeds": seeds, "name": name},
+            tune_config=tune.TuneConfig(num_samples=args.num_samples, metric=metric, mode=mode,
+                                        search_alg=OptunaSearch(sampler=TPESampler(seed=args.search_seed))),
+            run_config=tune.RunConfig(name="sweep", storage_path=str(experiment), verbose=1),
+        )  # fmt: skip
+    else:
+        trials = [{**hp, "config_id": f"c{i:03d}", "seed": seed, "out": str(out), "base": base, "name": name}
+                  for i, hp in enumerate(configs) for seed in seeds]  # fmt: skip
+        tuner = tune.Tuner(
+            run,
+            param_space={"trial": tune.grid_search(trials)},
+            tune_config=tune.TuneConfig(metric=metric, mode=mode),
+            run_config=tune.RunConfig(name="sweep", storage_path=str(experiment), verbose=1),
+        )
+    results = tuner.fit()
+    errors = [r.error for r in results if r.error is not None]
+    ray.shutdown()
+    report(out, metric, base)
+    if errors:
+        raise UsageError(f"{len(errors)} trial(s) failed, the first with: {str(errors[0]).splitlines()[-1]}")
+    return 0
+
+
+def report(out: Path, metric: str, base: dict[str, Any]) -> None:
+    """Print and write the table of trials, the best configuration (rl-zoo3 YAML) and the learning curves."""
+    groups = collect(out)
+    if not groups:
+        print("no finished runs")
+        return
+    table = summarize(groups, metric)
+    print(format_table(table))
+    with (out / "trials.csv").open("w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=list(table[0]))
+        writer.writeheader()
+        writer.writerows({**row, "hyperparams": json.dumps(row["hyperparams"])} for row in table)
+    best = trial_config(base, table[0]["hyperparams"], 0, out / "runs" / "best")
+    (out / "best.yml").write_text(zoo_yaml(best))
+    plot_curves(groups, out / "learning_curves.png", ("return_mean", "success_rate"))
+    print(f"best: {table[0]['config']} by {metric}; wrote {out / 'trials.csv'}, {out / 'best.yml'}, "
+          f"{out / 'learning_curves.png'}")  # fmt: skip
