@@ -9,6 +9,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dwr_gym import core, model
+from dwr_gym.disturbances import make_perturbation, split_env_kwargs
 from dwr_gym.params import EnvParams
 
 RENDER_MODES = ("human", "rgb_array")
@@ -97,8 +98,13 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
     Every field of :class:`dwr_gym.params.EnvParams` is a keyword (``T_con``, ``dt``, ``u_max``,
     ``omega_max``, ``goal_tolerance``, ``heading_tolerance``, ``horizon_factor``, ``arena_radius``,
     ``start_distance``, ``start_heading``, ``integrator``, ``substeps``, ``k``, the reward weights,
-    ``observation_noise``, ``actuation_noise``), plus ``render_mode`` (None, "human", "rgb_array").
-    Invalid values and unknown keywords raise ValueError.
+    ``observation_noise``, ``actuation_noise``), plus ``render_mode`` (None, "human", "rgb_array"),
+    and, off by default, ``robot`` (a preset of :data:`dwr_gym.robots.ROBOTS` or a
+    :class:`dwr_gym.robots.DifferentialDrive`: wheel speed limits, and u_max / omega_max from them),
+    ``wheel_saturation`` ('scale' or 'clip') and ``disturbances`` (a list of the objects of
+    :mod:`dwr_gym.disturbances`; their effect is in ``info["disturbance"]``, and ``linear_velocity`` /
+    ``angular_velocity`` are then the velocities the robot really had). Invalid values and unknown
+    keywords raise ValueError.
 
     >>> import gymnasium as gym
     >>> import dwr_gym
@@ -117,7 +123,9 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
     metadata = {"render_modes": list(RENDER_MODES), "render_fps": 20}
 
     def __init__(self, render_mode: str | None = None, **kwargs: Any) -> None:
+        kwargs, drive, disturbances = split_env_kwargs(kwargs)
         self.params = EnvParams.from_kwargs(**kwargs)
+        self.perturbation = make_perturbation(drive, disturbances, self.params, 1)
         check_render_mode(render_mode)
         self.render_mode = render_mode
         self.observation_space = core.observation_space(self.params)
@@ -146,6 +154,10 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
             self._state, coords, self.params, self.observation_space, self._noise(3, self.params.observation_noise)
         )
         info = core.infos(self._state, coords, self.params)
+        if self.perturbation is not None:
+            if seed is not None:
+                self.perturbation.seed([0], [(seed,)])
+            self.perturbation.reset(slice(None), obs)
         self._trail = [(float(info["pose"][0]), float(info["pose"][1]))]
         if self.render_mode == "human":
             self.render()
@@ -162,8 +174,11 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
         result = core.transition(
             self._state, action, self.params, self.observation_space,
             self._noise(2, self.params.actuation_noise), self._noise(3, self.params.observation_noise),
+            self.perturbation,
         )  # fmt: skip
         info = core.infos(self._state, result.coords, self.params, result)
+        if self.perturbation is not None:
+            info["disturbance"] = self.perturbation.info(scalar=True)
         if self.render_mode is not None:
             self._trail.append((float(info["pose"][0]), float(info["pose"][1])))
             if self.render_mode == "human":

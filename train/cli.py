@@ -156,7 +156,7 @@ def checked_optimum(args: argparse.Namespace) -> str:
 def checked_selection(args: argparse.Namespace) -> list[str]:
     """The controllers of ``--controllers`` ('all' expands); validates them, ``--scenarios`` and ``--n``."""
     from baselines.controllers import CONTROLLER_NAMES, CONTROLLERS
-    from train.evaluation import SCENARIO_SETS
+    from train.evaluation import ROBUSTNESS_SETS, SCENARIO_SETS
     from train.optimum import casadi_available
 
     if "all" in args.controllers:
@@ -174,8 +174,10 @@ def checked_selection(args: argparse.Namespace) -> list[str]:
         if not 0.0 < T_con <= 1e6:
             raise UsageError(f"--T-con {T_con} is invalid: expected prescribed times in (0, 1e6] s")
     for name in args.scenarios:
-        if name not in SCENARIO_SETS:
-            raise UsageError(f"--scenarios {name!r} is invalid: expected any of {', '.join(SCENARIO_SETS)}")
+        if name not in SCENARIO_SETS + ROBUSTNESS_SETS:
+            raise UsageError(
+                f"--scenarios {name!r} is invalid: expected any of {', '.join(SCENARIO_SETS + ROBUSTNESS_SETS)}"
+            )
     if args.n < 1:
         raise UsageError(f"--n {args.n} is invalid: expected an integer >= 1")
     return list(names)
@@ -184,7 +186,7 @@ def checked_selection(args: argparse.Namespace) -> list[str]:
 def add_scenario_arguments(p: argparse.ArgumentParser, out: str) -> None:
     """The options shared by ``evaluate`` and ``compare``."""
     from baselines.controllers import CONTROLLER_NAMES
-    from train.evaluation import SCENARIO_SETS
+    from train.evaluation import ROBUSTNESS_SETS, SCENARIO_SETS
     from train.optimum import OPTIMA
 
     p.add_argument(
@@ -210,7 +212,8 @@ def add_scenario_arguments(p: argparse.ArgumentParser, out: str) -> None:
         nargs="+",
         default=list(SCENARIO_SETS),
         metavar="SET",
-        help=f"scenario sets: any of {', '.join(SCENARIO_SETS)} (default: all)",
+        help=f"scenario sets: any of {', '.join(SCENARIO_SETS)} (default: these), or the imperfect robots' "
+        f"{', '.join(ROBUSTNESS_SETS)} (see 'Robustness' in the README)",
     )
     p.add_argument("--n", type=int, default=1000, help="number of random start poses for 'random' (default: 1000)")
     p.add_argument("--seed", type=int, default=0, help="seed of the random scenario set (default: 0)")
@@ -421,6 +424,9 @@ def build_parser() -> argparse.ArgumentParser:
     add_reproduce_parser(sub)
     add_train_parser(sub)
     add_compare_parser(sub)
+    from train.robustness import add_robustness_parser
+
+    add_robustness_parser(sub)
     return parser
 
 
