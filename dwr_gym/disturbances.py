@@ -214,7 +214,11 @@ class Perturbation:
         self._walk = {i: np.zeros((n, 2)) for i, d in enumerate(disturbances) if isinstance(d, VelocityRandomWalk)}
         self._rngs: dict[int, list[np.random.Generator]] = {}
         self._held = np.zeros((n, POSE_FEATURES), dtype=np.float32)
-        self.last: dict[str, NDArray[Any]] = {}
+        self.last: dict[str, NDArray[Any]] = {
+            "commanded_linear_velocity": np.zeros(n), "commanded_angular_velocity": np.zeros(n),
+            "wheel_saturated": np.zeros(n, dtype=bool), "fault_active": np.zeros(n, dtype=bool),
+            "measurement_held": np.zeros(n, dtype=bool),
+        }  # fmt: skip
 
     def __repr__(self) -> str:
         return f"Perturbation(drive={self.drive!r}, disturbances={self.disturbances!r})"
@@ -236,6 +240,8 @@ class Perturbation:
         for walk in self._walk.values():
             walk[index] = 0.0
         self._held[index] = np.reshape(observation, (-1, observation.shape[-1]))[:, :POSE_FEATURES]
+        for value in self.last.values():
+            value[index] = 0
 
     def _draw(self, i: int, kind: str, size: int) -> FloatArray:
         rngs = self._rngs[i]
@@ -284,8 +290,8 @@ class Perturbation:
                 walk += self._draw(i, "normal", 2) * (math.sqrt(self.params.dt)
                                                        * np.array([item.linear_intensity, item.angular_intensity]))  # fmt: skip
                 u_out, omega_out = u_out + walk[:, 0], omega_out + walk[:, 1]
-        self.last = {"commanded_linear_velocity": u_cmd, "commanded_angular_velocity": omega_cmd,
-                     "wheel_saturated": saturated, "fault_active": fault_active}  # fmt: skip
+        self.last.update(commanded_linear_velocity=u_cmd, commanded_angular_velocity=omega_cmd,
+                         wheel_saturated=saturated, fault_active=fault_active)  # fmt: skip
         if scalar:
             return float(u_out[0]), float(omega_out[0])
         return u_out.astype(dtype, copy=False), omega_out.astype(dtype, copy=False)
@@ -306,7 +312,7 @@ class Perturbation:
         """What the disturbances did in the last step: arrays (N,), or Python scalars for one robot."""
         if scalar:
             return {key: value[0].item() for key, value in self.last.items()}
-        return dict(self.last)
+        return {key: value.copy() for key, value in self.last.items()}
 
 
 __all__ = [

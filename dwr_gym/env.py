@@ -158,6 +158,7 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
             if seed is not None:
                 self.perturbation.seed([0], [(seed,)])
             self.perturbation.reset(slice(None), obs)
+            info["disturbance"] = self.perturbation.info(scalar=True)
         self._trail = [(float(info["pose"][0]), float(info["pose"][1]))]
         if self.render_mode == "human":
             self.render()

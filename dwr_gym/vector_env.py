@@ -127,6 +127,7 @@ class DWRPointStabilizationVectorEnv(VectorEnv):
                 known = [i for i in index if subs[i] is not None]
                 self.perturbation.seed(known, [(int(subs[i]),) for i in known])  # type: ignore[arg-type]
             self.perturbation.reset(index, obs[index])
+            infos["disturbance"], infos["_disturbance"] = self.perturbation.info(), self._all
         self._trail = [(float(infos["pose"][0, 0]), float(infos["pose"][0, 1]))]
         if self.render_mode == "human":
             self.render()
@@ -165,8 +166,9 @@ class DWRPointStabilizationVectorEnv(VectorEnv):
             fresh = self._state.subset(index)
             coords = fresh.coordinates(self.params.k)
             obs[index] = core.observe(fresh, coords, self.params, self.single_observation_space)
-            if self.perturbation is not None:
+            if self.perturbation is not None:  # final_info keeps the step's disturbance info
                 self.perturbation.reset(index, obs[index])
+                infos["disturbance"] = self.perturbation.info()
             reset_infos = core.infos(fresh, coords, self.params)
             for key in core.INFO_KEYS:  # copies: final_info keeps the step's arrays
                 infos[key] = infos[key].copy()

@@ -11,6 +11,7 @@ policy still succeeds in at least 95 % of the episodes.
 from __future__ import annotations
 
 import argparse
+import json
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -48,24 +49,24 @@ class Sweep:
 SWEEPS: dict[str, Sweep] = {
     sweep.name: sweep
     for sweep in (
-        Sweep("bias", "constant angular velocity bias [rad/s]", (0.0, 0.05, 0.1, 0.2, 0.3, 0.5),
+        Sweep("bias", "constant angular velocity bias [rad/s]", (0.0, 0.1, 0.2, 0.5, 1.0, 1.5),
               lambda m, T: {"disturbances": [VelocityBias(angular=m)]}),
         Sweep("sinusoid", "amplitude of a 4 s sinusoid on u [m/s] (and 4x on omega [rad/s])",
-              (0.0, 0.05, 0.1, 0.2, 0.3, 0.5),
+              (0.0, 0.1, 0.2, 0.3, 0.4, 0.5),
               lambda m, T: {"disturbances": [VelocitySinusoid(m, 4.0 * m, period=4.0)]}),
         Sweep("random-walk", "random-walk intensity on omega [rad/s/sqrt(s)] (u: a quarter of it in m/s)",
-              (0.0, 0.02, 0.05, 0.1, 0.2, 0.4),
+              (0.0, 0.025, 0.05, 0.1, 0.2, 0.4),
               lambda m, T: {"disturbances": [VelocityRandomWalk(m / 4.0, m)]}),
-        Sweep("slip", "slip of both wheels: 1 - efficiency [-]", (0.0, 0.2, 0.4, 0.6, 0.8, 0.9),
+        Sweep("slip", "slip of both wheels: 1 - efficiency [-]", (0.0, 0.2, 0.4, 0.6, 0.7, 0.8),
               lambda m, T: {"robot": UNLIMITED_BURGER, "disturbances": [WheelSlip(1.0 - m, 1.0 - m)]}),
-        Sweep("fault", "right motor's lost fraction from T_con/4 [-]", (0.0, 0.25, 0.5, 0.75, 0.9, 1.0),
+        Sweep("fault", "right motor's lost fraction from T_con/4 [-]", (0.0, 0.25, 0.5, 0.6, 0.75, 0.9),
               lambda m, T: {"robot": UNLIMITED_BURGER,
                             "disturbances": [ActuatorFault("right", 1.0 - m, start_time=T / 4.0)]}),
-        Sweep("delay", "input delay [control periods of 0.05 s]", (0, 1, 2, 4, 8, 16),
+        Sweep("delay", "input delay [control periods of 0.05 s]", (0, 4, 8, 16, 24, 32),
               lambda m, T: {"disturbances": [InputDelay(int(m))]}),
-        Sweep("dropout", "probability of a lost pose measurement [-]", (0.0, 0.25, 0.5, 0.75, 0.9, 0.95),
+        Sweep("dropout", "probability of a lost pose measurement [-]", (0.0, 0.5, 0.75, 0.9, 0.95, 0.98),
               lambda m, T: {"disturbances": [MeasurementDropout(m)]}),
-        Sweep("noise", "pose measurement noise, std [m and rad]", (0.0, 0.005, 0.01, 0.02, 0.05, 0.1),
+        Sweep("noise", "pose measurement noise, std [m and rad]", (0.0, 0.01, 0.02, 0.05, 0.1, 0.2),
               lambda m, T: {"observation_noise": m}),
     )
 }  # fmt: skip
@@ -79,17 +80,27 @@ def sweep(
     env_kwargs: dict[str, Any] | None = None,
     progress: bool = False,
     log: Callable[[str], None] | None = None,
+    n_optimal: int = 20,
 ) -> list[dict[str, Any]]:
-    """Rows (disturbance, magnitude, policy, metrics...) of each sweep in ``names`` over its magnitudes."""
+    """Rows (disturbance, magnitude, policy, metrics...) of each sweep in ``names`` over its magnitudes.
+
+    The ``optimal`` controller (one CasADi plan per robot and re-plan, about 1 s per disturbed
+    episode) runs on the first ``n_optimal`` of the ``n`` start poses.
+    """
     base = make_scenario("random", n=n, seed=seed, env_kwargs=env_kwargs)
     T_con = float(base.env_kwargs.get("T_con", 20.0))
+    few = min(n, n_optimal)
+    groups = [({k: v for k, v in policies.items() if k != "optimal"}, n), ({"optimal": "optimal"}, few)]
     rows = []
     for name in names:
         spec = SWEEPS[name]
         for magnitude in spec.magnitudes:
             kwargs = {**base.env_kwargs, **spec.env_kwargs(magnitude, T_con)}
-            scenario = Scenario(f"{name}={magnitude:g}", base.starts, base.goals, kwargs)
-            results = evaluate(policies, scenario, seed=seed, progress=progress)
+            results = {}
+            for group, size in groups:
+                if group and (group.keys() != {"optimal"} or "optimal" in policies):
+                    scenario = Scenario(f"{name}={magnitude:g}", base.starts[:size], base.goals[:size], kwargs)
+                    results.update(evaluate(group, scenario, seed=seed, progress=progress))
             for label, result in results.items():
                 summary = result.summary()
                 rows.append({"disturbance": name, "magnitude": float(magnitude), "policy": label,
@@ -127,7 +138,9 @@ def tolerance_markdown(rows: list[dict[str, Any]], level: float = SUCCESS_LEVEL)
     table = tolerated(rows, level)
     policies = list(dict.fromkeys(row["policy"] for row in rows))
     disturbances = list(dict.fromkeys(row["disturbance"] for row in rows))
-    lines = ["| disturbance (magnitude) | " + " | ".join(policies) + " |", "|---" * (len(policies) + 1) + "|"]
+    sizes = {row["policy"]: int(row["n"]) for row in rows}
+    header = " | ".join(f"{policy} (n={sizes[policy]})" for policy in policies)
+    lines = [f"| disturbance (magnitude) | {header} |", "|---" * (len(policies) + 1) + "|"]
     for name in disturbances:
         largest = max(row["magnitude"] for row in rows if row["disturbance"] == name)
         cells = []
@@ -173,9 +186,17 @@ def cmd_robustness(args: argparse.Namespace) -> int:
         load_agents,
         parse_env_kwargs,
         validated_env_params,
-        write_results,
     )
 
+    out = Path(args.out)
+    if args.from_json:  # tables and figures of earlier runs, e.g. of disturbances swept in parallel
+        rows = []
+        for path in args.from_json:
+            try:
+                rows += json.loads(Path(path).read_text())
+            except (OSError, ValueError) as error:
+                raise UsageError(f"--from-json {path!r} is invalid: {error}") from error
+        return report(rows, out, args.no_plots)
     env_kwargs = parse_env_kwargs(args.env_kwargs)
     validated_env_params(env_kwargs)
     for name in args.disturbances:
@@ -188,16 +209,24 @@ def cmd_robustness(args: argparse.Namespace) -> int:
 
         policies.update(dict(load_agent(path) for path in pretrained_paths().values()))
     policies.update(load_agents(args.agent))
-    out = Path(args.out)
+    if args.n_optimal < 1:
+        raise UsageError(f"--n-optimal {args.n_optimal} is invalid: expected an integer >= 1")
     rows = sweep(policies, args.disturbances, n=args.n, seed=args.seed, env_kwargs=env_kwargs,
-                 progress=not args.no_progress, log=print)  # fmt: skip
+                 progress=not args.no_progress, log=print, n_optimal=args.n_optimal)  # fmt: skip
+    return report(rows, out, args.no_plots)
+
+
+def report(rows: list[dict[str, Any]], out: Path, no_plots: bool) -> int:
+    """Print the tolerance table; write the rows (CSV, JSON), the table (Markdown) and the figures."""
+    from train.cli import write_results
+
     markdown = tolerance_markdown(rows)
-    print(f"\nlargest magnitude with success >= {SUCCESS_LEVEL:.0%} by T_con (n = {args.n} per point):\n{markdown}")
+    print(f"\nlargest magnitude with success >= {SUCCESS_LEVEL:.0%} by T_con (n: episodes per point):\n{markdown}")
     for path in write_results(rows, str(out), "robustness"):
         print(f"wrote {path}")
     (out / "robustness.md").write_text(markdown)
     print(f"wrote {out / 'robustness.md'}")
-    if not args.no_plots:
+    if not no_plots:
         for path in plot(rows, out):
             print(f"wrote {path}")
     return 0
@@ -226,6 +255,18 @@ def add_robustness_parser(sub: Any) -> None:
     p.add_argument("--agent", action="append", metavar="PATH", help="a saved agent (.zip) to sweep too; repeatable")
     p.add_argument("--no-shipped-agents", action="store_true", help="leave out the pretrained agents")
     p.add_argument("--n", type=int, default=200, help="random start poses per magnitude (default: 200)")
+    p.add_argument(
+        "--n-optimal",
+        type=int,
+        default=20,
+        help="start poses for the (slow) optimal controller, the first of the n (default: 20)",
+    )
+    p.add_argument(
+        "--from-json",
+        nargs="+",
+        metavar="FILE",
+        help="run nothing: table and figures of the rows in these robustness.json files",
+    )
     p.add_argument("--seed", type=int, default=0, help="seed of the start poses and disturbances (default: 0)")
     p.add_argument("--env-kwargs", nargs="*", metavar="KEY=VALUE", help="env keywords, e.g. T_con=25")
     p.add_argument("--out", default="results/robustness", help="output directory (default: results/robustness)")
