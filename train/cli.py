@@ -442,4 +442,6 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    from train.cli import main as package_main  # the package's module: one UsageError class for all subcommands
+
+    sys.exit(package_main())
