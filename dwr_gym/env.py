@@ -117,7 +117,8 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
     ['arena', 'arrival', 'effort', 'heading', 'late', 'progress', 'time']
 
     ## Version History
-    * v0: initial version.
+    * v0: initial version. Later additions, all off by default and leaving v0's dynamics and returns as
+      they were: ``robot``, ``wheel_saturation`` and ``disturbances``.
     """
 
     metadata = {"render_modes": list(RENDER_MODES), "render_fps": 20}

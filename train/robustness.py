@@ -90,7 +90,10 @@ def sweep(
     base = make_scenario("random", n=n, seed=seed, env_kwargs=env_kwargs)
     T_con = float(base.env_kwargs.get("T_con", 20.0))
     few = min(n, n_optimal)
-    groups = [({k: v for k, v in policies.items() if k != "optimal"}, n), ({"optimal": "optimal"}, few)]
+    groups: list[tuple[dict[str, Policy | str], int]] = [
+        ({k: v for k, v in policies.items() if k != "optimal"}, n),
+        ({"optimal": "optimal"}, few),
+    ]
     rows = []
     for name in names:
         spec = SWEEPS[name]
@@ -227,8 +230,8 @@ def report(rows: list[dict[str, Any]], out: Path, no_plots: bool) -> int:
     (out / "robustness.md").write_text(markdown)
     print(f"wrote {out / 'robustness.md'}")
     if not no_plots:
-        for path in plot(rows, out):
-            print(f"wrote {path}")
+        for figure in plot(rows, out):
+            print(f"wrote {figure}")
     return 0
 
 
