@@ -220,11 +220,13 @@ def test_random_disturbances_are_seeded_and_reproducible() -> None:
 
 def test_evaluate_robustness_sets_and_robustness_sweep_end_to_end(tmp_path: Path) -> None:
     result = run_cli("evaluate", "--controllers", "ptc", "--scenarios", "disturbed", "fault", "delay", "noise",
-                     "--n", "8", "--optimum", "none", "--out", str(tmp_path / "eval"), "--no-progress")  # fmt: skip
+                     "--n", "8", "--optimum", "none", "--out", str(tmp_path / "eval"), "--no-progress",
+                     "--env-kwargs", "robot=turtlebot3_burger")  # fmt: skip
     assert result.returncode == 0, result.stderr
     rows = json.loads((tmp_path / "eval" / "evaluation.json").read_text())
     assert [r["scenario"] for r in rows] == ["disturbed", "fault", "delay", "noise"]
     assert all(r["n"] == 8 for r in rows)
+    assert all(0.1 < r["peak_u_max"] <= 0.22 + 1e-9 for r in rows if r["scenario"] in ("fault", "delay"))
     result = run_cli("robustness", "--disturbances", "delay", "--controllers", "ptc", "--no-shipped-agents",
                      "--n", "6", "--out", str(tmp_path / "rob"), "--no-progress")  # fmt: skip
     assert result.returncode == 0, result.stderr

@@ -35,10 +35,11 @@ def parse_env_kwargs(items: Sequence[str] | None) -> dict[str, Any]:
 
 def validated_env_params(env_kwargs: dict[str, Any]) -> Any:
     """EnvParams from keywords, turning a ValueError into a UsageError."""
+    from dwr_gym.disturbances import split_env_kwargs
     from dwr_gym.params import EnvParams
 
     try:
-        return EnvParams.from_kwargs(**env_kwargs)
+        return EnvParams.from_kwargs(**split_env_kwargs(env_kwargs)[0])  # robot= and wheel_saturation= too
     except ValueError as error:
         raise UsageError(f"invalid env keyword: {error}") from error
 

@@ -189,6 +189,7 @@ def cmd_robustness(args: argparse.Namespace) -> int:
         load_agents,
         parse_env_kwargs,
         validated_env_params,
+        write_results,
     )
 
     out = Path(args.out)
@@ -214,8 +215,11 @@ def cmd_robustness(args: argparse.Namespace) -> int:
     policies.update(load_agents(args.agent))
     if args.n_optimal < 1:
         raise UsageError(f"--n-optimal {args.n_optimal} is invalid: expected an integer >= 1")
-    rows = sweep(policies, args.disturbances, n=args.n, seed=args.seed, env_kwargs=env_kwargs,
-                 progress=not args.no_progress, log=print, n_optimal=args.n_optimal)  # fmt: skip
+    rows: list[dict[str, Any]] = []
+    for name in args.disturbances:  # the rows so far are saved after each disturbance: a long sweep can be cut short
+        rows += sweep(policies, [name], n=args.n, seed=args.seed, env_kwargs=env_kwargs,
+                      progress=not args.no_progress, log=print, n_optimal=args.n_optimal)  # fmt: skip
+        write_results(rows, str(out), "robustness")
     return report(rows, out, args.no_plots)
 
 
