@@ -237,3 +237,16 @@ def test_evaluate_robustness_sets_and_robustness_sweep_end_to_end(tmp_path: Path
     assert "| delay (" in (tmp_path / "rob" / "robustness.md").read_text()
     bad = run_cli("robustness", "--disturbances", "gravity", "--no-shipped-agents")
     assert bad.returncode == 2 and "--disturbances 'gravity' is invalid: expected any of bias" in bad.stderr
+
+
+def test_tolerance_table_reads_the_largest_magnitude_held_without_a_dip() -> None:
+    from train.robustness import tolerance_markdown, tolerated
+
+    def row(policy: str, magnitude: float, rate: float) -> dict[str, Any]:
+        return {"disturbance": "delay", "magnitude": magnitude, "policy": policy, "success_rate": rate, "n": 100}
+
+    rows = [row("a", 0, 1.0), row("a", 4, 0.96), row("a", 8, 0.5), row("a", 16, 0.97),  # a dip ends it at 4
+            row("b", 0, 0.9), row("b", 4, 1.0), row("b", 8, 1.0), row("b", 16, 1.0),  # fails undisturbed
+            row("c", 0, 1.0), row("c", 4, 1.0), row("c", 8, 0.95), row("c", 16, 0.95)]  # fmt: skip
+    assert tolerated(rows) == {("delay", "a"): 4, ("delay", "b"): None, ("delay", "c"): 16}
+    assert "| 4 | - | 16+ |" in tolerance_markdown(rows)

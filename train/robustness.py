@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -136,7 +137,8 @@ def tolerance_markdown(rows: list[dict[str, Any]], level: float = SUCCESS_LEVEL)
     """The tolerance table as Markdown: one row per disturbance, one column per policy.
 
     A cell "0.2" means success >= level at every swept magnitude up to 0.2; a trailing "+" that the
-    policy held up to the largest magnitude swept; "-" that it is below the level even undisturbed.
+    policy held up to the largest magnitude swept; "-" that it is below the level even undisturbed;
+    an empty cell that it was not run on that disturbance.
     """
     table = tolerated(rows, level)
     policies = list(dict.fromkeys(row["policy"] for row in rows))
@@ -148,8 +150,10 @@ def tolerance_markdown(rows: list[dict[str, Any]], level: float = SUCCESS_LEVEL)
         largest = max(row["magnitude"] for row in rows if row["disturbance"] == name)
         cells = []
         for policy in policies:
-            value = table.get((name, policy))
-            cells.append("-" if value is None else f"{value:g}" + ("+" if value == largest else ""))
+            value = table.get((name, policy), math.inf)  # inf: not run on this disturbance
+            cells.append(
+                "" if value == math.inf else "-" if value is None else f"{value:g}" + ("+" if value == largest else "")
+            )
         lines.append(f"| {name} ({SWEEPS[name].magnitude if name in SWEEPS else ''}) | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
@@ -227,6 +231,8 @@ def report(rows: list[dict[str, Any]], out: Path, no_plots: bool) -> int:
     """Print the tolerance table; write the rows (CSV, JSON), the table (Markdown) and the figures."""
     from train.cli import write_results
 
+    keys = list(dict.fromkeys(key for row in rows for key in row))  # rows of several runs may differ in columns
+    rows = [{key: row.get(key, math.nan) for key in keys} for row in rows]
     markdown = tolerance_markdown(rows)
     print(f"\nlargest magnitude with success >= {SUCCESS_LEVEL:.0%} by T_con (n: episodes per point):\n{markdown}")
     for path in write_results(rows, str(out), "robustness"):
