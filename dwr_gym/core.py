@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 from gymnasium import spaces
@@ -20,6 +20,9 @@ from numpy.typing import NDArray
 from dwr_gym import model
 from dwr_gym.model import FloatArray
 from dwr_gym.params import EnvParams
+
+if TYPE_CHECKING:
+    from dwr_gym.disturbances import Perturbation
 
 #: Names of the observation features, in order.
 OBSERVATION_NAMES: tuple[str, ...] = (
@@ -290,16 +293,20 @@ def transition(
     space: spaces.Box,
     action_noise: FloatArray | None = None,
     pose_noise: FloatArray | None = None,
+    perturbation: Perturbation | None = None,
 ) -> StepResult:
     """Advance every robot by one control period and compute observation, reward and episode end.
 
     ``state`` is updated in place; ``action`` is (N, 2) for a batched state and (2,) for a state of
     floats (one robot). ``action_noise`` and ``pose_noise`` are pre-drawn standard-normal samples
     ((N, 2) and (N, 3), or (2,) and (3,)) or None, so that this function stays free of random state.
+    A ``perturbation`` (robot wheels, disturbances; None is the nominal robot) acts at the two marked places.
     """
     if action_noise is not None:
         action = np.asarray(action, dtype=np.float64) + params.actuation_noise * action_noise
     a_u, a_omega, u, omega = commands_from_action(action, params, getattr(state.x, "dtype", np.float64))
+    if perturbation is not None:  # the command side: the velocities the robot really has
+        u, omega = perturbation.command(u, omega, state.step_count)
     state.x, state.y, state.psi = model.integrate_unicycle(
         state.x,
         state.y,
@@ -343,6 +350,8 @@ def transition(
     truncated = (state.step_count >= state.max_steps) & xp.logical_not(terminated)
 
     obs = observe(state, coords, params, space, pose_noise)
+    if perturbation is not None:  # the measurement side
+        obs = perturbation.measure(obs)
     reward = sum(terms.values())
     return StepResult(obs, reward, terminated, truncated, coords, is_success, u, omega, terms)  # type: ignore[arg-type]
 

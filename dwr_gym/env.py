@@ -11,6 +11,7 @@ from gymnasium.envs.registration import EnvSpec
 from numpy.typing import NDArray
 
 from dwr_gym import core, model
+from dwr_gym.disturbances import make_perturbation, split_env_kwargs
 from dwr_gym.params import EnvParams
 
 RENDER_MODES = ("human", "rgb_array")
@@ -137,8 +138,13 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
     Every field of :class:`dwr_gym.params.EnvParams` is a keyword (``T_con``, ``dt``, ``u_max``,
     ``omega_max``, ``goal_tolerance``, ``heading_tolerance``, ``horizon_factor``, ``arena_radius``,
     ``start_distance``, ``start_heading``, ``integrator``, ``substeps``, ``k``, the reward weights,
-    ``observation_noise``, ``actuation_noise``), plus ``render_mode`` (None, "human", "rgb_array").
-    Invalid values and unknown keywords raise ValueError.
+    ``observation_noise``, ``actuation_noise``), plus ``render_mode`` (None, "human", "rgb_array"),
+    and, off by default, ``robot`` (a preset of :data:`dwr_gym.robots.ROBOTS` or a
+    :class:`dwr_gym.robots.DifferentialDrive`: wheel speed limits, and u_max / omega_max from them),
+    ``wheel_saturation`` ('scale' or 'clip') and ``disturbances`` (a list of the objects of
+    :mod:`dwr_gym.disturbances`; their effect is in ``info["disturbance"]``, and ``linear_velocity`` /
+    ``angular_velocity`` are then the velocities the robot really had). Invalid values and unknown
+    keywords raise ValueError.
 
     >>> import gymnasium as gym
     >>> import dwr_gym
@@ -153,11 +159,13 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
     ## Version History
     * v1: the defaults of ``dwr_gym.V1_DEFAULTS``: T_con drawn per episode from ``T_con_range`` = (10, 60) s
       (observed, in info["T_con"]), starts 0.3 to 3 m away, and the reward above (energy instead of
-      effort and the prescribed-time term, exact shaping with Phi = 0 at terminal states). A new ``energy`` term (0 in v0) and the
-      ``T_con_range`` keyword and ``options={"T_con": ...}`` of reset() exist in both ids.
+      effort and the prescribed-time term, exact shaping with Phi = 0 at terminal states). A new ``energy``
+      term (0 in v0) and the ``T_con_range`` keyword and ``options={"T_con": ...}`` of reset() exist in both ids.
     * v0: initial version. Later, with unchanged returns: ``spec.max_episode_steps`` reports the horizon
       the env truncates at; the native vector env takes ``autoreset_mode`` and defaults to NEXT_STEP, as
       Gymnasium's own vector envs (it used SAME_STEP before: pass ``autoreset_mode="same_step"`` for that).
+      Later additions, all off by default and leaving v0's dynamics and returns as they were: ``robot``,
+      ``wheel_saturation`` and ``disturbances``.
     """
 
     metadata = {"render_modes": list(RENDER_MODES), "render_fps": 20}
@@ -168,7 +176,9 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
                 f"autoreset_mode={kwargs['autoreset_mode']!r} is a keyword of vector envs, not of the single env: "
                 "with vectorization_mode 'sync' or 'async' pass vector_kwargs={'autoreset_mode': ...}"
             )
+        kwargs, drive, disturbances = split_env_kwargs(kwargs)
         self.params = EnvParams.from_kwargs(**kwargs)
+        self.perturbation = make_perturbation(drive, disturbances, self.params, 1)
         check_render_mode(render_mode)
         self.render_mode = render_mode
         self.observation_space = core.observation_space(self.params)
@@ -214,6 +224,11 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
             self._state, coords, self.params, self.observation_space, self._noise(3, self.params.observation_noise)
         )
         info = core.infos(self._state, coords, self.params)
+        if self.perturbation is not None:
+            if seed is not None:
+                self.perturbation.seed([0], [(seed,)])
+            self.perturbation.reset(slice(None), obs)
+            info["disturbance"] = self.perturbation.info(scalar=True)
         self._trail = [(float(info["pose"][0]), float(info["pose"][1]))]
         if self.render_mode == "human":
             self.render()
@@ -230,8 +245,11 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
         result = core.transition(
             self._state, action, self.params, self.observation_space,
             self._noise(2, self.params.actuation_noise), self._noise(3, self.params.observation_noise),
+            self.perturbation,
         )  # fmt: skip
         info = core.infos(self._state, result.coords, self.params, result)
+        if self.perturbation is not None:
+            info["disturbance"] = self.perturbation.info(scalar=True)
         if self.render_mode is not None:
             self._trail.append((float(info["pose"][0]), float(info["pose"][1])))
             if self.render_mode == "human":

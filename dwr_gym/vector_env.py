@@ -12,6 +12,7 @@ from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
 from dwr_gym import core, model
+from dwr_gym.disturbances import make_perturbation, split_env_kwargs
 from dwr_gym.env import check_render_mode, parse_reset_options, parse_T_con_option, spec_with_horizon
 from dwr_gym.params import EnvParams
 
@@ -87,7 +88,9 @@ class DWRPointStabilizationVectorEnv(VectorEnv):
         self.dtype = dtype
         self.autoreset_mode = parse_autoreset_mode(autoreset_mode)
         self.metadata = {**type(self).metadata, "autoreset_mode": self.autoreset_mode}
+        kwargs, drive, disturbances = split_env_kwargs(kwargs)
         self.params = EnvParams.from_kwargs(**kwargs)
+        self.perturbation = make_perturbation(drive, disturbances, self.params, int(num_envs))
         check_render_mode(render_mode)
         self.render_mode = render_mode
         self.num_envs = int(num_envs)
@@ -176,6 +179,13 @@ class DWRPointStabilizationVectorEnv(VectorEnv):
         obs = core.observe(self._state, coords, self.params, self.single_observation_space,
                            self._noise(3, self.params.observation_noise))  # fmt: skip
         infos = self._with_masks(core.infos(self._state, coords, self.params), mask)
+        if self.perturbation is not None:
+            if seed is not None:  # sub-env i's disturbances draw as a single env's reset with seed s + i
+                subs = [seed + i for i in range(self.num_envs)] if isinstance(seed, (int, np.integer)) else seed
+                known = [i for i in index if subs[i] is not None]
+                self.perturbation.seed(known, [(int(subs[i]),) for i in known])  # type: ignore[arg-type]
+            self.perturbation.reset(index, obs[index])
+            infos["disturbance"], infos["_disturbance"] = self.perturbation.info(), self._all
         self._needs_reset[index] = False
         self._start_trails(index, infos["pose"])
         if self.render_mode == "human":
@@ -201,6 +211,9 @@ class DWRPointStabilizationVectorEnv(VectorEnv):
         fresh = self._state.subset(index)
         coords = fresh.coordinates(self.params.k)
         obs[index] = core.observe(fresh, coords, self.params, self.single_observation_space)
+        if self.perturbation is not None:  # in SAME_STEP mode final_info keeps the step's disturbance info
+            self.perturbation.reset(index, obs[index])
+            infos["disturbance"] = self.perturbation.info()
         reset_infos = core.infos(fresh, coords, self.params)
         for key in core.INFO_KEYS:  # copies: in SAME_STEP mode final_info keeps the step's arrays
             infos[key] = infos[key].copy()
@@ -224,8 +237,11 @@ class DWRPointStabilizationVectorEnv(VectorEnv):
         result = core.transition(
             self._state, actions, self.params, self.single_observation_space,
             self._noise(2, self.params.actuation_noise), self._noise(3, self.params.observation_noise),
+            self.perturbation,
         )  # fmt: skip
         infos = self._with_masks(core.infos(self._state, result.coords, self.params, result))
+        if self.perturbation is not None:
+            infos["disturbance"], infos["_disturbance"] = self.perturbation.info(), self._all
         obs, rewards, terminated, truncated = result.observation, result.reward, result.terminated, result.truncated
         if self.autoreset_mode is AutoresetMode.SAME_STEP:
             done = terminated | truncated

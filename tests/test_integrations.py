@@ -22,7 +22,7 @@ import dwr_gym
 ENV_ID = dwr_gym.ENV_ID
 # Episodes of at most 30 steps with many arrivals, so that a few dozen steps see episodes end.
 SHORT: dict[str, Any] = {"T_con": 2.0, "dt": 0.1, "goal_tolerance": 0.15, "start_distance": (0.2, 0.5)}
-DWR_IDS = sorted(env_id for env_id in gym.registry if env_id.startswith("DWRPointStabilization"))
+DWR_IDS = sorted(env_id for env_id in gym.registry if env_id.startswith("DWRPointStabilization-"))  # Box ids
 
 
 def wrapper_chain(env: Any) -> list[type]:

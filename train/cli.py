@@ -35,10 +35,11 @@ def parse_env_kwargs(items: Sequence[str] | None) -> dict[str, Any]:
 
 def validated_env_params(env_kwargs: dict[str, Any]) -> Any:
     """EnvParams from keywords, turning a ValueError into a UsageError."""
+    from dwr_gym.disturbances import split_env_kwargs
     from dwr_gym.params import EnvParams
 
     try:
-        return EnvParams.from_kwargs(**env_kwargs)
+        return EnvParams.from_kwargs(**split_env_kwargs(env_kwargs)[0])  # robot= and wheel_saturation= too
     except ValueError as error:
         raise UsageError(f"invalid env keyword: {error}") from error
 
@@ -168,7 +169,7 @@ def checked_optimum(args: argparse.Namespace) -> str:
 def checked_selection(args: argparse.Namespace) -> list[str]:
     """The controllers of ``--controllers`` ('all' expands); validates them, ``--scenarios`` and ``--n``."""
     from baselines.controllers import CONTROLLER_NAMES, CONTROLLERS
-    from train.evaluation import SCENARIO_SETS
+    from train.evaluation import ROBUSTNESS_SETS, SCENARIO_SETS
     from train.optimum import casadi_available
 
     if "all" in args.controllers:
@@ -186,8 +187,10 @@ def checked_selection(args: argparse.Namespace) -> list[str]:
         if not 0.0 < T_con <= 1e6:
             raise UsageError(f"--T-con {T_con} is invalid: expected prescribed times in (0, 1e6] s")
     for name in args.scenarios:
-        if name not in SCENARIO_SETS:
-            raise UsageError(f"--scenarios {name!r} is invalid: expected any of {', '.join(SCENARIO_SETS)}")
+        if name not in SCENARIO_SETS + ROBUSTNESS_SETS:
+            raise UsageError(
+                f"--scenarios {name!r} is invalid: expected any of {', '.join(SCENARIO_SETS + ROBUSTNESS_SETS)}"
+            )
     if args.n < 1:
         raise UsageError(f"--n {args.n} is invalid: expected an integer >= 1")
     return list(names)
@@ -196,7 +199,7 @@ def checked_selection(args: argparse.Namespace) -> list[str]:
 def add_scenario_arguments(p: argparse.ArgumentParser, out: str) -> None:
     """The options shared by ``evaluate`` and ``compare``."""
     from baselines.controllers import CONTROLLER_NAMES
-    from train.evaluation import SCENARIO_SETS
+    from train.evaluation import ROBUSTNESS_SETS, SCENARIO_SETS
     from train.optimum import OPTIMA
 
     p.add_argument(
@@ -222,7 +225,8 @@ def add_scenario_arguments(p: argparse.ArgumentParser, out: str) -> None:
         nargs="+",
         default=list(SCENARIO_SETS),
         metavar="SET",
-        help=f"scenario sets: any of {', '.join(SCENARIO_SETS)} (default: all)",
+        help=f"scenario sets: any of {', '.join(SCENARIO_SETS)} (default: these), or the imperfect robots' "
+        f"{', '.join(ROBUSTNESS_SETS)} (see 'Robustness' in the README)",
     )
     p.add_argument("--n", type=int, default=1000, help="number of random start poses for 'random' (default: 1000)")
     p.add_argument("--seed", type=int, default=0, help="seed of the random scenario set (default: 0)")
@@ -510,6 +514,9 @@ def build_parser() -> argparse.ArgumentParser:
     from train.sweep import add_sweep_parser  # dwr-gym sweep on Ray Tune (train/sweep.py)
 
     add_sweep_parser(sub)
+    from train.robustness import add_robustness_parser
+
+    add_robustness_parser(sub)
     return parser
 
 
@@ -525,4 +532,6 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    from train.cli import main as package_main  # the package's module: one UsageError class for all subcommands
+
+    sys.exit(package_main())

@@ -17,7 +17,9 @@ from numpy.typing import NDArray
 from baselines.controllers import Controller, make_controller
 from baselines.expert import ExpertPolicy
 from dwr_gym import core
+from dwr_gym.disturbances import make_perturbation, split_env_kwargs
 from dwr_gym.params import EnvParams
+from train.disturbance_sets import ROBUSTNESS_SETS, robustness_env_kwargs
 from train.optimum import OPTIMA, optimal_energies
 
 SCENARIO_SETS: tuple[str, ...] = ("paper-fig5", "paper-fig7", "random")
@@ -64,15 +66,17 @@ def make_scenario(name: str, n: int = 100, seed: int = 0, env_kwargs: dict[str, 
         goals = np.array([[0.8, 0.0, 0.0]])
         gains = {"ptc": {"K1": 2.5, "K2": 40.0, "K": 1.2}, "conventional-ptc": {"K1": 2.5, "K2": 40.0}}
         return Scenario(name, starts, goals, {"T_con": 70.0, **env_kwargs}, gains, ("psi0=-178deg",))
-    if name == "random":
+    if name == "random" or name in ROBUSTNESS_SETS:
         if isinstance(n, bool) or not isinstance(n, int) or n < 1:
             raise ValueError(f"n={n!r} is invalid: expected an integer >= 1")
-        params = EnvParams.from_kwargs(**env_kwargs)
+        params = EnvParams.from_kwargs(**split_env_kwargs(env_kwargs)[0])
+        if name in ROBUSTNESS_SETS:  # the random starts, on the imperfect robot
+            env_kwargs = {**robustness_env_kwargs(name, params.T_con), **env_kwargs}
         rng = np.random.default_rng(seed)
         local = np.array([core.sample_start(rng, params) for _ in range(n)])
         T_cons = None if params.T_con_range is None else rng.uniform(*params.T_con_range, size=n)
         return Scenario(name, local, np.zeros((n, 3)), env_kwargs, {}, (), T_cons)
-    raise ValueError(f"scenario={name!r} is invalid: expected one of {', '.join(SCENARIO_SETS)}")
+    raise ValueError(f"scenario={name!r} is invalid: expected one of {', '.join((*SCENARIO_SETS, *ROBUSTNESS_SETS))}")
 
 
 def controller_for(name: str, scenario: Scenario, params: EnvParams, **overrides: Any) -> Controller:
@@ -173,11 +177,14 @@ def rollout(
     progress: bool = False,
     description: str = "rollout",
     T_con: NDArray[np.float64] | None = None,
+    env_kwargs: dict[str, Any] | None = None,
 ) -> RolloutResult:
     """Run ``policy`` from N start poses to N goals (world frame, (N, 3)) until every episode ends.
 
     ``T_con`` (N,) gives each episode its prescribed time (default: ``params.T_con``). Robots that
-    have terminated are held still with zero actions and no longer counted.
+    have terminated are held still with zero actions and no longer counted. The ``robot`` and
+    ``disturbances`` of ``env_kwargs`` act as in the envs (robot i's random disturbances seeded with
+    (seed, i)); its other keywords are those of ``params``.
     """
     starts, goals = np.asarray(starts, dtype=np.float64), np.asarray(goals, dtype=np.float64)
     if starts.ndim != 2 or starts.shape[1] != 3 or goals.shape != starts.shape:
@@ -193,6 +200,11 @@ def rollout(
 
     coords = state.coordinates(params.k)
     obs = core.observe(state, coords, params, space, noise(3, params.observation_noise))
+    _, drive, disturbances = split_env_kwargs(env_kwargs or {})
+    perturbation = make_perturbation(drive, disturbances, params, n)
+    if perturbation is not None:
+        perturbation.seed(list(range(n)), [(seed, i) for i in range(n)])
+        perturbation.reset(slice(None), obs)
     active = np.ones(n, dtype=bool)
     arrival_time = np.full(n, np.nan)
     success = np.zeros(n, dtype=bool)
@@ -222,7 +234,7 @@ def rollout(
         action_noise = noise(2, params.actuation_noise)
         result = core.transition(state, actions, params, space,
                                  None if action_noise is None else action_noise * active[:, None],
-                                 noise(3, params.observation_noise))  # fmt: skip
+                                 noise(3, params.observation_noise), perturbation)  # fmt: skip
         obs = result.observation
         u, w = result.linear_velocity, result.angular_velocity
         live = active
@@ -289,7 +301,7 @@ def evaluate(
     """
     if optimum not in OPTIMA:
         raise ValueError(f"optimum={optimum!r} is invalid: expected one of {', '.join(OPTIMA)}")
-    params = EnvParams.from_kwargs(**scenario.env_kwargs)
+    params = EnvParams.from_kwargs(**split_env_kwargs(scenario.env_kwargs)[0])
     optimal_energy, optimum_failures = None, []
     if optimum != "none":
         optimal_energy, optimum_failures = optimal_energies(params, scenario.starts, scenario.goals, scenario.T_cons,
@@ -301,7 +313,7 @@ def evaluate(
             policy = ExpertPolicy(controller_for(policy, scenario, params), params.u_max, params.omega_max)
         result = rollout(
             policy, params, scenario.starts, scenario.goals, record=record, seed=seed, progress=progress,
-            description=f"{scenario.name}: {label}", T_con=scenario.T_cons,
+            description=f"{scenario.name}: {label}", T_con=scenario.T_cons, env_kwargs=scenario.env_kwargs,
         )  # fmt: skip
         result.optimal_energy, result.optimum_failures = optimal_energy, optimum_failures
         controller = getattr(policy, "controller", None)
