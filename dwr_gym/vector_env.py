@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
@@ -12,6 +13,10 @@ from numpy.typing import NDArray
 from dwr_gym import core, model
 from dwr_gym.env import check_render_mode, parse_reset_options
 from dwr_gym.params import EnvParams
+from dwr_gym.validation import POSE_LIMIT, as_choice, as_int
+
+MAX_NUM_ENVS = 1_000_000
+"""More robots than this would take gigabytes for the state alone; larger values are refused."""
 
 
 def _pose_batch(name: str, value: Any, n: int) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
@@ -19,8 +24,11 @@ def _pose_batch(name: str, value: Any, n: int) -> tuple[NDArray[np.float64], NDA
     array = np.asarray(value, dtype=np.float64)
     if array.shape == (3,):
         array = np.broadcast_to(array, (n, 3))
-    if array.shape != (n, 3) or not np.all(np.isfinite(array)):
-        raise ValueError(f"options[{name!r}] of shape {array.shape} is invalid: expected finite (3,) or ({n}, 3)")
+    if array.shape != (n, 3) or not np.all(np.abs(array) <= POSE_LIMIT):
+        raise ValueError(
+            f"options[{name!r}] of shape {array.shape} is invalid: expected (3,) or ({n}, 3) finite numbers "
+            f"within [-{POSE_LIMIT:g}, {POSE_LIMIT:g}]"
+        )
     return array[:, 0].copy(), array[:, 1].copy(), array[:, 2].copy()
 
 
@@ -48,11 +56,8 @@ class DWRPointStabilizationVectorEnv(VectorEnv):
     def __init__(
         self, num_envs: int = 1, render_mode: str | None = None, dtype: str = "float64", **kwargs: Any
     ) -> None:
-        if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
-            raise ValueError(f"num_envs={num_envs!r} is invalid: expected an integer >= 1")
-        if dtype not in ("float64", "float32"):
-            raise ValueError(f"dtype={dtype!r} is invalid: expected 'float64' or 'float32'")
-        self.dtype = dtype
+        num_envs = as_int("num_envs", num_envs, 1, MAX_NUM_ENVS)
+        self.dtype = as_choice("dtype", dtype, ("float64", "float32"))
         self.params = EnvParams.from_kwargs(**kwargs)
         check_render_mode(render_mode)
         self.render_mode = render_mode
@@ -62,6 +67,7 @@ class DWRPointStabilizationVectorEnv(VectorEnv):
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self._state = core.TaskState.zeros(self.num_envs, np.dtype(dtype).type)
+        self._needs_reset = True
         self._rngs: list[np.random.Generator] = []
         self._all = np.ones(self.num_envs, dtype=bool)
         self._trail: list[tuple[float, float]] = []
@@ -102,18 +108,25 @@ class DWRPointStabilizationVectorEnv(VectorEnv):
         super().reset(seed=seed if isinstance(seed, (int, np.integer)) or seed is None else None)
         self._seed_sub_envs(seed)
         options = dict(options or {})
-        mask = np.asarray(options.pop("reset_mask", self._all), dtype=bool)
-        if mask.shape != (self.num_envs,):
-            raise ValueError(f"options['reset_mask'] of shape {mask.shape} is invalid: expected ({self.num_envs},)")
+        mask = np.asarray(options.pop("reset_mask", self._all))
+        if mask.shape != (self.num_envs,) or not (mask.dtype == np.bool_ or np.isin(mask, (0, 1)).all()):
+            raise ValueError(
+                f"options['reset_mask'] of shape {mask.shape} is invalid: expected ({self.num_envs},) booleans"
+            )
+        mask = mask.astype(bool)
+        if self._needs_reset and not mask.all():
+            raise gym.error.ResetNeeded("the first reset() must reset every sub-env: drop options['reset_mask']")
         parse_reset_options({k: (0.0, 0.0, 0.0) for k in options})  # rejects unknown option names
         index = np.flatnonzero(mask)
         start = _pose_batch("start", options["start"], self.num_envs) if "start" in options else None
         goal = _pose_batch("goal", options["goal"], self.num_envs) if "goal" in options else None
-        self._reset_envs(
-            index,
-            None if start is None else tuple(a[index] for a in start),
-            None if goal is None else tuple(a[index] for a in goal),
-        )
+        if index.size:
+            self._reset_envs(
+                index,
+                None if start is None else tuple(a[index] for a in start),
+                None if goal is None else tuple(a[index] for a in goal),
+            )
+        self._needs_reset = False
         coords = self._state.coordinates(self.params.k)
         obs = core.observe(self._state, coords, self.params, self.single_observation_space,
                            self._noise(3, self.params.observation_noise))  # fmt: skip
@@ -132,6 +145,8 @@ class DWRPointStabilizationVectorEnv(VectorEnv):
     def step(
         self, actions: NDArray[np.float32]
     ) -> tuple[NDArray[np.float32], NDArray[np.float64], NDArray[np.bool_], NDArray[np.bool_], dict[str, Any]]:
+        if self._needs_reset:
+            raise gym.error.ResetNeeded("call reset() before step()")
         actions = np.asarray(actions)
         if actions.shape != (self.num_envs, 2):
             raise ValueError(f"actions of shape {actions.shape} are invalid: expected ({self.num_envs}, 2)")
