@@ -47,6 +47,11 @@ def _scalar(value: Any, text: bool) -> Any:
     return value
 
 
+def _show(name: str, text: str) -> str:
+    """``name=value`` for keywords, ``--flag value`` for command-line options."""
+    return f"{name} {text}" if name.startswith("--") else f"{name}={text}"
+
+
 def _describe(value: Any) -> str:
     if isinstance(value, np.ndarray):
         return f"array of shape {value.shape}"
@@ -69,12 +74,12 @@ def as_float(
     plain = _scalar(value, text)
     if isinstance(plain, bool) or not isinstance(plain, numbers.Real):
         hint = " (a string; write it as a number)" if isinstance(plain, str) else ""
-        raise ValueError(f"{name}={_describe(value)} is invalid{hint}: expected {allowed}")
+        raise ValueError(f"{_show(name, _describe(value))} is invalid{hint}: expected {allowed}")
     result = float(plain)
     below = result < low or (result == low and not low_inclusive)
     above = result > high or (result == high and not high_inclusive)
     if not math.isfinite(result) or below or above:
-        raise ValueError(f"{name}={result!r} is invalid: expected {allowed}")
+        raise ValueError(f"{_show(name, repr(result))} is invalid: expected {allowed}")
     return result
 
 
@@ -83,15 +88,15 @@ def as_int(name: str, value: Any, low: float = -math.inf, high: float = math.inf
     allowed = f"an integer in [{low:g}, {high:g}]"
     plain = _scalar(value, text)
     if isinstance(plain, bool) or not isinstance(plain, numbers.Real):
-        raise ValueError(f"{name}={_describe(value)} is invalid: expected {allowed}")
+        raise ValueError(f"{_show(name, _describe(value))} is invalid: expected {allowed}")
     if isinstance(plain, numbers.Integral):
         result = int(plain)
     elif math.isfinite(plain) and float(plain).is_integer():
         result = int(plain)
     else:
-        raise ValueError(f"{name}={plain!r} is invalid: expected {allowed}")
+        raise ValueError(f"{_show(name, repr(plain))} is invalid: expected {allowed}")
     if not low <= result <= high:
-        raise ValueError(f"{name}={result!r} is invalid: expected {allowed}")
+        raise ValueError(f"{_show(name, repr(result))} is invalid: expected {allowed}")
     return result
 
 
@@ -99,7 +104,7 @@ def as_bool(name: str, value: Any) -> bool:
     """``value`` as a bool: True/False, numpy bools; nothing else."""
     plain = _scalar(value, False)
     if not isinstance(plain, bool):
-        raise ValueError(f"{name}={_describe(value)} is invalid: expected True or False")
+        raise ValueError(f"{_show(name, _describe(value))} is invalid: expected True or False")
     return plain
 
 
@@ -108,16 +113,16 @@ def as_choice(name: str, value: Any, choices: Iterable[Any]) -> Any:
     options = tuple(choices)
     plain = _scalar(value, False)
     if not isinstance(plain, (str, type(None))) or plain not in options:
-        raise ValueError(f"{name}={_describe(value)} is invalid: expected one of {', '.join(map(repr, options))}")
+        raise ValueError(f"{_show(name, _describe(value))} is invalid: expected one of {', '.join(map(repr, options))}")
     return plain
 
 
 def _sequence(name: str, value: Any, length: int, expected: str) -> list[Any]:
     if isinstance(value, (str, bytes, dict)) or not isinstance(value, (list, tuple, np.ndarray)):
-        raise ValueError(f"{name}={_describe(value)} is invalid: expected {expected}")
+        raise ValueError(f"{_show(name, _describe(value))} is invalid: expected {expected}")
     items = list(np.asarray(value, dtype=object).reshape(-1)) if isinstance(value, np.ndarray) else list(value)
     if (isinstance(value, np.ndarray) and value.ndim != 1) or len(items) != length:
-        raise ValueError(f"{name}={_describe(value)} is invalid: expected {expected}")
+        raise ValueError(f"{_show(name, _describe(value))} is invalid: expected {expected}")
     return items
 
 
@@ -127,7 +132,7 @@ def as_interval(name: str, value: Any, low: float, high: float) -> tuple[float, 
     first, second = _sequence(name, value, 2, expected)
     pair = as_float(f"{name}[0]", first, low, high), as_float(f"{name}[1]", second, low, high)
     if pair[0] > pair[1]:
-        raise ValueError(f"{name}={pair!r} is invalid: min must not exceed max")
+        raise ValueError(f"{_show(name, repr(pair))} is invalid: min must not exceed max")
     return pair
 
 
@@ -138,7 +143,7 @@ def as_pose(name: str, value: Any) -> tuple[float, float, float]:
         items = _sequence(name, value, 3, expected)
         return tuple(as_float(name, v, -POSE_LIMIT, POSE_LIMIT) for v in items)  # type: ignore[return-value]
     except ValueError:
-        raise ValueError(f"{name}={_describe(value)} is invalid: expected {expected}") from None
+        raise ValueError(f"{_show(name, _describe(value))} is invalid: expected {expected}") from None
 
 
 def reject_unknown(cls: type, kwargs: dict[str, Any]) -> None:
