@@ -205,9 +205,9 @@ def parse_overrides(items: list[str]) -> dict[str, Any]:
 
     overrides: dict[str, Any] = {}
     for item in items:
-        key, sep, raw = item.partition("=")
-        if not sep:
-            key, sep, raw = item.partition(":")
+        positions = [i for i in (item.find("="), item.find(":")) if i >= 0]
+        cut = min(positions) if positions else len(item)
+        key, sep, raw = item[:cut], item[cut : cut + 1], item[cut + 1 :]
         if not sep or not key.strip() or not raw.strip():
             raise ConfigError(f"--hyperparams item {item!r} is invalid: expected KEY=VALUE, e.g. learning_rate=1e-4")
         try:

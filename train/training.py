@@ -352,7 +352,9 @@ def train(config: TrainConfig, command: list[str] | None = None) -> Path:
                 saved = pickle.load(handle)
             env = make_training_env(config)
             restore_env(env, saved["env"])
-            model = algo.load(config.resume, env=env, device=config.device, tensorboard_log=str(run_dir / "tb"))
+            model = algo.load(
+                config.resume, env=env, device=config.device, tensorboard_log=str(run_dir / "tb"), force_reset=False
+            )  # continue the saved episodes
             if (run_dir / "replay_buffer.pkl").is_file() and hasattr(model, "load_replay_buffer"):
                 model.load_replay_buffer(run_dir / "replay_buffer.pkl")
             torch.set_rng_state(saved["generators"]["torch"])
