@@ -11,7 +11,7 @@ from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
 from dwr_gym import core, model
-from dwr_gym.env import check_render_mode, parse_reset_options
+from dwr_gym.env import append_trail, check_render_mode, parse_reset_options
 from dwr_gym.params import EnvParams
 from dwr_gym.validation import POSE_LIMIT, as_choice, as_int
 
@@ -178,7 +178,7 @@ class DWRPointStabilizationVectorEnv(VectorEnv):
         if self.render_mode is not None:
             if done[0]:
                 self._trail = []
-            self._trail.append((float(infos["pose"][0, 0]), float(infos["pose"][0, 1])))
+            append_trail(self._trail, (float(infos["pose"][0, 0]), float(infos["pose"][0, 1])))
         if self.render_mode == "human":
             self.render()
         return obs, result.reward, result.terminated, result.truncated, infos

@@ -151,3 +151,12 @@ def test_command_line_hyperparameters_override_the_yaml_file(tmp_path) -> None:
 def test_json_output_writes_nan_as_null() -> None:
     text = json.dumps(json_safe([{"t": float("nan"), "x": np.float32(1.5), "n": np.int64(3), "i": math.inf}]))
     assert json.loads(text) == [{"t": None, "x": 1.5, "n": 3, "i": None}]
+
+
+def test_render_trail_stays_bounded_and_keeps_its_start() -> None:
+    from dwr_gym.env import TRAIL_LIMIT, append_trail
+
+    trail: list[tuple[float, float]] = []
+    for i in range(10 * TRAIL_LIMIT):
+        append_trail(trail, (float(i), 0.0))
+    assert len(trail) <= TRAIL_LIMIT and trail[0] == (0.0, 0.0) and trail[-1][0] == 10 * TRAIL_LIMIT - 1

@@ -161,6 +161,18 @@ def json_safe(value: Any) -> Any:
     return value
 
 
+FAILS_BY_DESIGN = {
+    "fabregas": "fabregas is the slow law of ref. [9] (u = K0 d p, not prescribed-time): the paper compares it at "
+    "T_con = 70 s (paper-fig7); it cannot arrive within T_con = 20 s, so its success there is 0 % by design",
+}
+
+
+def table_notes(rows: list[dict[str, Any]]) -> str:
+    """One line per policy whose low success rate the table alone would not explain."""
+    failing = {row["policy"] for row in rows if row["policy"] in FAILS_BY_DESIGN and row["success_rate"] < 0.5}
+    return "\n".join(f"note: {FAILS_BY_DESIGN[name]}" for name in sorted(failing))
+
+
 def write_results(rows: list[dict[str, Any]], out_dir: str, stem: str) -> list[str]:
     """Write rows as CSV and JSON into ``out_dir``; returns the paths written."""
     import csv
@@ -245,6 +257,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     policies.update(load_agents(args.agent))
     rows = run_evaluation(policies, args.scenarios, args.n, args.seed, env_kwargs, progress=not args.no_progress)
     print(format_table(rows, EVAL_COLUMNS))
+    if table_notes(rows):
+        print(table_notes(rows))
     for path in write_results(rows, args.out, "evaluation"):
         print(f"wrote {path}")
     return 0
@@ -417,6 +431,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
     rows = compare(agents, run_dirs, controllers, args.scenarios, args.n, args.seed, Path(args.out),
                    progress=not args.no_progress)  # fmt: skip
     print(format_table(rows, EVAL_COLUMNS))
+    if table_notes(rows):
+        print(table_notes(rows))
     for path in write_results(rows, args.out, "comparison"):
         print(f"wrote {path}")
     for name in ("trajectories.png", "time_series.png", "learning_curves.png"):
