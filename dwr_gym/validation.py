@@ -29,8 +29,13 @@ POSE_LIMIT = 1e9
 """Largest |x|, |y| [m] and |psi| [rad] of a pose option: beyond it differences of poses overflow."""
 
 
+def _number(x: float) -> str:
+    """A bound as users read it: 4294967295 exactly, 1e+06 short."""
+    return str(int(x)) if (math.isfinite(x) and float(x).is_integer() and abs(x) < 1e6) or x == 2**32 - 1 else f"{x:g}"
+
+
 def _bounds(low: float, high: float, low_inclusive: bool, high_inclusive: bool) -> str:
-    return f"{'[' if low_inclusive else '('}{low:g}, {high:g}{']' if high_inclusive else ')'}"
+    return f"{'[' if low_inclusive else '('}{_number(low)}, {_number(high)}{']' if high_inclusive else ')'}"
 
 
 def _scalar(value: Any, text: bool) -> Any:
@@ -85,7 +90,7 @@ def as_float(
 
 def as_int(name: str, value: Any, low: float = -math.inf, high: float = math.inf, *, text: bool = False) -> int:
     """``value`` as an int within [low, high]; integral floats such as ``1e5`` or ``2.0`` are accepted."""
-    allowed = f"an integer in [{low:g}, {high:g}]"
+    allowed = f"an integer in {_bounds(low, high, True, True)}"
     plain = _scalar(value, text)
     if isinstance(plain, bool) or not isinstance(plain, numbers.Real):
         raise ValueError(f"{_show(name, _describe(value))} is invalid: expected {allowed}")

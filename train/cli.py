@@ -363,7 +363,7 @@ def split_hyperparams(items: Sequence[str]) -> tuple[str | None, list[str]]:
 
 def cmd_train(args: argparse.Namespace) -> int:
     """Train an agent; bad input ends before any training starts."""
-    from train.config import ConfigError, TrainConfig, parse_overrides, resolve_hyperparams, rollout_rounding
+    from train.config import ConfigError, TrainConfig, parse_overrides, resolve_hyperparams
 
     given = {k: v for k, v in vars(args).items() if k not in ("func", "command")}
     if "env_kwargs" in given:
@@ -384,9 +384,6 @@ def cmd_train(args: argparse.Namespace) -> int:
             config = TrainConfig(**given)
             config.validate()
             config = resolve_hyperparams(config, set(given))
-        note = rollout_rounding(config)
-        if note:
-            print(note, file=sys.stderr)
         train(config, command=["dwr-gym", *sys.argv[1:]])
     except (ConfigError, RunDirError) as error:  # all raised before any training starts
         raise UsageError(str(error)) from None

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from train.config import ConfigError, TrainConfig, algorithm_class, build_algo_kwargs
+from train.config import ConfigError, TrainConfig, algorithm_class, build_algo_kwargs, rollout_rounding
 
 CONFIG_FILE = "config.yaml"
 MODEL_FILE = "model.zip"
@@ -345,6 +345,9 @@ def train(config: TrainConfig, command: list[str] | None = None) -> Path:
     run_dir, lock = prepare_run_dir(config)
     try:
         config.run_dir = str(run_dir)
+        note = rollout_rounding(config)
+        if note and config.resume is None:
+            print(note, file=sys.stderr)
         algo = algorithm_class(config.algo)
         state = read_state(run_dir) if config.resume is not None else {}
         if config.resume is not None:
