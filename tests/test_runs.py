@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import json
 import os
 import signal
 import subprocess
@@ -50,6 +51,10 @@ def test_same_seed_same_agent_and_resume_equals_the_uninterrupted_run(tmp_path: 
     for a, b in zip(parameters(first), parameters(split), strict=True):
         np.testing.assert_array_equal(a, b)
     assert evaluations(split) == evaluations(first)
+    assert (
+        json.loads((split / "run_state.json").read_text())["best_score"]
+        == json.loads((first / "run_state.json").read_text())["best_score"]
+    )  # the best score survives the resume
     steps = [int(row[0]) for row in evaluations(split)[1:]]
     assert steps == sorted(steps) and steps[-1] == 400
     wall = [float(row[1]) for row in list(csv.reader((split / "evaluations.csv").open()))[1:]]

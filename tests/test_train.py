@@ -154,6 +154,8 @@ def test_zoo_yaml_hyperparameters(tmp_path: Path) -> None:
         (["--num-envs", "0"], "--num-envs 0 is invalid"),
         (["--residual-scale", "9"], "--residual-scale 9.0 is invalid"),
         (["--expert", "pid"], "--expert 'pid' is invalid"),
+        (["--device", "gpu"], "--device 'gpu' is invalid"),
+        (["--total-timesteps", "1e5", "--seed", "-1"], "--seed -1 is invalid"),
     ],
 )
 def test_train_bad_input_exits_2_before_training(args: list[str], message: str, tmp_path: Path) -> None:
