@@ -1,6 +1,7 @@
 """Analytic controllers for DWR point stabilization, and their expert-policy wrapper."""
 
 from baselines.controllers import (
+    CONTROLLER_NAMES,
     CONTROLLERS,
     AstolfiController,
     AstolfiParams,
@@ -20,6 +21,7 @@ from baselines.expert import ExpertPolicy, controller_input_from_observation
 
 __all__ = [
     "CONTROLLERS",
+    "CONTROLLER_NAMES",
     "AstolfiController",
     "AstolfiParams",
     "Controller",

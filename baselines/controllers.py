@@ -427,15 +427,25 @@ PARAMS: dict[str, type[ControllerParams]] = {
 }
 
 
+#: Every name :func:`make_controller` knows: the analytic laws above, and the minimum-energy NMPC
+#: ``optimal`` of :mod:`baselines.nmpc` (which needs the ``optimal`` extra, CasADi).
+CONTROLLER_NAMES: tuple[str, ...] = (*CONTROLLERS, "optimal")
+
+
 def make_controller(name: str, **kwargs: Any) -> Controller:
-    """A controller by its name ('ptc', 'conventional-ptc', 'fabregas', 'fixed-time', 'astolfi')."""
+    """A controller by its name ('ptc', 'conventional-ptc', 'fabregas', 'fixed-time', 'astolfi', 'optimal')."""
+    if name == "optimal":
+        from baselines.nmpc import OptimalController, OptimalParams
+
+        return OptimalController(OptimalParams.from_kwargs(**kwargs))
     if name not in CONTROLLERS:
-        raise ValueError(f"controller={name!r} is invalid: expected one of {', '.join(CONTROLLERS)}")
+        raise ValueError(f"controller={name!r} is invalid: expected one of {', '.join(CONTROLLER_NAMES)}")
     return CONTROLLERS[name](PARAMS[name].from_kwargs(**kwargs))  # type: ignore[call-arg]
 
 
 __all__ = [
     "CONTROLLERS",
+    "CONTROLLER_NAMES",
     "AstolfiController",
     "AstolfiParams",
     "Controller",

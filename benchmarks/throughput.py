@@ -7,7 +7,8 @@ Prints, as medians of several repeats: the cost of one step of our single env an
 (both through gym.make, and both unwrapped); env-steps per second of our vector env (float64, the
 default, and dtype="float32"), of Gymnasium's
 SyncVectorEnv over our single env, and of Gymnasium's CartPoleVectorEnv at N = 1, 64, 1024, 4096,
-16384; the ratios; and the time to evaluate the PTC law on the `random` set of 10,000 start poses.
+16384; the ratios; our vector env in each autoreset mode on short episodes (many resets); and the time
+to evaluate the PTC law on the `random` set of 10,000 start poses.
 Timings on shared machines are noisy: compare ratios measured in one run, not absolute numbers.
 """
 
@@ -100,6 +101,20 @@ def main() -> None:
                            repeats, steps)  # fmt: skip
         print(f"{n:>6} {ours / 1e6:>11.2f} M {fast / 1e6:>11.2f} M {sync / 1e6:>9.3f} M {cart / 1e6:>10.2f} M "
               f"{ours / cart:>13.2f} {fast / cart:>13.2f} {ours / sync:>9.1f}")  # fmt: skip
+
+    print("\n== autoreset modes: N = 4096, T_con = 2 s and dt = 0.1 s, so every episode ends within 30 steps ==")
+    rates = {}
+    for mode in ("next_step", "same_step"):
+        for dtype in ("float64", "float32"):
+            envs = gym.make_vec("DWRPointStabilization-v0", num_envs=4096, dtype=dtype, autoreset_mode=mode,
+                                T_con=2.0, dt=0.1)  # fmt: skip
+            rates[mode, dtype] = vector_rate(envs, 4096, repeats, 100)
+    for dtype in ("float64", "float32"):
+        next_step, same_step = rates["next_step", dtype], rates["same_step", dtype]
+        print(
+            f"{dtype}: NEXT_STEP (default) {next_step / 1e6:.2f} M, SAME_STEP {same_step / 1e6:.2f} M, "
+            f"ratio {next_step / same_step:.2f}"
+        )
 
     print("\n== PTC law on the `random` scenario set (10,000 start poses, default T_con and dt) ==")
     from train.evaluation import evaluate, make_scenario

@@ -1,8 +1,10 @@
 """dwr-gym: prescribed-time point stabilization of a differential wheeled robot as a Gymnasium benchmark.
 
-Importing this package registers ``DWRPointStabilization-v0`` (idempotently), so both
-``gymnasium.make("DWRPointStabilization-v0")`` after ``import dwr_gym`` and
-``gymnasium.make("dwr_gym:DWRPointStabilization-v0")`` in a fresh interpreter work.
+Importing this package registers ``DWRPointStabilization-v0`` and ``DWRPointStabilization-v1``
+(idempotently), so both ``gymnasium.make("DWRPointStabilization-v1")`` after ``import dwr_gym`` and
+``gymnasium.make("dwr_gym:DWRPointStabilization-v1")`` in a fresh interpreter work. v1 is the same env
+with the defaults of :data:`V1_DEFAULTS`: T_con drawn per episode and a reward whose optimum is the task
+(arrive by T_con with the least energy); see the env's docstring, "Version History".
 """
 
 from __future__ import annotations
@@ -20,20 +22,44 @@ except PackageNotFoundError:  # running from a source tree that is not installed
     __version__ = "0.0.0+unknown"
 
 ENV_ID = "DWRPointStabilization-v0"
+ENV_ID_V1 = "DWRPointStabilization-v1"
+#: The keywords that make v1 of the same env class: any T_con in [10, 60] s, starts 0.3-3 m away, and a
+#: reward that pays for arriving by T_con with the heading, charges the energy, and pays nothing for
+#: arriving earlier than needed (no prescribed-time term, shaping that telescopes exactly).
+V1_DEFAULTS: dict[str, object] = {
+    "T_con_range": (10.0, 60.0),
+    "start_distance": (0.3, 3.0),
+    "time_weight": 0.0,
+    "effort_weight": 0.0,
+    "energy_weight": 2.0,
+    "shaping_discount": 1.0,
+    "zero_terminal_potential": True,
+}
 
 
 def register_envs() -> None:
-    """Register DWRPointStabilization-v0 with Gymnasium unless it is registered already."""
-    if ENV_ID not in gymnasium.registry:
-        gymnasium.register(
-            id=ENV_ID,
-            entry_point="dwr_gym.env:DWRPointStabilizationEnv",
-            vector_entry_point="dwr_gym.vector_env:DWRPointStabilizationVectorEnv",
-            # The env truncates itself at horizon_factor * T_con, which depends on its keywords.
-            max_episode_steps=None,
-        )
+    """Register DWRPointStabilization-v0 and -v1 with Gymnasium unless they are registered already."""
+    for env_id, defaults in ((ENV_ID, {}), (ENV_ID_V1, V1_DEFAULTS)):
+        if env_id not in gymnasium.registry:
+            gymnasium.register(
+                id=env_id,
+                entry_point="dwr_gym.env:DWRPointStabilizationEnv",
+                vector_entry_point="dwr_gym.vector_env:DWRPointStabilizationVectorEnv",
+                # The env truncates itself at horizon_factor * T_con, which depends on its keywords, and reports
+                # that number of steps as env.spec.max_episode_steps (see dwr_gym.env.spec_with_horizon).
+                max_episode_steps=None,
+                kwargs=dict(defaults),
+            )
 
 
 register_envs()
 
-__all__ = ["ENV_ID", "DWRPointStabilizationEnv", "EnvParams", "__version__", "register_envs"]
+__all__ = [
+    "ENV_ID",
+    "ENV_ID_V1",
+    "V1_DEFAULTS",
+    "DWRPointStabilizationEnv",
+    "EnvParams",
+    "__version__",
+    "register_envs",
+]

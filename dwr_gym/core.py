@@ -35,9 +35,9 @@ OBSERVATION_NAMES: tuple[str, ...] = (
     "initial_distance",
     "initial_orientation_error",
 )
-REWARD_TERMS: tuple[str, ...] = ("progress", "time", "effort", "arrival", "heading", "late", "arena")
+REWARD_TERMS: tuple[str, ...] = ("progress", "time", "effort", "energy", "arrival", "heading", "late", "arena")
 #: Keys of the info dict besides "reward_terms".
-INFO_KEYS: tuple[str, ...] = ("distance", "orientation_error", "heading_error", "time", "is_success", "energy",
+INFO_KEYS: tuple[str, ...] = ("distance", "orientation_error", "heading_error", "time", "T_con", "is_success", "energy",
                               "linear_velocity", "angular_velocity", "pose")  # fmt: skip
 
 
@@ -80,13 +80,17 @@ class TaskState:
     lyapunov: FloatArray  # eq. (21) at the current pose, kept for the next progress term
     goal_cos: FloatArray  # cos(goal_psi), set with the goal by new_state so world_pose needs no trigonometry
     goal_sin: FloatArray
+    T_con: FloatArray  # the episode's prescribed time [s]
+    prescribed_steps: NDArray[np.int64]  # control periods within T_con: arriving at or before this one is in time
+    max_steps: NDArray[np.int64]  # control periods until truncation
 
     @classmethod
     def zeros(cls, n: int, dtype: type[np.floating] = np.float64) -> TaskState:
         """A state of n robots at the goal, computed in ``dtype`` (float64, or float32 for speed)."""
         state = cls(
-            *(np.zeros(n, dtype) for _ in range(6)), np.zeros(n, np.int64), *(np.zeros(n, dtype) for _ in range(6))
-        )
+            *(np.zeros(n, dtype) for _ in range(6)), np.zeros(n, np.int64), *(np.zeros(n, dtype) for _ in range(7)),
+            np.zeros(n, np.int64), np.zeros(n, np.int64),
+        )  # fmt: skip
         state.goal_cos[:] = 1.0
         return state
 
@@ -115,7 +119,8 @@ def observation_space(params: EnvParams) -> spaces.Box:
     d_max = 2.0 * params.arena_radius
     low = np.array([0, -1, -1, -1, -1, -e_max, 0, 0, 0, -e_max], dtype=np.float32)
     high = np.array(
-        [d_max, 1, 1, 1, 1, e_max, params.horizon_factor, params.T_con, params.arena_radius, e_max], dtype=np.float32
+        [d_max, 1, 1, 1, 1, e_max, params.horizon_factor, params.T_con_max, params.arena_radius, e_max],
+        dtype=np.float32,
     )
     return spaces.Box(low, high, dtype=np.float32)
 
@@ -150,7 +155,7 @@ def observe(
         cos_alpha, sin_alpha = (-coords.x / dist, -coords.y / dist) if dist > 0.0 else (1.0, 0.0)
         features = np.array(
             [dist, cos_alpha, sin_alpha, math.cos(coords.psi), math.sin(coords.psi), coords.orientation_error,
-             state.step_count * (params.dt / params.T_con), params.T_con, state.initial_distance,
+             state.step_count * (params.dt / state.T_con), state.T_con, state.initial_distance,
              state.initial_orientation_error], dtype=np.float32,
         )  # fmt: skip
         return np.minimum(np.maximum(features, space.low, out=features), space.high, out=features)  # 2x np.clip's speed
@@ -164,8 +169,8 @@ def observe(
     features[3] = np.cos(heading)
     features[4] = np.sin(heading)
     features[5] = coords.orientation_error
-    features[6] = state.step_count * (params.dt / params.T_con)
-    features[7] = params.T_con
+    features[6] = state.step_count * (params.dt / state.T_con)
+    features[7] = state.T_con
     features[8] = state.initial_distance
     features[9] = state.initial_orientation_error
     np.clip(features, space.low[:, None], space.high[:, None], out=features)
@@ -185,8 +190,13 @@ def parse_pose(name: str, value: object) -> tuple[float, float, float]:
     return as_pose(f"options[{name!r}]", value)
 
 
-def new_state(start: tuple[Any, Any, Any], goal: tuple[Any, Any, Any], params: EnvParams) -> TaskState:
-    """Robots at world poses ``start`` heading for world poses ``goal``: (N,) arrays, or floats for one robot."""
+def new_state(
+    start: tuple[Any, Any, Any], goal: tuple[Any, Any, Any], params: EnvParams, T_con: Any = None
+) -> TaskState:
+    """Robots at world poses ``start`` heading for world poses ``goal``: (N,) arrays, or floats for one robot.
+
+    ``T_con`` is each episode's prescribed time (a float, or (N,)); None is ``params.T_con``.
+    """
     xp = model.namespace(*start, *goal)
     x, y, psi = model.to_goal_frame(*start, *goal)
     coords = error_coordinates(x, y, psi, params.k)
@@ -200,7 +210,7 @@ def new_state(start: tuple[Any, Any, Any], goal: tuple[Any, Any, Any], params: E
     steps = 0 if xp is model.SCALAR_MATH else np.zeros(coords.distance.shape, np.int64)
     return TaskState(x, y, psi, goal[0] + zero, goal[1] + zero, goal[2] + zero, steps, zero, coords.distance,
                      coords.orientation_error, model.lyapunov(coords.distance, coords.orientation_error),
-                     xp.cos(goal[2]) + zero, xp.sin(goal[2]) + zero)  # fmt: skip
+                     xp.cos(goal[2]) + zero, xp.sin(goal[2]) + zero, *episode_length(T_con, zero, params, xp))  # fmt: skip
 
 
 def reset_robots(
@@ -209,9 +219,30 @@ def reset_robots(
     start: tuple[FloatArray, FloatArray, FloatArray],
     goal: tuple[FloatArray, FloatArray, FloatArray],
     params: EnvParams,
+    T_con: FloatArray | None = None,
 ) -> None:
-    """Place the robots at ``index`` of a batched state at world poses ``start`` with goals ``goal``."""
-    state.assign(index, new_state(start, goal, params))
+    """Place the robots at ``index`` of a batched state at world poses ``start`` with goals ``goal``
+    and prescribed times ``T_con`` (None: ``params.T_con``)."""
+    state.assign(index, new_state(start, goal, params, T_con))
+
+
+def episode_length(T_con: Any, zero: Any, params: EnvParams, xp: Any) -> tuple[Any, Any, Any]:
+    """(T_con, prescribed steps, steps until truncation) of episodes with prescribed times ``T_con`` (None:
+    ``params.T_con``), broadcast like ``zero`` (floats and ints for one robot, else (N,) arrays)."""
+    if T_con is None:
+        T_con = params.T_con
+    if xp is model.SCALAR_MATH:
+        T_con = float(T_con)
+        return T_con, params.prescribed_steps_of(T_con), params.max_episode_steps_of(T_con)
+    T_con = np.asarray(T_con, dtype=np.float64) + np.zeros(np.shape(zero))
+    prescribed = np.floor(T_con / params.dt + 1e-9).astype(np.int64)  # as EnvParams.prescribed_steps_of
+    steps = np.ceil(params.horizon_factor * T_con / params.dt - 1e-9).astype(np.int64)  # as max_episode_steps_of
+    return T_con.astype(np.asarray(zero).dtype), prescribed, steps
+
+
+def sample_T_con(rng: np.random.Generator, params: EnvParams) -> float:
+    """An episode's prescribed time: drawn uniformly from ``T_con_range``, else ``T_con`` (no draw)."""
+    return params.T_con if params.T_con_range is None else float(rng.uniform(*params.T_con_range))
 
 
 def commands_from_action(
@@ -285,21 +316,24 @@ def transition(
     heading_ok = True if params.heading_tolerance is None else xp.abs(coords.psi) <= params.heading_tolerance
     is_success = (coords.distance <= params.goal_tolerance) & heading_ok
     out_of_arena = coords.distance > params.arena_radius
-    in_time = state.step_count <= params.prescribed_steps  # integer comparison: exact in any dtype
+    in_time = state.step_count <= state.prescribed_steps  # integer comparison: exact in any dtype
     lyapunov = model.lyapunov(coords.distance, coords.orientation_error)
+    terminated = is_success | out_of_arena
+    # Exact shaping in an episodic task gives terminal states the potential 0 (v1); v0 keeps Phi(s') there.
+    next_potential = xp.where(terminated, 0.0, lyapunov) if params.zero_terminal_potential else lyapunov
     terms = {
-        "progress": params.progress_weight * (state.lyapunov - params.shaping_discount * lyapunov),
+        "progress": params.progress_weight * (state.lyapunov - params.shaping_discount * next_potential),
         "time": -params.time_weight * params.dt * coords.distance
-        * model.conventional_scaling(time, params.T_con, max_gain=params.time_gain_cap),
+        * model.conventional_scaling(time, state.T_con, max_gain=params.time_gain_cap),
         "effort": -params.effort_weight * params.dt * (a_u * a_u + a_omega * a_omega),
+        "energy": -params.energy_weight * params.dt * (u * u + omega * omega),
         "arrival": xp.where(is_success & in_time, params.arrival_bonus, 0.0),
         "heading": xp.where(is_success, params.heading_weight * (xp.cos(coords.psi) - 1.0), 0.0),
         "late": xp.where(xp.logical_not(is_success | in_time), -params.late_penalty * params.dt, 0.0),
         "arena": xp.where(out_of_arena, -params.arena_penalty, 0.0),
     }  # fmt: skip
     state.lyapunov = lyapunov
-    terminated = is_success | out_of_arena
-    truncated = (state.step_count >= params.max_episode_steps) & xp.logical_not(terminated)
+    truncated = (state.step_count >= state.max_steps) & xp.logical_not(terminated)
 
     obs = observe(state, coords, params, space, pose_noise)
     reward = sum(terms.values())
@@ -319,8 +353,9 @@ def infos(
     return {
         "distance": coords.distance,
         "orientation_error": coords.orientation_error,
-        "heading_error": coords.psi,
+        "heading_error": xp.copy(coords.psi),  # coords.psi is the state's own array, which resets overwrite
         "time": state.step_count * params.dt,
+        "T_con": xp.copy(state.T_con),
         "is_success": bool(is_success) if scalar else is_success,
         "energy": xp.copy(state.energy),
         "linear_velocity": zeros if result is None else result.linear_velocity,

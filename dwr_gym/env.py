@@ -2,17 +2,19 @@
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any, SupportsFloat
 
 import gymnasium as gym
 import numpy as np
+from gymnasium.envs.registration import EnvSpec
 from numpy.typing import NDArray
 
 from dwr_gym import core, model
 from dwr_gym.params import EnvParams
 
 RENDER_MODES = ("human", "rgb_array")
-RESET_OPTIONS = ("start", "goal")
+RESET_OPTIONS = ("start", "goal", "T_con")
 TRAIL_LIMIT = 4096
 """Most points the render trail keeps; past it every other point is dropped, so memory stays bounded."""
 
@@ -31,12 +33,39 @@ def check_render_mode(render_mode: str | None) -> None:
 
 
 def parse_reset_options(options: dict[str, Any] | None) -> dict[str, tuple[float, float, float]]:
-    """Validate reset options {'start': (x, y, psi), 'goal': (x_d, y_d, psi_d)}."""
+    """Validate the pose options {'start': (x, y, psi), 'goal': (x_d, y_d, psi_d)} of reset(); rejects
+    unknown names ('T_con' is checked by :func:`parse_T_con_option`)."""
     options = dict(options or {})
     unknown = sorted(set(options) - set(RESET_OPTIONS))
     if unknown:
-        raise ValueError(f"unknown reset option(s) {unknown}; allowed: 'start', 'goal'")
-    return {name: core.parse_pose(name, value) for name, value in options.items()}
+        raise ValueError(f"unknown reset option(s) {unknown}; allowed: 'start', 'goal', 'T_con'")
+    return {name: core.parse_pose(name, value) for name, value in options.items() if name != "T_con"}
+
+
+def parse_T_con_option(value: Any, params: EnvParams) -> NDArray[np.float64]:
+    """The reset option 'T_con' [s] as an array: within [dt, the largest T_con the observation space covers]."""
+    array = np.asarray(value, dtype=np.float64) if not isinstance(value, (str, bytes)) else np.array(np.nan)
+    high = params.T_con_max
+    if array.size == 0 or not np.all(np.isfinite(array)) or np.any(array < params.dt) or np.any(array > high):
+        raise ValueError(
+            f"options['T_con']={value!r} is invalid: expected prescribed times in [dt={params.dt:g}, {high:g}] s "
+            "(the observation space covers T_con up to T_con, or up to T_con_range[1] when that is set)"
+        )
+    return array
+
+
+def spec_with_horizon(spec: EnvSpec | None, params: EnvParams) -> EnvSpec | None:
+    """``spec`` with ``max_episode_steps`` the number of steps after which an env of ``params`` truncates.
+
+    Registration cannot know it (it depends on the keywords T_con, dt and horizon_factor), so the env
+    fills it in when ``gymnasium.make`` sets its spec; wrappers that read the horizon from the spec
+    (``TimeAwareObservation``) then see it, and ``gymnasium.make(env.spec)`` adds a ``TimeLimit`` that
+    truncates at the very step the env does. A smaller limit set by the user is kept.
+    """
+    if spec is None:
+        return None
+    steps = params.max_episode_steps
+    return dataclasses.replace(spec, max_episode_steps=min(spec.max_episode_steps or steps, steps))
 
 
 class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
@@ -81,6 +110,7 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
       when gamma is the agent's discount;
     - time = -time_weight * dt * mu_1(t') * d(s'): the cost of still being away grows as T_con nears;
     - effort = -effort_weight * dt * (a_u^2 + a_omega^2);
+    - energy = -energy_weight * dt * (u^2 + omega^2), the env's ``energy`` in SI units (0 in v0);
     - arrival = +arrival_bonus on arrival at or before T_con (nothing for a late arrival);
     - heading = heading_weight * (cos(psi - psi_d) - 1) on arrival: the paper aims at a final yaw of
       zero too (Theorem 8, Remark 1), though its success criterion is the position alone; set
@@ -88,19 +118,29 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
     - late = -late_penalty * dt for each step after T_con without arrival;
     - arena = -arena_penalty when the robot leaves the arena.
 
-    Each term is in ``info["reward_terms"]``.
+    Each term is in ``info["reward_terms"]``. In v1 (``time_weight=0``, ``effort_weight=0``,
+    ``energy_weight=2``, ``shaping_discount=1``, ``zero_terminal_potential=True``: Phi = 0 at a terminal
+    state) the return of an episode that arrives in time is L(s_0) - 2 energy + arrival_bonus + heading
+    term, whatever the path: the progress term telescopes, nothing is
+    paid for arriving earlier than needed, and of two arrivals in time with the same final pose the
+    cheaper earns more. The task's optimum is defined on this undiscounted return; an agent that
+    discounts (gamma < 1) values an early bonus more, so train with gamma close to 1 (0.999 or more).
 
     ## Starting State
     Without options the goal is (0, 0, 0) and the start is drawn from ``self.np_random``: distance
     uniform in ``start_distance``, bearing uniform in [-pi, pi), heading relative to the goal uniform
     in ``start_heading``. ``reset(options={"start": (x, y, psi), "goal": (x_d, y_d, psi_d)})`` places
-    either or both exactly (a random start is then drawn around the given goal).
+    either or both exactly (a random start is then drawn around the given goal). The prescribed time
+    is ``T_con``, or with ``T_con_range`` drawn uniformly per episode (after the start);
+    ``options={"T_con": 35.0}`` sets it for one episode, within [dt, the observation space's bound].
 
     ## Episode End
     Terminated on arrival (d <= ``goal_tolerance``, and |psi - psi_d| <= ``heading_tolerance`` when
     that is set) or on leaving the arena (d > ``arena_radius``). Truncated at the horizon
     ``horizon_factor * T_con`` (30 s by default), past T_con so that late arrivals are observable.
-    The env truncates itself because the horizon depends on the keywords ``T_con`` and ``dt``.
+    The env truncates itself, because the horizon depends on the keywords ``T_con``, ``dt`` and
+    ``horizon_factor``, and reports the number of steps in ``env.spec.max_episode_steps`` (600 by
+    default), where ``TimeLimit``-aware wrappers such as ``TimeAwareObservation`` look for it.
 
     ## Arguments
     Every field of :class:`dwr_gym.params.EnvParams` is a keyword (``T_con``, ``dt``, ``u_max``,
@@ -117,15 +157,26 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
     (0.8, (10,))
     >>> obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
     >>> sorted(info["reward_terms"])
-    ['arena', 'arrival', 'effort', 'heading', 'late', 'progress', 'time']
+    ['arena', 'arrival', 'effort', 'energy', 'heading', 'late', 'progress', 'time']
 
     ## Version History
-    * v0: initial version.
+    * v1: the defaults of ``dwr_gym.V1_DEFAULTS``: T_con drawn per episode from ``T_con_range`` = (10, 60) s
+      (observed, in info["T_con"]), starts 0.3 to 3 m away, and the reward above (energy instead of
+      effort and the prescribed-time term, exact shaping with Phi = 0 at terminal states). A new ``energy`` term (0 in v0) and the
+      ``T_con_range`` keyword and ``options={"T_con": ...}`` of reset() exist in both ids.
+    * v0: initial version. Later, with unchanged returns: ``spec.max_episode_steps`` reports the horizon
+      the env truncates at; the native vector env takes ``autoreset_mode`` and defaults to NEXT_STEP, as
+      Gymnasium's own vector envs (it used SAME_STEP before: pass ``autoreset_mode="same_step"`` for that).
     """
 
     metadata = {"render_modes": list(RENDER_MODES), "render_fps": 20}
 
     def __init__(self, render_mode: str | None = None, **kwargs: Any) -> None:
+        if "autoreset_mode" in kwargs:  # reaches the single env through gym.make_vec(..., vectorization_mode="sync")
+            raise ValueError(
+                f"autoreset_mode={kwargs['autoreset_mode']!r} is a keyword of vector envs, not of the single env: "
+                "with vectorization_mode 'sync' or 'async' pass vector_kwargs={'autoreset_mode': ...}"
+            )
         self.params = EnvParams.from_kwargs(**kwargs)
         check_render_mode(render_mode)
         self.render_mode = render_mode
@@ -134,6 +185,16 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
         self._state: core.TaskState | None = None  # a state of Python floats: one robot
         self._trail: list[tuple[float, float]] = []
         self._renderer: Any = None
+        self._spec: EnvSpec | None = None
+
+    @property  # type: ignore[override]
+    def spec(self) -> EnvSpec | None:
+        """The registration, with ``max_episode_steps`` the number of steps after which this env truncates."""
+        return self._spec
+
+    @spec.setter
+    def spec(self, spec: EnvSpec | None) -> None:
+        self._spec = spec_with_horizon(spec, self.params)
 
     def _noise(self, size: int, sigma: float) -> NDArray[np.float64] | None:
         return self.np_random.standard_normal(size) if sigma > 0 else None
@@ -149,7 +210,14 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
             if "start" in poses
             else model.from_goal_frame(*core.sample_start(self.np_random, self.params), *goal)
         )
-        self._state = core.new_state(tuple(map(float, start)), tuple(map(float, goal)), self.params)  # type: ignore[arg-type]
+        if options and "T_con" in options:
+            T_con = parse_T_con_option(options["T_con"], self.params)
+            if T_con.shape != ():
+                raise ValueError(f"options['T_con'] of shape {T_con.shape} is invalid: expected one number")
+            T_con = float(T_con)
+        else:
+            T_con = core.sample_T_con(self.np_random, self.params)
+        self._state = core.new_state(tuple(map(float, start)), tuple(map(float, goal)), self.params, T_con)  # type: ignore[arg-type]
         coords = self._state.coordinates(self.params.k)
         obs = core.observe(
             self._state, coords, self.params, self.observation_space, self._noise(3, self.params.observation_noise)
@@ -199,4 +267,4 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
             self._renderer = None
 
 
-__all__ = ["DWRPointStabilizationEnv"]
+__all__ = ["DWRPointStabilizationEnv", "spec_with_horizon"]

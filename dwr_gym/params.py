@@ -9,7 +9,7 @@ from functools import cached_property
 from typing import Any
 
 from dwr_gym.model import INTEGRATORS
-from dwr_gym.validation import as_choice, as_float, as_int, as_interval, blame, reject_unknown
+from dwr_gym.validation import as_bool, as_choice, as_float, as_int, as_interval, blame, reject_unknown
 
 MIN_T_CON = 1e-3  # [s]
 MIN_DT = 1e-6  # [s]
@@ -26,6 +26,8 @@ class EnvParams:
 
     T_con: float = 20.0  # [s]
     """Prescribed time within which the robot should reach the goal (T_con of eq. (17))."""
+    T_con_range: tuple[float, float] | None = None  # [s]
+    """If set, each episode draws its T_con uniformly from this range (``T_con`` is then unused)."""
     dt: float = 0.05  # [s]
     """Control period: the commands are held constant for dt seconds."""
     u_max: float = 0.5  # [m/s]
@@ -54,12 +56,17 @@ class EnvParams:
     """Weight of the potential-based progress term on the Lyapunov function (21)."""
     shaping_discount: float = 0.99
     """gamma of the shaping term gamma*Phi(s') - Phi(s); set it to your algorithm's discount."""
+    zero_terminal_potential: bool = False
+    """Give terminal states the potential 0 in the progress term, which makes its sum over an episode that
+    arrives exactly L(s_0) whatever the path (exact potential-based shaping); False is v0's Phi(s')."""
     time_weight: float = 0.5  # [1/(m s)]
     """Weight of the prescribed-time term dt * mu_1(t) * d, with mu_1 of eq. (12)."""
     time_gain_cap: float = 20.0
     """Cap of mu_1(t) in the prescribed-time term (eq. (12) is infinite at T_con)."""
     effort_weight: float = 0.01  # [1/s]
     """Weight of the control-effort term dt * (a_u^2 + a_omega^2) on normalised actions."""
+    energy_weight: float = 0.0
+    """Weight of the energy term dt * (u^2 + omega^2) on the commands in SI units: the env's ``energy``."""
     arrival_bonus: float = 10.0
     """Reward for arriving at or before T_con."""
     heading_weight: float = 5.0
@@ -76,6 +83,8 @@ class EnvParams:
     def __post_init__(self) -> None:
         set_ = object.__setattr__
         set_(self, "T_con", as_float("T_con", self.T_con, MIN_T_CON, 1e6))
+        if self.T_con_range is not None:
+            set_(self, "T_con_range", as_interval("T_con_range", self.T_con_range, MIN_T_CON, 1e6))
         set_(self, "dt", as_float("dt", self.dt, MIN_DT, 1e6))
         set_(self, "u_max", as_float("u_max", self.u_max, 0.0, 100.0, low_inclusive=False))
         set_(self, "omega_max", as_float("omega_max", self.omega_max, 0.0, 100.0, low_inclusive=False))
@@ -94,6 +103,7 @@ class EnvParams:
             "progress_weight",
             "time_weight",
             "effort_weight",
+            "energy_weight",
             "arrival_bonus",
             "heading_weight",
             "late_penalty",
@@ -101,6 +111,7 @@ class EnvParams:
         ):
             set_(self, name, as_float(name, getattr(self, name), 0.0, 1e6))
         set_(self, "shaping_discount", as_float("shaping_discount", self.shaping_discount, 0.0, 1.0))
+        set_(self, "zero_terminal_potential", as_bool("zero_terminal_potential", self.zero_terminal_potential))
         set_(self, "time_gain_cap", as_float("time_gain_cap", self.time_gain_cap, 1.0, 1e6))
         set_(self, "observation_noise", as_float("observation_noise", self.observation_noise, 0.0, 10.0))
         set_(self, "actuation_noise", as_float("actuation_noise", self.actuation_noise, 0.0, 10.0))
@@ -108,8 +119,11 @@ class EnvParams:
 
     def _check_consistency(self) -> None:
         """Checks between parameters; each error names the one of the pair that the user set."""
-        if self.dt > self.T_con:
-            self._conflict(blame(self, "dt", "T_con"), f"dt <= T_con (dt={self.dt:g} s, T_con={self.T_con:g} s)")
+        if self.dt > self.T_con_min:
+            self._conflict(
+                blame(self, "dt", "T_con_range" if self.T_con_range is not None else "T_con"),
+                f"dt <= T_con (dt={self.dt:g} s, smallest T_con={self.T_con_min:g} s)",
+            )
         step = self.u_max * self.dt
         if step >= self.arena_radius:
             self._conflict(
@@ -137,19 +151,37 @@ class EnvParams:
         return cls(**kwargs)
 
     @property
+    def T_con_min(self) -> float:
+        """The smallest prescribed time an episode can have [s]."""
+        return self.T_con if self.T_con_range is None else self.T_con_range[0]
+
+    @property
+    def T_con_max(self) -> float:
+        """The largest prescribed time an episode can have [s]."""
+        return self.T_con if self.T_con_range is None else self.T_con_range[1]
+
+    @property
     def horizon(self) -> float:
-        """Time at which an episode is truncated [s]."""
-        return self.horizon_factor * self.T_con
+        """Time at which the longest episode is truncated [s]."""
+        return self.horizon_factor * self.T_con_max
 
     @cached_property
     def prescribed_steps(self) -> int:
         """Number of control periods within T_con: arriving at or before this step is in time."""
-        return math.floor(self.T_con / self.dt + 1e-9)
+        return self.prescribed_steps_of(self.T_con)
 
     @cached_property
     def max_episode_steps(self) -> int:
-        """Number of control periods until truncation."""
-        return math.ceil(self.horizon / self.dt - 1e-9)
+        """Number of control periods until truncation (of the longest episode, with ``T_con_range``)."""
+        return self.max_episode_steps_of(self.T_con_max)
+
+    def prescribed_steps_of(self, T_con: float) -> int:
+        """Control periods within ``T_con``."""
+        return math.floor(T_con / self.dt + 1e-9)
+
+    def max_episode_steps_of(self, T_con: float) -> int:
+        """Control periods until the truncation of an episode of prescribed time ``T_con``."""
+        return math.ceil(self.horizon_factor * T_con / self.dt - 1e-9)
 
     def as_dict(self) -> dict[str, Any]:
         """The parameters as a plain dict of constructor keywords."""

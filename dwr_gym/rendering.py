@@ -40,6 +40,13 @@ class Renderer:
         self._canvas = pygame.Surface((size, size))
         self._font = pygame.font.Font(None, 22)
 
+    def __getstate__(self) -> dict[str, Any]:
+        """The settings only: pygame's module and surfaces cannot be pickled, so a copy sets them up anew."""
+        return {"render_mode": self.render_mode, "fps": self.fps, "size": self.size}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__init__(**state)  # type: ignore[misc]
+
     def draw(
         self,
         pose: tuple[float, float, float],

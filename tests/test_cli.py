@@ -35,13 +35,26 @@ def test_evaluate_end_to_end_writes_table_csv_and_json(tmp_path: Path) -> None:
     }  # fmt: skip
     ptc_random = next(r for r in rows if r["scenario"] == "random" and r["policy"] == "ptc")
     assert ptc_random["n"] == 20 and ptc_random["success_rate"] == 1.0
-    assert (tmp_path / "evaluation.csv").read_text().startswith("scenario,policy,n,success_rate")
+    assert (tmp_path / "evaluation.csv").read_text().startswith("scenario,T_con,policy,n,success_rate")
+    # every policy is stated against the optimum of the same episodes (the optimal extra is part of "all")
+    assert 1.0 < ptc_random["energy_ratio_mean"] <= ptc_random["energy_ratio_max"]
+
+
+def test_evaluate_by_prescribed_time_prints_one_block_per_T_con(tmp_path: Path) -> None:
+    result = dwr_gym("evaluate", "--controllers", "ptc", "--scenarios", "random", "--n", "5", "--T-con", "10", "40",
+                     "--optimum", "none", "--out", str(tmp_path), "--no-progress")  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    assert "random, T_con = 10 s" in result.stdout and "random, T_con = 40 s" in result.stdout
+    rows = json.loads((tmp_path / "evaluation.json").read_text())
+    assert [r["T_con"] for r in rows] == [10.0, 40.0]
+    assert all(r["success_rate"] == 1.0 for r in rows)
 
 
 @pytest.mark.parametrize(
     "args, message",
     [
         (["evaluate", "--controllers", "pid"], "--controllers 'pid' is invalid"),
+        (["evaluate", "--T-con", "0"], "--T-con 0.0 is invalid"),
         (["evaluate", "--scenarios", "paper-fig99"], "--scenarios 'paper-fig99' is invalid"),
         (["evaluate", "--n", "0"], "--n 0 is invalid"),
         (["evaluate", "--env-kwargs", "T_con=-3"], "T_con=-3"),

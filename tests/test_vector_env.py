@@ -22,21 +22,56 @@ def test_make_vec_returns_the_native_vector_env() -> None:
     envs = gym.make_vec(ENV_ID, num_envs=8, T_con=25.0)
     assert isinstance(envs, DWRPointStabilizationVectorEnv)
     assert envs.params.T_con == 25.0
-    assert envs.metadata["autoreset_mode"] == AutoresetMode.SAME_STEP
+    assert envs.metadata["autoreset_mode"] == AutoresetMode.NEXT_STEP  # as Gymnasium's own vector envs
+    assert envs.spec is not None and envs.spec.max_episode_steps == 750  # 1.5 * 25 s / 0.05 s
     assert envs.observation_space.shape == (8, 10) and envs.action_space.shape == (8, 2)
 
 
-@pytest.mark.parametrize("num_envs", [1, 5])
-def test_vector_env_matches_single_envs_step_by_step(num_envs: int) -> None:
-    """Gymnasium's test_cartpole_vector_equiv, for our env: same seeds, same actions, same everything."""
-    vec = gym.make_vec(ENV_ID, num_envs=num_envs, **KWARGS)
-    ref = SyncVectorEnv([lambda: gym.make(ENV_ID, **KWARGS) for _ in range(num_envs)],
-                        autoreset_mode=AutoresetMode.SAME_STEP)  # fmt: skip
+@pytest.mark.parametrize("mode", [*AutoresetMode, "next_step", "SAME_STEP", "Disabled"])
+def test_make_vec_takes_the_autoreset_mode_and_reports_it(mode: Any) -> None:
+    envs = gym.make_vec(ENV_ID, num_envs=2, autoreset_mode=mode)
+    expected = mode if isinstance(mode, AutoresetMode) else {"n": AutoresetMode.NEXT_STEP, "s": AutoresetMode.SAME_STEP,
+                                                            "d": AutoresetMode.DISABLED}[mode[0].lower()]  # fmt: skip
+    assert envs.metadata["autoreset_mode"] is expected and envs.autoreset_mode is expected
+    assert type(envs).metadata["autoreset_mode"] is AutoresetMode.NEXT_STEP  # the class default is untouched
+    with pytest.raises(ValueError, match="autoreset_mode='sometimes' is invalid"):
+        gym.make_vec(ENV_ID, num_envs=2, autoreset_mode="sometimes")
+
+
+def test_sync_and_async_vectorization_take_the_autoreset_mode_in_vector_kwargs() -> None:
+    envs = gym.make_vec(ENV_ID, num_envs=2, vectorization_mode="sync",
+                        vector_kwargs={"autoreset_mode": AutoresetMode.SAME_STEP})  # fmt: skip
+    assert isinstance(envs, SyncVectorEnv) and envs.metadata["autoreset_mode"] is AutoresetMode.SAME_STEP
+    with pytest.raises(ValueError, match="vector_kwargs"):  # a keyword there would reach the single envs
+        gym.make_vec(ENV_ID, num_envs=2, vectorization_mode="sync", autoreset_mode="same_step")
+
+
+def assert_infos_match(info: dict[str, Any], ref_info: dict[str, Any], rows: Any) -> None:
+    """Every info key of the single env, and every reward term, equal on ``rows``."""
+    for key in ("distance", "orientation_error", "heading_error", "time", "is_success", "energy", "pose",
+                "linear_velocity", "angular_velocity"):  # fmt: skip
+        np.testing.assert_allclose(info[key][rows], ref_info[key][rows], rtol=1e-9, atol=1e-12, err_msg=key)
+    for term in ("progress", "time", "effort", "arrival", "heading", "late", "arena"):
+        np.testing.assert_allclose(info["reward_terms"][term][rows], ref_info["reward_terms"][term][rows], atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("mode", "num_envs"),
+    [(AutoresetMode.NEXT_STEP, 1), (AutoresetMode.NEXT_STEP, 5), (AutoresetMode.SAME_STEP, 5),
+     (AutoresetMode.DISABLED, 5)],
+)  # fmt: skip
+def test_vector_env_matches_sync_vector_env_step_by_step(mode: AutoresetMode, num_envs: int) -> None:
+    """Gymnasium's test_cartpole_vector_equiv, for our env and each autoreset mode: same seeds, same
+    actions, same everything as SyncVectorEnv of single envs in that mode."""
+    vec = gym.make_vec(ENV_ID, num_envs=num_envs, autoreset_mode=mode, **KWARGS)
+    ref = SyncVectorEnv([lambda: gym.make(ENV_ID, **KWARGS) for _ in range(num_envs)], autoreset_mode=mode)
+    assert vec.metadata["autoreset_mode"] == ref.metadata["autoreset_mode"] == mode
     obs, info = vec.reset(seed=123)
     ref_obs, ref_info = ref.reset(seed=123)
     np.testing.assert_allclose(obs, ref_obs, rtol=1e-6, atol=1e-7)  # float32 features: equal to rounding
-    np.testing.assert_allclose(info["distance"], ref_info["distance"])
+    assert_infos_match(info, ref_info, slice(None))
     vec.action_space.seed(0)
+    ended = np.zeros(num_envs, dtype=bool)
     dones = 0
     for _ in range(200):
         actions = vec.action_space.sample()
@@ -46,17 +81,28 @@ def test_vector_env_matches_single_envs_step_by_step(num_envs: int) -> None:
         np.testing.assert_allclose(rewards, ref_rewards, rtol=1e-9, atol=1e-12)
         np.testing.assert_array_equal(terminated, ref_terminated)
         np.testing.assert_array_equal(truncated, ref_truncated)
-        for key in ("distance", "orientation_error", "heading_error", "time", "is_success", "energy", "pose"):
-            np.testing.assert_allclose(info[key], ref_info[key], rtol=1e-9, atol=1e-12, err_msg=key)
-        for term in ("progress", "time", "effort", "arrival", "heading", "late", "arena"):
-            np.testing.assert_allclose(info["reward_terms"][term], ref_info["reward_terms"][term], atol=1e-12)
+        assert_infos_match(info, ref_info, slice(None))
+        if mode == AutoresetMode.NEXT_STEP and ended.any():
+            # the step after an episode ends: the reset observation, reward 0, both flags False
+            assert np.all(rewards[ended] == 0.0) and not terminated[ended].any() and not truncated[ended].any()
+            assert np.all(info["time"][ended] == 0.0) and np.all(obs[ended, 6] == 0.0)
         done = terminated | truncated
-        if done.any():
-            dones += int(done.sum())
-            for i in np.flatnonzero(done):
-                np.testing.assert_allclose(info["final_obs"][i], ref_info["final_obs"][i], rtol=1e-6, atol=1e-6)
-                assert info["final_info"]["is_success"][i] == ref_info["final_info"]["is_success"][i]
-                assert info["final_info"]["distance"][i] == pytest.approx(ref_info["final_info"]["distance"][i])
+        dones += int(done.sum())
+        if mode == AutoresetMode.SAME_STEP and done.any():
+            np.testing.assert_array_equal(info["_final_obs"], ref_info["_final_obs"])
+            ref_final = np.stack(ref_info["final_obs"][done])  # SyncVectorEnv's is an object array
+            np.testing.assert_allclose(info["final_obs"][done], ref_final, rtol=1e-6, atol=1e-6)
+            assert_infos_match(info["final_info"], ref_info["final_info"], done)
+            assert np.all(info["time"][done] == 0.0)  # already the new episodes
+        if mode == AutoresetMode.DISABLED and done.any():
+            with pytest.raises(gym.error.ResetNeeded, match="reset_mask"):
+                vec.step(actions)
+            obs, info = vec.reset(options={"reset_mask": done})
+            ref_obs, ref_info = ref.reset(options={"reset_mask": done})
+            np.testing.assert_allclose(obs[done], ref_obs[done], rtol=1e-6, atol=1e-7)
+            assert_infos_match(info, ref_info, done)
+            np.testing.assert_array_equal(info["_distance"], done)
+        ended = done
     assert dones > 2 * num_envs  # autoreset was exercised
     assert terminated.dtype == bool
 
@@ -93,27 +139,39 @@ def test_per_env_start_and_goal_options_and_reset_mask() -> None:
         DWRPointStabilizationVectorEnv(num_envs=0)
 
 
-def test_vector_env_truncates_itself_at_the_horizon() -> None:
+def test_vector_env_truncates_itself_at_the_horizon_it_reports() -> None:
     envs = gym.make_vec(ENV_ID, num_envs=2, T_con=1.0, dt=0.1, horizon_factor=2.0)
+    assert envs.spec is not None and envs.spec.max_episode_steps == 20
     envs.reset(seed=0)
-    for step in range(1, 21):
-        _, _, terminated, truncated, info = envs.step(np.zeros((2, 2), dtype=np.float32))
+    for step in range(1, 22):
+        _, rewards, terminated, truncated, info = envs.step(np.zeros((2, 2), dtype=np.float32))
         assert not terminated.any()
         assert truncated.all() == (step == 20)
-    assert np.all(info["time"] == 0.0)  # already the new episodes
+        if step == 20:
+            np.testing.assert_allclose(info["time"], 2.0)
+    assert np.all(info["time"] == 0.0) and np.all(rewards == 0.0)  # step 21: the new episodes (NEXT_STEP)
 
 
-def test_vector_env_renders_sub_env_zero() -> None:
-    envs = gym.make_vec(ENV_ID, num_envs=4, render_mode="rgb_array")
+def test_vector_env_renders_one_frame_per_sub_env() -> None:
+    envs = gym.make_vec(ENV_ID, num_envs=3, render_mode="rgb_array", **KWARGS)
     envs.reset(seed=0)
-    envs.step(np.ones((4, 2), dtype=np.float32))
-    frame = envs.render()
-    assert frame is not None and frame.shape == (480, 480, 3) and frame.dtype == np.uint8
+    for _ in range(25):  # through an autoreset of some sub-envs
+        envs.step(np.tile(np.array([[1.0, 0.5]], dtype=np.float32), (3, 1)))
+    frames = envs.render()
+    assert isinstance(frames, tuple) and len(frames) == 3
+    assert all(frame.shape == (480, 480, 3) and frame.dtype == np.uint8 for frame in frames)
+    assert not np.array_equal(frames[0], frames[1])  # different robots
+    single = gym.make(ENV_ID, render_mode="rgb_array", **KWARGS)
+    single.reset(seed=1)
+    for _ in range(25):
+        _, _, terminated, truncated, _ = single.step(np.array([1.0, 0.5], dtype=np.float32))
+        if terminated or truncated:
+            single.reset()
+    np.testing.assert_array_equal(frames[1], single.render())  # sub-env 1 is drawn as the single env of seed 1
 
 
 def test_sb3_adapter_conventions_and_ppo_learns_on_the_native_batch() -> None:
     from stable_baselines3 import PPO
-    from stable_baselines3.common.vec_env import VecMonitor
 
     from dwr_gym.sb3 import make_sb3_vec_env
 
@@ -133,10 +191,13 @@ def test_sb3_adapter_conventions_and_ppo_learns_on_the_native_batch() -> None:
     assert seen_done
     assert venv.get_attr("params")[0].T_con == 2.0
 
-    model = PPO("MlpPolicy", VecMonitor(make_sb3_vec_env(num_envs=8, seed=1)), n_steps=32, batch_size=64, seed=0)
+    model = PPO("MlpPolicy", make_sb3_vec_env(num_envs=8, seed=1, **KWARGS), n_steps=32, batch_size=64, seed=0)
     before = [p.detach().clone() for p in model.policy.parameters()]
     model.learn(total_timesteps=512)
     assert model.num_timesteps >= 512
+    # episode statistics without a VecMonitor: SB3 logs rollout/ep_rew_mean and ep_len_mean from them
+    assert len(model.ep_info_buffer) > 0 and all(0 < e["l"] <= 30 for e in model.ep_info_buffer)
+    assert len(model.ep_success_buffer) == len(model.ep_info_buffer)
     assert any(
         not np.allclose(a.numpy(), b.detach().numpy()) for a, b in zip(before, model.policy.parameters(), strict=True)
     )

@@ -1,4 +1,4 @@
-"""The ``dwr-gym`` command line: ``info``, ``evaluate``, ``reproduce``, ``train``, ``compare``.
+"""The ``dwr-gym`` command line: ``info``, ``evaluate``, ``reproduce``, ``train``, ``compare``, ``imitate``.
 
 Every subcommand validates its input before doing any work; bad input ends with a one-line
 error on stderr and exit code 2.
@@ -130,6 +130,7 @@ def format_table(rows: list[dict[str, Any]], columns: list[tuple[str, str, str]]
 
 EVAL_COLUMNS = [
     ("scenario", "scenario", ""),
+    ("T_con", "T_con", ".0f"),
     ("policy", "policy", ""),
     ("n", "n", ".0f"),
     ("success_rate", "success", ".3f"),
@@ -141,6 +142,8 @@ EVAL_COLUMNS = [
     ("peak_u_max", "peak u", ".3f"),
     ("peak_omega_max", "peak w", ".3f"),
     ("energy_mean", "energy", ".3f"),
+    ("energy_ratio_mean", "E/opt mean", ".2f"),
+    ("energy_ratio_max", "E/opt max", ".2f"),
     ("path_length_mean", "path", ".3f"),
     ("command_rate_rms_mean", "rate rms", ".3f"),
 ]
@@ -189,29 +192,63 @@ def write_results(rows: list[dict[str, Any]], out_dir: str, stem: str) -> list[s
     return [str(csv_path), str(json_path)]
 
 
-def run_evaluation(
-    policies: dict[str, Any], scenarios: Sequence[str], n: int, seed: int, env_kwargs: dict[str, Any], progress: bool
-) -> list[dict[str, Any]]:
-    """Evaluate policies (controller names or objects with ``predict``) on named scenario sets."""
-    from train.evaluation import evaluate, make_scenario
+def print_blocks(rows: list[dict[str, Any]], columns: list[tuple[str, str, str]]) -> None:
+    """The table, one block per (scenario, T_con), with a note under policies that fail by design."""
 
-    rows = []
-    for name in scenarios:
-        scenario = make_scenario(name, n=n, seed=seed, env_kwargs=env_kwargs)
-        for label, result in evaluate(policies, scenario, seed=seed, progress=progress).items():
-            rows.append({"scenario": name, "policy": label, **result.summary()})
-    return rows
+    def block_of(row: dict[str, Any]) -> str:
+        T_con = row["T_con"]
+        return f"{row['scenario']}, " + ("T_con drawn per episode" if T_con != T_con else f"T_con = {T_con:g} s")
+
+    blocks: dict[str, list[dict[str, Any]]] = {}
+    for row in rows:
+        blocks.setdefault(block_of(row), []).append(row)
+    for title, block in blocks.items():
+        print(f"\n{title}")
+        print(format_table(block, columns))
+    noted = {block_of(r): r for r in rows if r.get("optimum_failures")}
+    for title, row in noted.items():
+        print(f"note: {title}: {row['optimum_failures']:.0f} episode(s) have no optimum (E/opt is nan there); "
+              f"the first: {row['optimum_note']}")  # fmt: skip
+    if any(row.get("planner_failures") for row in rows):
+        print("note: the optimal controller found no plan for some robots (planner_failures in the JSON); "
+              "they stood still and count as failures")  # fmt: skip
+    if any(row["optimal_energy_mean"] == row["optimal_energy_mean"] for row in rows):  # not NaN
+        print("E/opt: energy / minimum energy to the goal pose by T_con, over the episodes that succeeded")
+    if any(row["policy"] == "fabregas" and row["success_rate"] == 0.0 for row in rows):
+        print("fabregas: the slow law of ref. [9], which the paper compares at T_con = 70 s (paper-fig7); "
+              "it is not designed to arrive by a shorter T_con")  # fmt: skip
+
+
+def checked_optimum(args: argparse.Namespace) -> str:
+    """``--optimum``, turned off with a notice when CasADi is not installed."""
+    from train.optimum import casadi_available
+
+    if args.optimum != "none" and not casadi_available():
+        print('note: energy / optimal needs CasADi: pip install "dwr-gym[optimal]"; skipped', file=sys.stderr)
+        return "none"
+    return str(args.optimum)
 
 
 def checked_selection(args: argparse.Namespace) -> list[str]:
     """The controllers of ``--controllers`` ('all' expands); validates them, ``--scenarios`` and ``--n``."""
-    from baselines.controllers import CONTROLLERS
+    from baselines.controllers import CONTROLLER_NAMES, CONTROLLERS
     from train.evaluation import SCENARIO_SETS
+    from train.optimum import casadi_available
 
-    names = list(CONTROLLERS) if "all" in args.controllers else args.controllers
+    if "all" in args.controllers:
+        names = [*CONTROLLERS, *(["optimal"] if casadi_available() else [])]
+    else:
+        names = args.controllers
     for name in names:
-        if name not in CONTROLLERS:
-            raise UsageError(f"--controllers {name!r} is invalid: expected 'all' or any of {', '.join(CONTROLLERS)}")
+        if name not in CONTROLLER_NAMES:
+            raise UsageError(
+                f"--controllers {name!r} is invalid: expected 'all' or any of {', '.join(CONTROLLER_NAMES)}"
+            )
+        if name == "optimal" and not casadi_available():
+            raise UsageError('--controllers optimal needs CasADi: pip install "dwr-gym[optimal]"')
+    for T_con in args.T_con or ():
+        if not 0.0 < T_con <= 1e6:
+            raise UsageError(f"--T-con {T_con} is invalid: expected prescribed times in (0, 1e6] s")
     for name in args.scenarios:
         if name not in SCENARIO_SETS:
             raise UsageError(f"--scenarios {name!r} is invalid: expected any of {', '.join(SCENARIO_SETS)}")
@@ -225,16 +262,28 @@ def checked_selection(args: argparse.Namespace) -> list[str]:
 
 def add_scenario_arguments(p: argparse.ArgumentParser, out: str) -> None:
     """The options shared by ``evaluate`` and ``compare``."""
-    from baselines.controllers import CONTROLLERS
+    from baselines.controllers import CONTROLLER_NAMES
     from train.evaluation import SCENARIO_SETS
+    from train.optimum import OPTIMA
 
     p.add_argument(
         "--controllers",
         nargs="+",
         default=["all"],
         metavar="NAME",
-        help=f"controllers: 'all' or any of {', '.join(CONTROLLERS)} (default: all)",
+        help=f"controllers: 'all' or any of {', '.join(CONTROLLER_NAMES)} "
+        "(default: all; 'optimal' needs the optimal extra)",
     )
+    p.add_argument(
+        "--T-con",
+        type=float,
+        nargs="+",
+        metavar="SECONDS",
+        help="evaluate at each of these prescribed times, one block each (default: the scenario's own)",
+    )
+    p.add_argument("--optimum", choices=OPTIMA, default="pose",
+                   help="the optimum of the E/opt columns: minimum energy to the goal 'pose' (default), to the "
+                   "'position' only, or 'none'; solved once per episode with CasADi and cached")  # fmt: skip
     p.add_argument(
         "--scenarios",
         nargs="+",
@@ -255,8 +304,11 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     names = checked_selection(args)
     policies: dict[str, Any] = {name: name for name in names}
     policies.update(load_agents(args.agent))
-    rows = run_evaluation(policies, args.scenarios, args.n, args.seed, env_kwargs, progress=not args.no_progress)
-    print(format_table(rows, EVAL_COLUMNS))
+    from train.evaluation import evaluate_sets
+
+    rows = evaluate_sets(policies, args.scenarios, args.n, args.seed, env_kwargs, progress=not args.no_progress,
+                          optimum=checked_optimum(args), T_cons=args.T_con)  # fmt: skip
+    print_blocks(rows, EVAL_COLUMNS)
     if table_notes(rows):
         print(table_notes(rows))
     for path in write_results(rows, args.out, "evaluation"):
@@ -426,8 +478,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
         except AgentLoadError:
             pass
     rows = compare(agents, run_dirs, controllers, args.scenarios, args.n, args.seed, Path(args.out),
-                   progress=not args.no_progress)  # fmt: skip
-    print(format_table(rows, EVAL_COLUMNS))
+                   progress=not args.no_progress, optimum=checked_optimum(args), T_cons=args.T_con)  # fmt: skip
+    print_blocks(rows, EVAL_COLUMNS)
     if table_notes(rows):
         print(table_notes(rows))
     for path in write_results(rows, args.out, "comparison"):
@@ -435,6 +487,79 @@ def cmd_compare(args: argparse.Namespace) -> int:
     for name in ("trajectories.png", "time_series.png", "learning_curves.png"):
         if (Path(args.out) / name).exists():
             print(f"wrote {Path(args.out) / name}")
+    return 0
+
+
+def add_imitate_parser(sub: Any) -> None:
+    """The ``imitate`` subcommand, generated from :class:`train.imitation.ImitationConfig`."""
+    import dataclasses
+
+    from train.imitation import ImitationConfig
+
+    p = sub.add_parser("imitate", help="clone the optimal planner into a network policy for any T_con",
+                       description="Record the optimal controller on DWRPointStabilization-v1's task and fit a PPO "
+                       "MlpPolicy to its actions (behaviour cloning with noise injection).")  # fmt: skip
+    for f in dataclasses.fields(ImitationConfig):
+        flag = "--" + f.name.replace("_", "-")
+        if isinstance(f.default, tuple):
+            kind = int if f.name == "net_arch" else float
+            p.add_argument(flag, type=kind, nargs="+", default=argparse.SUPPRESS,
+                           help=f"{f.metadata['help']} (default: {' '.join(map(str, f.default))})")  # fmt: skip
+        else:
+            p.add_argument(flag, type=type(f.default), default=argparse.SUPPRESS,
+                           help=f"{f.metadata['help']} (default: {f.default})")  # fmt: skip
+    p.add_argument("--run-dir", default=None, help="output directory (default: runs/bc-optimal-seed<seed>)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    p.set_defaults(func=cmd_imitate)
+
+
+def cmd_imitate(args: argparse.Namespace) -> int:
+    """Behaviour cloning of the optimal controller; bad input ends before any work starts."""
+    from pathlib import Path
+
+    from train.imitation import ImitationConfig, imitate
+    from train.optimum import casadi_available
+
+    given = {k: v for k, v in vars(args).items() if k not in ("func", "command", "run_dir", "no_progress")}
+    for key in ("T_con_range", "start_distance", "net_arch"):
+        if key in given:
+            given[key] = tuple(given[key])
+    config = ImitationConfig(**given)
+    positive = {"episodes": 1, "epochs": 1, "batch_size": 1, "eval_episodes": 1, "eval_every": 1}
+    for key, low in positive.items():
+        if getattr(config, key) < low:
+            raise UsageError(
+                f"--{key.replace('_', '-')} {getattr(config, key)} is invalid: expected an integer >= {low}"
+            )
+    if not 0.0 <= config.action_noise <= 1.0:
+        raise UsageError(f"--action-noise {config.action_noise} is invalid: expected a number in [0, 1]")
+    if not 0.0 < config.arrival_fraction <= 1.0:
+        raise UsageError(f"--arrival-fraction {config.arrival_fraction} is invalid: expected a number in (0, 1]")
+    if not 0.0 < config.learning_rate < 1.0:
+        raise UsageError(f"--learning-rate {config.learning_rate} is invalid: expected a number in (0, 1)")
+    for key in ("T_con_range", "start_distance"):
+        value = getattr(config, key)
+        if len(value) != 2 or not 0.0 < value[0] <= value[1]:
+            raise UsageError(f"--{key.replace('_', '-')} {list(value)} is invalid: expected two numbers 0 < min <= max")
+    if len(config.net_arch) == 0 or min(config.net_arch) < 1:
+        raise UsageError(f"--net-arch {list(config.net_arch)} is invalid: expected layer sizes >= 1")
+    validated_env_params({"T_con_range": config.T_con_range, "start_distance": config.start_distance})
+    if not casadi_available():
+        raise UsageError('imitate needs the optimal planner (CasADi): pip install "dwr-gym[optimal]"')
+    try:
+        import stable_baselines3  # noqa: F401
+    except ImportError as error:
+        raise UsageError('stable-baselines3 is not installed: pip install "dwr-gym[train]"') from error
+    run_dir = Path(args.run_dir or f"runs/bc-optimal-seed{config.seed}")
+    if (run_dir / "model.zip").exists():
+        raise UsageError(
+            f"--run-dir {str(run_dir)!r} is invalid: it already holds a model.zip; choose another directory"
+        )
+    try:
+        imitate(config, run_dir, progress=not args.no_progress)
+    except KeyboardInterrupt:
+        return 130
+    print(f"wrote {run_dir / 'model.zip'}, config.yaml and evaluations.csv")
     return 0
 
 
@@ -448,6 +573,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_reproduce_parser(sub)
     add_train_parser(sub)
     add_compare_parser(sub)
+    add_imitate_parser(sub)
     return parser
 
 

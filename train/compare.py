@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from train.evaluation import RolloutResult, evaluate, make_scenario
+from train.evaluation import RolloutResult, evaluate, evaluate_sets, make_scenario
 from train.plotting import legend_outside, pyplot, save
 
 TRAJECTORY_SCENARIO = "paper-fig5"
@@ -24,14 +24,12 @@ def compare(
     seed: int,
     out_dir: Path,
     progress: bool = True,
+    optimum: str = "none",
+    T_cons: list[float] | None = None,
 ) -> list[dict[str, Any]]:
-    """Evaluate agents and controllers on each scenario set; write the plots; return the table rows."""
+    """Evaluate agents and controllers on each scenario set (at each T_con); write the plots; return the rows."""
     policies: dict[str, Any] = {**agents, **{name: name for name in controllers}}
-    rows = []
-    for name in scenarios:
-        scenario = make_scenario(name, n=n, seed=seed)
-        for label, result in evaluate(policies, scenario, seed=seed, progress=progress).items():
-            rows.append({"scenario": name, "policy": label, **result.summary()})
+    rows = evaluate_sets(policies, scenarios, n, seed, {}, progress, optimum=optimum, T_cons=T_cons)
     out_dir.mkdir(parents=True, exist_ok=True)
     trajectory_scenario = make_scenario(TRAJECTORY_SCENARIO)
     recorded = evaluate(policies, trajectory_scenario, record=True)
@@ -93,6 +91,8 @@ def plot_learning_curves(run_dirs: dict[str, Path], path: Path) -> None:
             continue
         with csv_path.open() as handle:
             rows = list(csv.DictReader(handle))
+        if not rows or "timesteps" not in rows[0]:  # a cloned agent's curve is over epochs: its own learning_curve.png
+            continue
         steps = [float(r["timesteps"]) for r in rows]
         for ax, key in zip(axes, ("success_rate", "final_heading_error_mean", "return_mean"), strict=True):
             ax.plot(steps, [float(r[key]) for r in rows], marker="o", markersize=3, label=label)

@@ -45,7 +45,7 @@ class TrainConfig:
     seed: int = option(0, "seed of the env, the network initialisation and the sampling")
     residual: bool = option(False, "learn a residual on the expert: action = clip(expert + scale * residual)")
     residual_scale: float = option(0.5, "scale of the residual action, in (0, 2]")
-    expert: str = option("ptc", "controller under the residual: ptc, conventional-ptc, fabregas, fixed-time, astolfi")
+    expert: str = option("ptc", "controller under the residual: any of evaluate --controllers")
     env_kwargs: dict[str, Any] = field(
         default_factory=dict, metadata={"help": "env keywords KEY=VALUE, e.g. T_con=25 heading_weight=5"}
     )
@@ -74,11 +74,11 @@ class TrainConfig:
             self._coerce()
         except ValueError as error:
             raise ConfigError(str(error)) from None
-        from baselines.controllers import CONTROLLERS
+        from baselines.controllers import CONTROLLER_NAMES
         from dwr_gym.params import EnvParams
 
-        if self.expert not in CONTROLLERS:
-            raise ConfigError(f"--expert {self.expert!r} is invalid: expected one of {', '.join(CONTROLLERS)}")
+        if self.expert not in CONTROLLER_NAMES:
+            raise ConfigError(f"--expert {self.expert!r} is invalid: expected one of {', '.join(CONTROLLER_NAMES)}")
         try:
             EnvParams.from_kwargs(**self.env_kwargs)
         except ValueError as error:

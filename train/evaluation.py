@@ -18,6 +18,7 @@ from baselines.controllers import Controller, make_controller
 from baselines.expert import ExpertPolicy
 from dwr_gym import core
 from dwr_gym.params import EnvParams
+from train.optimum import OPTIMA, optimal_energies
 
 SCENARIO_SETS: tuple[str, ...] = ("paper-fig5", "paper-fig7", "random")
 FIG5_HEADINGS = (0.0, -math.pi / 4, -math.pi / 2, -3 * math.pi / 4, math.pi, 3 * math.pi / 4, math.pi / 2, math.pi / 4)
@@ -42,6 +43,8 @@ class Scenario:
     controller_kwargs: dict[str, dict[str, Any]] = field(default_factory=dict)
     """Per-controller keyword overrides, e.g. the paper's gains for its figure."""
     labels: tuple[str, ...] = ()
+    T_cons: NDArray[np.float64] | None = None
+    """Each episode's prescribed time (N,) when the env draws T_con per episode (``T_con_range``)."""
 
     @property
     def size(self) -> int:
@@ -67,7 +70,8 @@ def make_scenario(name: str, n: int = 100, seed: int = 0, env_kwargs: dict[str, 
         params = EnvParams.from_kwargs(**env_kwargs)
         rng = np.random.default_rng(seed)
         local = np.array([core.sample_start(rng, params) for _ in range(n)])
-        return Scenario(name, local, np.zeros((n, 3)), env_kwargs, {}, ())
+        T_cons = None if params.T_con_range is None else rng.uniform(*params.T_con_range, size=n)
+        return Scenario(name, local, np.zeros((n, 3)), env_kwargs, {}, (), T_cons)
     raise ValueError(f"scenario={name!r} is invalid: expected one of {', '.join(SCENARIO_SETS)}")
 
 
@@ -78,6 +82,8 @@ def controller_for(name: str, scenario: Scenario, params: EnvParams, **overrides
         kwargs["T_con"] = params.T_con  # the expert reads T_con from the observation; this keeps repr honest
     if name == "fabregas":
         kwargs["dt"] = params.dt
+    if name == "optimal":
+        kwargs.update(T_con=params.T_con, dt=params.dt, u_max=params.u_max, omega_max=params.omega_max)
     kwargs.update(scenario.controller_kwargs.get(name, {}))
     kwargs.update(overrides)
     return make_controller(name, **kwargs)
@@ -88,6 +94,7 @@ class RolloutResult:
     """Per-robot outcomes of a batched rollout (arrays of shape (N,)) and, if recorded, trajectories."""
 
     params: EnvParams
+    T_con: NDArray[np.float64]  # each episode's prescribed time [s]
     success: NDArray[np.bool_]  # arrived (within the tolerances) at or before T_con
     arrived: NDArray[np.bool_]  # arrived at any time before the horizon
     arrival_time: NDArray[np.float64]  # [s], NaN where the robot did not arrive
@@ -103,11 +110,26 @@ class RolloutResult:
     trajectory: dict[str, NDArray[np.float64]] | None = None
     """With ``record=True``: arrays (steps + 1, N) of time, x, y, psi, distance, orientation_error,
     lyapunov, and (steps, N) of linear_velocity, angular_velocity."""
+    optimal_energy: NDArray[np.float64] | None = None
+    """The minimum energy of each episode (NaN where there is none), when the optimum was asked for."""
+    planner_failures: int = 0
+    """Plans the ``optimal`` controller could not find (those robots stood still)."""
+    optimum_failures: list[str] = field(default_factory=list)
+    """Why some episodes have no optimum (an infeasible T_con, an IPOPT failure), one message each."""
+
+    def energy_ratio(self) -> NDArray[np.float64]:
+        """energy / optimal energy per episode, NaN where the episode failed or has no optimum."""
+        if self.optimal_energy is None:
+            return np.full(self.success.shape, np.nan)
+        valid = self.success & np.isfinite(self.optimal_energy) & (self.optimal_energy > 0.0)
+        return np.where(valid, self.energy / np.where(valid, self.optimal_energy, 1.0), np.nan)
 
     def summary(self) -> dict[str, float]:
         """Aggregate metrics over the N robots (means and worst cases)."""
-        T = self.params.T_con
-        arrival = self.arrival_time[np.isfinite(self.arrival_time)]
+        arrived = np.isfinite(self.arrival_time)
+        arrival = self.arrival_time[arrived]
+        T = self.T_con[arrived]
+        ratio = self.energy_ratio()
 
         def stat(values: NDArray[np.float64], fn: Callable[..., Any]) -> float:
             return float(fn(values)) if values.size else float("nan")
@@ -131,7 +153,13 @@ class RolloutResult:
             "path_length_mean": float(np.mean(self.path_length)),
             "command_rate_rms_mean": float(np.mean(self.command_rate_rms)),
             "return_mean": float(np.mean(self.episode_return)),
-        }
+            "energy_ratio_mean": stat(ratio[np.isfinite(ratio)], np.mean),
+            "energy_ratio_max": stat(ratio[np.isfinite(ratio)], np.max),
+            "optimal_energy_mean": float("nan") if self.optimal_energy is None
+            else stat(self.optimal_energy[np.isfinite(self.optimal_energy)], np.mean),
+            "planner_failures": float(self.planner_failures),
+            "optimum_failures": float(len(self.optimum_failures)),
+        }  # fmt: skip
 
 
 def rollout(
@@ -144,10 +172,12 @@ def rollout(
     seed: int = 0,
     progress: bool = False,
     description: str = "rollout",
+    T_con: NDArray[np.float64] | None = None,
 ) -> RolloutResult:
     """Run ``policy`` from N start poses to N goals (world frame, (N, 3)) until every episode ends.
 
-    Robots that have terminated are held still with zero actions and no longer counted.
+    ``T_con`` (N,) gives each episode its prescribed time (default: ``params.T_con``). Robots that
+    have terminated are held still with zero actions and no longer counted.
     """
     starts, goals = np.asarray(starts, dtype=np.float64), np.asarray(goals, dtype=np.float64)
     if starts.ndim != 2 or starts.shape[1] != 3 or goals.shape != starts.shape:
@@ -155,7 +185,7 @@ def rollout(
     n = starts.shape[0]
     space = core.observation_space(params)
     state = core.TaskState.zeros(n)
-    core.reset_robots(state, slice(None), tuple(starts.T), tuple(goals.T), params)  # type: ignore[arg-type]
+    core.reset_robots(state, slice(None), tuple(starts.T), tuple(goals.T), params, T_con)  # type: ignore[arg-type]
     rng = np.random.default_rng(seed)
 
     def noise(size: int, sigma: float) -> NDArray[np.float64] | None:
@@ -179,7 +209,7 @@ def rollout(
                       "orientation_error": [coords.orientation_error], "lyapunov": [state.lyapunov.copy()],
                       "linear_velocity": [], "angular_velocity": []}  # fmt: skip
 
-    steps = range(params.max_episode_steps)
+    steps = range(int(state.max_steps.max()))
     if progress:
         from tqdm.auto import tqdm
 
@@ -210,7 +240,7 @@ def rollout(
         arrived_now = ended & result.is_success
         time = state.step_count * params.dt
         arrival_time = np.where(arrived_now, time, arrival_time)
-        success |= arrived_now & (state.step_count <= params.prescribed_steps)  # as the env counts "in time"
+        success |= arrived_now & (state.step_count <= state.prescribed_steps)  # as the env counts "in time"
         left_arena |= ended & result.terminated & ~result.is_success
         if record:
             x, y, psi = state.world_pose()
@@ -219,10 +249,14 @@ def rollout(
                                ("linear_velocity", u), ("angular_velocity", w)):  # fmt: skip
                 trajectory[key].append(np.array(value, dtype=np.float64))
         active = active & ~ended
+        freeze = getattr(getattr(policy, "controller", None), "freeze", None)
+        if freeze is not None:  # a planning controller need not plan for robots whose episodes ended
+            freeze(~active)
         if not active.any():
             break
     return RolloutResult(
         params=params,
+        T_con=state.T_con.copy(),
         success=success,
         arrived=np.isfinite(arrival_time),
         arrival_time=arrival_time,
@@ -246,15 +280,62 @@ def evaluate(
     record: bool = False,
     seed: int = 0,
     progress: bool = False,
+    optimum: str = "none",
 ) -> dict[str, RolloutResult]:
-    """Run each policy on the scenario; a string value names a controller of :mod:`baselines`."""
+    """Run each policy on the scenario; a string value names a controller of :mod:`baselines`.
+
+    ``optimum`` "pose" (or "position") also solves, or reads from the cache, the minimum energy of
+    each episode to the goal pose (or position) by T_con, for the energy / optimal ratios.
+    """
+    if optimum not in OPTIMA:
+        raise ValueError(f"optimum={optimum!r} is invalid: expected one of {', '.join(OPTIMA)}")
     params = EnvParams.from_kwargs(**scenario.env_kwargs)
+    optimal_energy, optimum_failures = None, []
+    if optimum != "none":
+        optimal_energy, optimum_failures = optimal_energies(params, scenario.starts, scenario.goals, scenario.T_cons,
+                                                             heading=optimum == "pose",
+                                             progress=progress, description=f"{scenario.name}: optimum")  # fmt: skip
     results = {}
     for label, policy in policies.items():
         if isinstance(policy, str):
             policy = ExpertPolicy(controller_for(policy, scenario, params), params.u_max, params.omega_max)
-        results[label] = rollout(
+        result = rollout(
             policy, params, scenario.starts, scenario.goals, record=record, seed=seed, progress=progress,
-            description=f"{scenario.name}: {label}",
+            description=f"{scenario.name}: {label}", T_con=scenario.T_cons,
         )  # fmt: skip
+        result.optimal_energy, result.optimum_failures = optimal_energy, optimum_failures
+        controller = getattr(policy, "controller", None)
+        result.planner_failures = len(getattr(controller, "failures", ()))
+        if hasattr(controller, "close"):
+            controller.close()
+        results[label] = result
     return results
+
+
+def evaluate_sets(
+    policies: dict[str, Policy | str],
+    scenarios: list[str] | tuple[str, ...],
+    n: int,
+    seed: int,
+    env_kwargs: dict[str, Any],
+    progress: bool = False,
+    optimum: str = "none",
+    T_cons: list[float] | None = None,
+) -> list[dict[str, Any]]:
+    """Evaluate policies on named scenario sets, at each prescribed time of ``T_cons`` (default: the set's own).
+
+    Returns one row per (scenario, T_con, policy): the keys ``scenario``, ``T_con``, ``policy``, those
+    of :meth:`RolloutResult.summary`, and ``optimum_note``, why the first episode without an optimum has none.
+    """
+    rows = []
+    for name in scenarios:
+        for T_con in T_cons or [None]:
+            kwargs = env_kwargs if T_con is None else {**env_kwargs, "T_con": T_con}
+            scenario = make_scenario(name, n=n, seed=seed, env_kwargs=kwargs)
+            results = evaluate(policies, scenario, seed=seed, progress=progress, optimum=optimum)
+            for label, result in results.items():
+                note = result.optimum_failures[0] if result.optimum_failures else ""
+                T_row = float("nan") if scenario.T_cons is not None else result.params.T_con  # nan: per episode
+                rows.append({"scenario": name, "T_con": T_row, "policy": label, **result.summary(),
+                             "optimum_note": note})  # fmt: skip
+    return rows

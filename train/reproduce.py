@@ -16,11 +16,13 @@ import numpy as np
 from baselines.controllers import PTCParams
 from dwr_gym import model
 from train.evaluation import FIG5_HEADINGS, RolloutResult, evaluate, make_scenario
+from train.optimum import casadi_available
 from train.plotting import legend_outside, pyplot, save
 
 FIG6_T_CON = (20.0, 25.0, 30.0, 35.0)
 FIG8_T_CON = (25.0, 50.0)
 COMPARED = {"ptc": "PTC (this paper)", "fabregas": "Fabregas [9]", "fixed-time": "fixed-time [23]"}
+OPTIMUM_LABEL = "optimum (least energy to the pose)"
 
 
 @dataclass
@@ -55,6 +57,7 @@ def reproduce(out_dir: str | Path = "results/reproduce", dt: float = 0.01, gif: 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     claims: list[Claim] = []
+    optimum_lines: list[str] = []
 
     # Figure 5: eight initial headings, T_con = 20
     fig5 = _run("paper-fig5", {"ptc": "ptc"}, dt)["ptc"]
@@ -115,6 +118,7 @@ def reproduce(out_dir: str | Path = "results/reproduce", dt: float = 0.01, gif: 
 
     # Figures 7 and 9: comparison with refs. [9] and [23]
     fig7 = _run("paper-fig7", {name: name for name in COMPARED}, dt)
+    optimal7 = _run("paper-fig7", {"optimal": "optimal"}, dt)["optimal"] if casadi_available() else None
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
     for name, result in fig7.items():
         tr = result.trajectory
@@ -150,12 +154,24 @@ def reproduce(out_dir: str | Path = "results/reproduce", dt: float = 0.01, gif: 
         ax_a.plot(tr["x"][:, 0], tr["y"][:, 0], label=COMPARED[name])
         u, w = tr["linear_velocity"][:, 0], tr["angular_velocity"][:, 0]
         ax_b.plot(tr["time"][1:, 0], np.cumsum((u**2 + w**2) * dt), label=COMPARED[name])
+    if optimal7 is not None:  # the yardstick the paper does not have: the least energy to the pose by T_con
+        tr = optimal7.trajectory
+        assert tr is not None
+        u, w = tr["linear_velocity"][:, 0], tr["angular_velocity"][:, 0]
+        style = {"color": "k", "linestyle": ":", "linewidth": 2, "label": OPTIMUM_LABEL}
+        ax_a.plot(tr["x"][:, 0], tr["y"][:, 0], **style)
+        ax_b.plot(tr["time"][1:, 0], np.cumsum((u**2 + w**2) * dt), **style)
     ax_a.plot([0.8], [0.0], "k*", markersize=12)
     ax_a.set(xlabel="x [m]", ylabel="y [m]", title="(a) trajectories", aspect="equal")
     ax_b.set(xlabel="t [s]", ylabel="integral of u^2 + omega^2 dt [m^2/s, rad^2/s]", title="(b) energy")
     legend_outside(ax_b)
     fig.suptitle("Figure 9: trajectory and energy consumption")
     save(fig, out / "figure9.png")
+    if optimal7 is not None:
+        optimum_lines.append(
+            f"Figure 7/9's start (T_con = 70 s): the optimum spends {float(optimal7.energy[0]):.3f}; "
+            + ", ".join(f"{COMPARED[n]} {energies[n] / float(optimal7.energy[0]):.1f}x" for n in COMPARED)
+        )
 
     # Figure 8: fractional against conventional PTC
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.5))
@@ -201,10 +217,38 @@ def reproduce(out_dir: str | Path = "results/reproduce", dt: float = 0.01, gif: 
         bool(stuck.final_distance[0] > 0.5 and ptc_pi.success[0]),
     ))  # fmt: skip
 
+    if casadi_available():
+        optimum_lines.insert(0, plot_optimal_vs_ptc(fig5, dt, out / "optimal_vs_ptc.png"))
     if gif:
         animate_fig5(fig5, out / "figure5.gif")
-    write_report(claims, out / "report.md", dt)
+    write_report(claims, out / "report.md", dt, optimum_lines)
     return claims
+
+
+def plot_optimal_vs_ptc(ptc: RolloutResult, dt: float, path: Path) -> str:
+    """Figure 5's eight starts: PTC's trajectories beside the minimum-energy ones to the pose; returns a summary."""
+    optimal = _run("paper-fig5", {"optimal": "optimal"}, dt)["optimal"]
+    plt = pyplot()
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.8), sharex=True, sharey=True)
+    for ax, result, title in ((axes[0], ptc, "PTC (16)-(19)"), (axes[1], optimal, OPTIMUM_LABEL)):
+        tr = result.trajectory
+        assert tr is not None
+        for i, heading in enumerate(FIG5_HEADINGS):
+            ax.plot(tr["x"][:, i], tr["y"][:, i], label=f"psi0 = {math.degrees(heading):+.0f} deg")
+        ax.plot([0.8], [0.0], "k*", markersize=12)
+        ax.set(xlabel="x [m]", ylabel="y [m]", aspect="equal",
+               title=f"{title}\nenergy {result.energy.mean():.3f}, final |psi| {result.final_heading_error.mean():.3f} rad")  # fmt: skip
+    axes[1].legend(fontsize=7, loc="center left", bbox_to_anchor=(1.02, 0.5))
+    fig.suptitle(
+        "Figure 5's starts, T_con = 20 s: the paper's law and the optimum (mean energy, mean final heading error)"
+    )
+    save(fig, path)
+    return (
+        f"Figure 5's eight starts (T_con = 20 s): the optimum spends {optimal.energy.mean():.3f} on average with a "
+        f"final heading error of {optimal.final_heading_error.mean():.3f} rad; PTC {ptc.energy.mean():.3f} "
+        f"({ptc.energy.mean() / optimal.energy.mean():.2f}x) with {ptc.final_heading_error.mean():.3f} rad "
+        "(optimal_vs_ptc.png)"
+    )
 
 
 def animate_fig5(result: RolloutResult, path: Path, fps: int = 12) -> None:
@@ -234,7 +278,7 @@ def animate_fig5(result: RolloutResult, path: Path, fps: int = 12) -> None:
     plt.close(fig)
 
 
-def write_report(claims: list[Claim], path: Path, dt: float) -> None:
+def write_report(claims: list[Claim], path: Path, dt: float, optimum_lines: list[str] | None = None) -> None:
     """The Markdown report: each claim, the number measured here and the verdict."""
     lines = [
         "# The paper's claims, measured",
@@ -247,5 +291,10 @@ def write_report(claims: list[Claim], path: Path, dt: float) -> None:
     ]
     for i, claim in enumerate(claims, 1):
         lines.append(f"| {i} | {claim.claim} | {claim.measured} | **{claim.verdict}** |")
-    lines += ["", "Figures: figure5.png ... figure9.png; animation: figure5.gif.", ""]
+    if optimum_lines:
+        lines += ["", "## How far from optimal (not a claim of the paper)", "",
+                  "The `optimal` controller: minimum energy to the goal pose (heading 0 included) by T_con, "
+                  "planned with CasADi/IPOPT.", ""]  # fmt: skip
+        lines += [f"- {line}" for line in optimum_lines]
+    lines += ["", "Figures: figure5.png ... figure9.png, optimal_vs_ptc.png; animation: figure5.gif.", ""]
     path.write_text("\n".join(lines))

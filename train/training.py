@@ -53,20 +53,22 @@ def make_expert(config: TrainConfig) -> Any:
     from dwr_gym.params import EnvParams
 
     params = EnvParams.from_kwargs(**config.env_kwargs)
-    return ExpertPolicy(make_controller(config.expert), params.u_max, params.omega_max)
+    kwargs = {}
+    if config.expert == "optimal":  # the planner must know the env's grid and limits
+        kwargs = {"T_con": params.T_con, "dt": params.dt, "u_max": params.u_max, "omega_max": params.omega_max}
+    return ExpertPolicy(make_controller(config.expert, **kwargs), params.u_max, params.omega_max)
 
 
 def make_training_env(config: TrainConfig) -> Any:
-    """The native vector env behind SB3's VecEnv API (residual-wrapped if asked), with episode statistics."""
-    from stable_baselines3.common.vec_env import VecMonitor
-
+    """The native vector env behind SB3's VecEnv API (residual-wrapped if asked); the adapter reports the
+    episode statistics (``ep_rew_mean``, ``ep_len_mean``, ``success_rate``) itself, as a Monitor would."""
     from dwr_gym.sb3 import make_sb3_vec_env
     from train.residual import ResidualVecEnv
 
     venv: Any = make_sb3_vec_env(config.num_envs, seed=config.seed, **config.env_kwargs)
     if config.residual:
         venv = ResidualVecEnv(venv, make_expert(config), config.residual_scale)
-    return VecMonitor(venv, info_keywords=("is_success",))
+    return venv
 
 
 def as_policy(model: Any, config: TrainConfig) -> Any:
@@ -197,10 +199,17 @@ def _layers(env: Any) -> list[Any]:
 
 def env_snapshot(env: Any) -> list[dict[str, Any]]:
     """The state of every layer of the training env (robots, generators, episode statistics), picklable."""
-    import copy
+    import pickle
+
+    def picklable(value: Any) -> bool:
+        try:
+            pickle.dumps(value)
+        except Exception:  # e.g. a compiled CasADi solver in the 'optimal' expert: rebuilt from the config
+            return False
+        return True
 
     skip = ("venv", "class_attributes")
-    return [{k: copy.deepcopy(v) for k, v in vars(layer).items() if k not in skip} for layer in _layers(env)]
+    return [{k: v for k, v in vars(layer).items() if k not in skip and picklable(v)} for layer in _layers(env)]
 
 
 def restore_env(env: Any, snapshot: list[dict[str, Any]]) -> None:

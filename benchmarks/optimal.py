@@ -1,0 +1,61 @@
+"""Seconds per episode of the optimum: the cached reference plans and the NMPC controller ``optimal``.
+
+    python benchmarks/optimal.py            # paper-fig5, paper-fig7 and random --n 1000
+    python benchmarks/optimal.py --n 200    # a quicker look
+
+For each scenario set it times (1) solving the reference optimum of every episode on the env's grid
+(what ``evaluate``/``compare`` cache for the E/opt columns; the cache is bypassed here) and (2) a
+whole rollout of the ``optimal`` controller, and prints the seconds per episode, the solver count and
+the quality (success, final heading error, energy / optimum). Wall-clock times depend on the
+machine and its load; the table says how many worker processes were used.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import tempfile
+import time
+
+import numpy as np
+
+from baselines.expert import ExpertPolicy
+from dwr_gym.params import EnvParams
+from train.evaluation import controller_for, make_scenario, rollout
+from train.optimum import optimal_energies
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--n", type=int, default=1000, help="random episodes (default: 1000)")
+    parser.add_argument("--workers", type=int, default=0, help="solver processes (default: every core)")
+    args = parser.parse_args()
+    os.environ["DWR_GYM_CACHE"] = tempfile.mkdtemp(prefix="dwr-gym-bench-")  # time the solves, not the cache
+    workers = args.workers or min(os.cpu_count() or 1, 8)
+    print(f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, {workers} worker processes")
+    header = f"{'scenario':<11} {'n':>5} {'ref s/ep':>9} {'nmpc s/ep':>9} {'solves/ep':>9} {'success':>7} {'|psi_end|':>9} {'E/opt':>6}"
+    print(header)
+    print("-" * len(header))
+    for name in ("paper-fig5", "paper-fig7", "random"):
+        scenario = make_scenario(name, n=args.n, seed=0)
+        params = EnvParams.from_kwargs(**scenario.env_kwargs)
+        began = time.perf_counter()
+        reference, failures = optimal_energies(params, scenario.starts, scenario.goals, workers=workers, progress=True)
+        reference_time = time.perf_counter() - began
+        controller = controller_for("optimal", scenario, params, workers=workers)
+        policy = ExpertPolicy(controller, params.u_max, params.omega_max)
+        began = time.perf_counter()
+        result = rollout(policy, params, scenario.starts, scenario.goals, progress=True)
+        nmpc_time = time.perf_counter() - began
+        controller.close()
+        result.optimal_energy = reference
+        ratio = result.energy_ratio()
+        n = scenario.size
+        print(f"{name:<11} {n:>5} {reference_time / n:>9.3f} {nmpc_time / n:>9.3f} {controller.solves / n:>9.2f} "
+              f"{result.success.mean():>7.3f} {result.final_heading_error.mean():>9.4f} {np.nanmean(ratio):>6.3f}"
+              + (f"  ({len(failures)} episodes without optimum)" if failures else ""))  # fmt: skip
+
+
+if __name__ == "__main__":
+    main()

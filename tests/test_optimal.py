@@ -1,0 +1,211 @@
+"""The minimum-energy problem (baselines.optimal), the NMPC controller (baselines.nmpc) and the E/opt ratios."""
+
+from __future__ import annotations
+
+import itertools
+import math
+import sys
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import dwr_gym
+from baselines import ExpertPolicy, make_controller
+from baselines.optimal import (
+    InfeasibleArrivalTimeError,
+    OptimalControlError,
+    casadi_step_exact,
+    solve_minimum_energy,
+)
+from dwr_gym import model
+from train import optimum as optimum_module
+from train.evaluation import Scenario, evaluate, make_scenario
+
+ca = pytest.importorskip("casadi")
+LIMITS = {"dt": 0.05, "u_max": 0.5, "omega_max": 2.0}
+
+
+def test_symbolic_step_equals_the_env_step_to_1e_12() -> None:
+    rng = np.random.default_rng(0)
+    n = 2000
+    x, y, psi = rng.uniform(-3, 3, n), rng.uniform(-3, 3, n), rng.uniform(-math.pi, math.pi, n)
+    u = rng.uniform(-0.5, 0.5, n)
+    omega = np.concatenate([rng.uniform(-2, 2, n - 4), [0.0, 1e-9, -1e-7, 1e-5]])  # straight and nearly straight
+    for h in (0.01, 0.05, 0.25):
+        s, c, hs = ca.SX.sym("s", 3), ca.SX.sym("c", 2), ca.SX.sym("h")
+        step = ca.Function("step", [s, c, hs], [casadi_step_exact(s, c, hs)]).map(n)
+        symbolic = np.array(step(np.stack([x, y, psi]), np.stack([u, omega]), h))
+        exact = model.unicycle_step_exact(x, y, psi, u, omega, h)
+        assert np.max(np.abs(symbolic[0] - exact[0])) < 1e-12
+        assert np.max(np.abs(symbolic[1] - exact[1])) < 1e-12
+        assert np.max(np.abs(model.wrap_angle(symbolic[2] - exact[2]))) < 1e-12
+
+
+def test_plan_replayed_through_the_env_arrives_with_the_heading_within_the_limits() -> None:
+    start, goal = (0.0, 0.0, math.pi / 2), (0.8, 0.0, 0.0)
+    local = tuple(float(v) for v in model.to_goal_frame(*start, *goal))
+    plan = solve_minimum_energy(local, 20.0, **LIMITS)  # type: ignore[arg-type]
+    assert plan.intervals == 400
+    env = gym.make("DWRPointStabilization-v0", T_con=20.0, heading_tolerance=0.01)
+    env.reset(seed=0, options={"start": start, "goal": goal})
+    played = 0.0
+    for u, omega in plan.commands:
+        played += (u * u + omega * omega) * LIMITS["dt"]
+        action = np.array([u / LIMITS["u_max"], omega / LIMITS["omega_max"]])
+        assert np.all(np.abs(action) <= 1.0 + 1e-9)  # the limits hold
+        _, _, terminated, truncated, info = env.step(action.astype(np.float32))
+        if terminated or truncated:
+            break
+    assert terminated and info["is_success"]
+    assert 19.5 <= info["time"] <= 20.0 + 1e-9  # within the tolerances only at the deadline, as planned
+    assert info["distance"] <= 0.01 and abs(info["heading_error"]) <= 0.01
+    assert info["energy"] == pytest.approx(played, rel=1e-6)  # the env's energy is the plan's objective
+    assert played <= plan.energy + 1e-12
+
+
+@pytest.mark.parametrize("heading", [True, False])
+def test_straight_ahead_has_the_closed_form_optimum(heading: bool) -> None:
+    length, T_con = 1.2, 10.0
+    plan = solve_minimum_energy((-length, 0.0, 0.0), T_con, **LIMITS, heading=heading)  # type: ignore[arg-type]
+    assert plan.energy == pytest.approx(length**2 / T_con, abs=1e-8)
+    np.testing.assert_allclose(plan.commands[:, 0], length / T_con, atol=1e-6)
+    np.testing.assert_allclose(plan.commands[:, 1], 0.0, atol=1e-6)
+
+
+def test_energy_does_not_increase_with_the_prescribed_time() -> None:
+    start = (-0.6, 0.5, 2.5)
+    energies = [solve_minimum_energy(start, T, **LIMITS).energy for T in (4.0, 8.0, 16.0, 32.0)]  # type: ignore[arg-type]
+    assert all(later <= earlier + 1e-9 for earlier, later in itertools.pairwise(energies))
+    assert energies[-1] < energies[0]
+
+
+def test_position_only_optimum_is_cheaper_than_the_pose() -> None:
+    start = (-0.8, 0.0, math.pi)
+    pose = solve_minimum_energy(start, 20.0, **LIMITS)  # type: ignore[arg-type]
+    position = solve_minimum_energy(start, 20.0, **LIMITS, heading=False)  # type: ignore[arg-type]
+    assert position.energy == pytest.approx(0.8**2 / 20.0, rel=1e-6)  # straight back, in reverse
+    assert pose.energy > position.energy + 0.4  # turning pi around costs at least pi^2 / T_con
+
+
+def test_an_infeasible_T_con_names_T_con_and_the_smallest_feasible_value() -> None:
+    with pytest.raises(InfeasibleArrivalTimeError, match=r"T_con=3 s is infeasible.*expected T_con >= 4"):
+        solve_minimum_energy((-2.0, 0.0, 0.0), 3.0, **LIMITS, heading=False)  # type: ignore[arg-type]
+
+
+def test_a_failed_scenario_is_a_failure_in_the_table_not_a_crash(monkeypatch: pytest.MonkeyPatch) -> None:
+    import baselines.nmpc as nmpc
+
+    real = nmpc.solve_minimum_energy
+
+    def failing_for_robot_one(**job: object) -> object:
+        if abs(job["start"][1] + 0.3) < 1e-6:  # type: ignore[index]
+            raise OptimalControlError("IPOPT found no plan (injected)")
+        return real(**job)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(nmpc, "solve_minimum_energy", failing_for_robot_one)
+    starts = np.array([[-0.8, 0.0, 0.0], [-0.5, -0.3, 0.0], [-4.0, 0.0, 0.0]])  # the third is infeasible in 5 s
+    scenario = Scenario("mixed", starts, np.zeros((3, 3)), {"T_con": 5.0})
+    result = evaluate({"optimal": "optimal"}, scenario, optimum="pose")["optimal"]
+    assert result.success.tolist() == [True, False, False]
+    assert result.planner_failures == 1
+    assert np.isnan(result.optimal_energy[2]) and np.isfinite(result.optimal_energy[:2]).all()  # type: ignore[index]
+    summary = result.summary()
+    assert summary["energy_ratio_mean"] == pytest.approx(result.energy[0] / result.optimal_energy[0])  # type: ignore[index]
+
+
+def test_a_failed_replan_keeps_the_previous_plan(monkeypatch: pytest.MonkeyPatch) -> None:
+    import baselines.nmpc as nmpc
+
+    real = nmpc.solve_minimum_energy
+
+    def cold_only(**job: object) -> object:
+        if job.get("warm_start") is not None:
+            raise OptimalControlError("IPOPT found no plan (injected)")
+        return real(**job)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(nmpc, "solve_minimum_energy", cold_only)
+    scenario = make_scenario("paper-fig5", env_kwargs={"actuation_noise": 0.02})  # noise: re-plans are attempted
+    policy = ExpertPolicy(make_controller("optimal"), 0.5, 2.0)
+    result = evaluate({"optimal": policy}, scenario)["optimal"]
+    assert result.planner_failures == 0
+    assert result.final_distance.max() < 0.1  # it went on open loop on its first plan (from 0.8 m), not stopped
+
+
+def test_optimal_controller_on_paper_fig5_reaches_the_pose_with_less_energy_than_ptc() -> None:
+    results = evaluate({"optimal": "optimal", "ptc": "ptc"}, make_scenario("paper-fig5"), optimum="pose")
+    optimal, ptc = results["optimal"].summary(), results["ptc"].summary()
+    assert optimal["success_rate"] == 1.0 and optimal["final_heading_error_mean"] < 0.05
+    assert optimal["energy_mean"] < 0.5 * ptc["energy_mean"]
+    assert ptc["energy_ratio_mean"] > 2.0  # PTC spends more than twice the optimum here
+    assert 0.9 < optimal["energy_ratio_mean"] <= 1.01  # the env stops at 1 cm, a little before the plan's end
+
+
+def test_nmpc_replans_under_noise_and_still_arrives() -> None:
+    scenario = make_scenario("paper-fig5", env_kwargs={"observation_noise": 0.002, "actuation_noise": 0.05})
+    policy = ExpertPolicy(make_controller("optimal", replan_every=20), 0.5, 2.0)
+    result = evaluate({"optimal": policy}, scenario)["optimal"]
+    assert result.success.all()
+    assert policy.controller.solves > 8 * 5  # it re-planned from the measured poses, not once per robot
+
+
+def test_optimal_energies_are_cached_per_episode(monkeypatch: pytest.MonkeyPatch, tmp_path: object) -> None:
+    monkeypatch.setenv("DWR_GYM_CACHE", str(tmp_path))
+    scenario = make_scenario("random", n=6, seed=3)
+    params = dwr_gym.EnvParams(**scenario.env_kwargs)
+    first, failures = optimum_module.optimal_energies(params, scenario.starts, scenario.goals, workers=1)
+    assert not failures and np.isfinite(first).all()
+
+    def no_solving(job: object) -> float:
+        raise AssertionError("solved again despite the cache")
+
+    monkeypatch.setattr(optimum_module, "_solve_energy", no_solving)
+    again, _ = optimum_module.optimal_energies(params, scenario.starts[::-1], scenario.goals[::-1], workers=1)
+    np.testing.assert_array_equal(again, first[::-1])
+
+
+def test_bad_parameters_and_a_missing_casadi_give_clear_errors(monkeypatch: pytest.MonkeyPatch) -> None:
+    with pytest.raises(ValueError, match=r"replan_every=7 is invalid: expected a multiple of hold_steps=5"):
+        make_controller("optimal", replan_every=7)
+    with pytest.raises(ValueError, match=r"dt=-1(.0)? is invalid"):
+        make_controller("optimal", dt=-1)
+    with pytest.raises(ValueError, match=r"unknown parameter\(s\) 'horizon'"):
+        make_controller("optimal", horizon=3)
+    monkeypatch.setitem(sys.modules, "casadi", None)
+    with pytest.raises(ImportError, match=r'pip install "dwr-gym\[optimal\]"'):
+        make_controller("optimal")
+
+
+def test_cli_with_an_infeasible_T_con_reports_it_and_still_writes_the_table(tmp_path: object) -> None:
+    import json
+    import os
+    import subprocess
+    from pathlib import Path
+
+    out = Path(str(tmp_path))
+    result = subprocess.run(
+        [sys.executable, "-m", "train.cli", "evaluate", "--controllers", "optimal", "ptc", "--scenarios", "paper-fig5",
+         "--env-kwargs", "T_con=1", "--out", str(out), "--no-progress"],
+        capture_output=True, text=True, env={**os.environ, "MPLBACKEND": "Agg"}, timeout=600,
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    assert "episode(s) have no optimum" in result.stdout and "T_con=1 s is infeasible" in result.stdout
+    assert "Traceback" not in result.stdout + result.stderr and "Ipopt" not in result.stdout + result.stderr
+    rows = json.loads((out / "evaluation.json").read_text())
+    assert {r["policy"]: r["success_rate"] for r in rows} == {"optimal": 0.0, "ptc": 0.0}
+
+
+def test_a_second_reset_without_a_step_gets_a_new_plan_and_a_finished_robot_no_more_solves() -> None:
+    env = gym.make("DWRPointStabilization-v1")
+    controller = make_controller("optimal")
+    expert = ExpertPolicy(controller, 0.5, 2.0)
+    first, _ = env.reset(seed=0, options={"start": (-1.0, 0.0, 0.0), "T_con": 20.0})
+    assert expert.predict(first)[0][0] > 0  # drive forward to the goal ahead
+    second, _ = env.reset(seed=0, options={"start": (1.0, 0.0, 0.0), "T_con": 20.0})
+    assert expert.predict(second)[0][0] < 0  # a new plan: reverse to the goal behind
+    solves = controller.solves
+    clipped = second.copy()
+    clipped[6] = 1.5  # past the horizon the observed time fraction is clipped: the clock stands still
+    for _ in range(5):
+        expert.predict(clipped)
+    assert controller.solves <= solves + 1  # no re-planning on every call

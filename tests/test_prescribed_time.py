@@ -1,0 +1,175 @@
+"""Per-episode prescribed time (T_con_range, reset option), DWRPointStabilization-v1's reward, and v0 unchanged."""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import dwr_gym
+from train.evaluation import evaluate, make_scenario
+
+V0, V1 = "DWRPointStabilization-v0", "DWRPointStabilization-v1"
+
+
+def make(env_id: str, **kwargs: object) -> gym.Env:  # type: ignore[type-arg]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)  # v0 is out of date now that v1 exists
+        return gym.make(env_id, **kwargs)
+
+
+def random_actions_digest(env_id: str, kwargs: dict[str, object], seed: int, steps: int = 700) -> tuple[str, float]:
+    env = make(env_id, **kwargs)
+    obs, _ = env.reset(seed=seed)
+    rng = np.random.default_rng(seed)
+    observations, rewards, flags = [obs], [], []
+    for _ in range(steps):
+        obs, reward, terminated, truncated, _ = env.step(rng.uniform(-1, 1, 2).astype(np.float32))
+        observations.append(obs)
+        rewards.append(reward)
+        flags.append((terminated, truncated))
+        if terminated or truncated:
+            obs, _ = env.reset()
+            observations.append(obs)
+    data = np.array(observations, np.float32).tobytes() + np.array(rewards).tobytes() + np.array(flags).tobytes()
+    return hashlib.sha256(data).hexdigest()[:16], float(np.sum(rewards))
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "seed", "digest", "total"),
+    [
+        ({}, 0, "97306d35f539771c", -204.6475053950984),
+        ({"T_con": 5.0, "dt": 0.1}, 1, "3bac36e9068aca1e", -284.4973671801804),
+        ({"observation_noise": 0.01, "actuation_noise": 0.1}, 2, "301cd62cdeb72148", -74.14659687781885),
+    ],
+)
+def test_v0_is_bit_for_bit_what_it_was(kwargs: dict[str, object], seed: int, digest: str, total: float) -> None:
+    """Observations, rewards and flags of seeded v0 episodes, pinned before v1 and T_con_range existed."""
+    assert random_actions_digest(V0, kwargs, seed) == (digest, total)
+
+
+def test_v0_returns_of_the_experts_are_unchanged() -> None:
+    results = evaluate({"ptc": "ptc", "astolfi": "astolfi"}, make_scenario("random", n=20, seed=5))
+    assert float(results["ptc"].episode_return.sum()) == 82.30626649521052
+    assert float(results["astolfi"].episode_return.sum()) == 253.4081652078928
+
+
+def test_v1_draws_T_con_per_episode_observes_it_and_reports_it() -> None:
+    env = make(V1)
+    assert env.observation_space.high[7] == 60.0 and env.spec is not None and env.spec.max_episode_steps == 1800
+    seen = []
+    for seed in range(20):
+        obs, info = env.reset(seed=seed)
+        assert 10.0 <= info["T_con"] <= 60.0 and obs[7] == np.float32(info["T_con"])
+        seen.append(info["T_con"])
+    assert np.ptp(seen) > 20.0  # spread over the range
+    obs, info = env.reset(seed=0, options={"T_con": 33.0})
+    assert info["T_con"] == 33.0 and obs[7] == 33.0
+    _, _, _, _, info = env.step(np.zeros(2, np.float32))
+    assert info["T_con"] == 33.0 and info["time"] == pytest.approx(0.05)
+
+
+def test_an_episode_truncates_at_its_own_horizon() -> None:
+    env = make(V1)
+    env.reset(seed=0, options={"T_con": 10.0, "start": (1.0, 0.0, 0.0)})
+    steps, truncated = 0, False
+    while not truncated:
+        _, reward, terminated, truncated, _ = env.step(np.zeros(2, np.float32))
+        steps += 1
+        assert not terminated
+    assert steps == 300 and reward == pytest.approx(-0.05 + 0.0)  # late penalty per step after T_con
+
+
+def test_vector_env_draws_per_sub_env_as_the_single_envs_do() -> None:
+    envs = gym.make_vec(V1, num_envs=4)
+    _, infos = envs.reset(seed=7)
+    singles = [make(V1).reset(seed=7 + i)[1]["T_con"] for i in range(4)]
+    np.testing.assert_array_equal(infos["T_con"], singles)
+    _, infos = envs.reset(options={"T_con": [11.0, 22.0, 33.0, 44.0]})
+    np.testing.assert_array_equal(infos["T_con"], [11.0, 22.0, 33.0, 44.0])
+
+
+@pytest.mark.parametrize(
+    ("option", "message"),
+    [(70.0, r"options\['T_con'\]=70.0 is invalid: expected prescribed times in \[dt=0.05, 60\] s"),
+     (float("nan"), r"options\['T_con'\]=nan is invalid"), ("20", r"options\['T_con'\]='20' is invalid")],
+)  # fmt: skip
+def test_bad_T_con_option_is_a_clear_error(option: object, message: str) -> None:
+    with pytest.raises(ValueError, match=message):
+        make(V1).reset(options={"T_con": option})
+
+
+def test_bad_T_con_range_is_a_clear_error() -> None:
+    with pytest.raises(ValueError, match=r"T_con_range=\(30, 10\) is invalid: min must not exceed max"):
+        make(V0, T_con_range=(30, 10))
+    with pytest.raises(ValueError, match=r"dt=2.0 is invalid"):
+        make(V0, T_con_range=(1.0, 10.0), dt=2.0)
+
+
+def replay(commands: np.ndarray, T_con: float) -> tuple[float, dict[str, object]]:
+    """The v1 return of playing (u, omega) commands from Figure 5's psi0 = pi/2 start."""
+    env = make(V1)
+    env.reset(seed=0, options={"start": (-0.8, 0.0, math.pi / 2), "goal": (0.0, 0.0, 0.0), "T_con": T_con})
+    total = 0.0
+    for u, omega in commands:
+        _, reward, terminated, truncated, info = env.step(np.array([u / 0.5, omega / 2.0], np.float32))
+        total += float(reward)
+        if terminated or truncated:
+            break
+    return total, info
+
+
+def test_v1_pays_the_cheaper_of_two_timely_arrivals_with_the_heading_more() -> None:
+    pytest.importorskip("casadi")
+    from baselines.optimal import solve_minimum_energy
+
+    start = (-0.8, 0.0, math.pi / 2)
+    slow = solve_minimum_energy(start, 20.0, dt=0.05, u_max=0.5, omega_max=2.0).commands  # arrives at 20 s
+    fast = solve_minimum_energy(start, 8.0, dt=0.05, u_max=0.5, omega_max=2.0).commands  # arrives at 8 s
+    slow_return, slow_info = replay(slow, 20.0)
+    fast_return, fast_info = replay(fast, 20.0)
+    for info in (slow_info, fast_info):  # both arrive in time, with the heading
+        assert info["is_success"] and info["time"] <= 20.0 and abs(info["heading_error"]) < 0.05  # type: ignore[arg-type,operator]
+    assert slow_info["energy"] < fast_info["energy"]  # type: ignore[operator]
+    assert slow_return > fast_return
+    # and the difference is the energy's: nothing is paid for arriving 12 s earlier
+    energy_gap = 2.0 * (fast_info["energy"] - slow_info["energy"])  # type: ignore[operator]
+    assert slow_return - fast_return == pytest.approx(energy_gap, abs=0.02)
+
+
+def test_v1_defaults_are_registered() -> None:
+    env = make(V1)
+    params = env.unwrapped.params  # type: ignore[attr-defined]
+    for key, value in dwr_gym.V1_DEFAULTS.items():
+        assert getattr(params, key) == value
+
+
+def test_imitate_clones_the_optimal_planner_into_a_loadable_agent(tmp_path: object) -> None:
+    pytest.importorskip("casadi")
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from train.agents import load_agent
+
+    run_dir = Path(str(tmp_path)) / "bc"
+    command = [sys.executable, "-m", "train.cli", "imitate", "--episodes", "4", "--T-con-range", "2", "3",
+               "--start-distance", "0.2", "0.3", "--epochs", "2", "--eval-every", "1", "--eval-episodes", "4",
+               "--batch-size", "256", "--net-arch", "16", "--run-dir", str(run_dir), "--no-progress"]  # fmt: skip
+    env = {**os.environ, "MPLBACKEND": "Agg"}
+    result = subprocess.run(command, capture_output=True, text=True, env=env, timeout=600)
+    assert result.returncode == 0, result.stderr
+    assert "recorded" in result.stdout and (run_dir / "model.zip").is_file()
+    rows = (run_dir / "evaluations.csv").read_text().splitlines()
+    assert rows[0].startswith("epoch,samples") and len(rows) == 3
+    label, policy = load_agent(run_dir)
+    obs, _ = make(V1).reset(seed=0)
+    action, _ = policy.predict(obs, deterministic=True)
+    assert label == "bc" and action.shape == (2,) and np.all(np.abs(action) <= 1.0)
+    again = subprocess.run(command, capture_output=True, text=True, env=env, timeout=600)
+    assert again.returncode == 2 and "already holds a model.zip" in again.stderr

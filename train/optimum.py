@@ -1,0 +1,144 @@
+"""The optimum every policy is measured against: minimum-energy plans per scenario, solved once and cached.
+
+For each episode of a scenario set, :func:`optimal_energies` solves the minimum-energy problem of
+:mod:`baselines.optimal` on the env's own grid (every command held over one ``dt``) from the start to
+the goal by T_con, and caches the energy on disk, keyed by the start in the goal's frame, T_con, dt
+and the limits, so that a second ``evaluate`` or ``compare`` does not solve again.
+
+The cache lives in ``$DWR_GYM_CACHE`` (default ``~/.cache/dwr-gym``); delete it to solve afresh.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import multiprocessing
+import os
+import sys
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from dwr_gym import model
+from dwr_gym.params import EnvParams
+
+#: Bump when the problem or the solver settings change, so that stale optima are not reused.
+CACHE_VERSION = 2
+OPTIMA = ("pose", "position", "none")
+
+
+def cache_dir() -> Path:
+    """Where optimal energies are cached: ``$DWR_GYM_CACHE``, else ``~/.cache/dwr-gym``."""
+    return Path(os.environ.get("DWR_GYM_CACHE") or Path.home() / ".cache" / "dwr-gym")
+
+
+def casadi_available() -> bool:
+    """Whether the ``optimal`` extra (CasADi) is installed."""
+    try:
+        import casadi  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def _cache_file(params: EnvParams, heading: bool) -> Path:
+    key = json.dumps([CACHE_VERSION, params.dt, params.u_max, params.omega_max, heading])
+    return cache_dir() / f"optimal-energy-{hashlib.sha256(key.encode()).hexdigest()[:16]}.json"
+
+
+def _start_key(start: NDArray[np.float64], T_con: float) -> str:
+    return ",".join(f"{v:.12e}" for v in (*start, T_con))
+
+
+def _solve_energy(job: tuple[tuple[float, float, float], float, float, float, float, bool]) -> float | str:
+    """The optimal energy of one start, or the error message (returned, so one failure cannot stop a batch)."""
+    from baselines.optimal import InfeasibleArrivalTimeError, OptimalControlError, solve_minimum_energy
+
+    start, T_con, dt, u_max, omega_max, heading = job
+    try:
+        return solve_minimum_energy(start, T_con, dt, u_max, omega_max, heading=heading).energy
+    except (OptimalControlError, InfeasibleArrivalTimeError) as error:
+        return str(error)
+
+
+def goal_frame_starts(starts: NDArray[np.float64], goals: NDArray[np.float64]) -> NDArray[np.float64]:
+    """(N, 3) start poses in their goals' frames, where the optimal problem is posed."""
+    x, y, psi = model.to_goal_frame(*np.asarray(starts, dtype=np.float64).T, *np.asarray(goals, dtype=np.float64).T)
+    return np.stack([x, y, psi], axis=1)
+
+
+def optimal_energies(
+    params: EnvParams,
+    starts: NDArray[np.float64],
+    goals: NDArray[np.float64],
+    T_cons: NDArray[np.float64] | None = None,
+    *,
+    heading: bool = True,
+    workers: int = 0,
+    progress: bool = False,
+    description: str = "optimum",
+) -> tuple[NDArray[np.float64], list[str]]:
+    """Minimum energy to reach each goal (the pose, or the position when ``heading`` is False) by T_con
+    (each episode's ``T_cons``, default ``params.T_con``).
+
+    Returns the energies (N,) and the messages of the episodes without an optimum (infeasible T_con
+    or an IPOPT failure), whose energy is NaN. Solved in ``workers`` processes (0: every core, at
+    most 8) and cached on disk.
+    """
+    local = goal_frame_starts(starts, goals)
+    path = _cache_file(params, heading)
+    try:
+        cache: dict[str, float | str] = json.loads(path.read_text())
+    except (OSError, ValueError):
+        cache = {}
+    T_cons = np.full(len(local), params.T_con) if T_cons is None else np.asarray(T_cons, dtype=np.float64)
+    keys = [_start_key(s, T) for s, T in zip(local, T_cons, strict=True)]
+    missing = sorted({k: i for i, k in enumerate(keys) if k not in cache}.values())
+    if missing:
+        jobs = [(tuple(map(float, local[i])), float(T_cons[i]), params.dt, params.u_max, params.omega_max, heading)
+                for i in missing]  # fmt: skip
+        results = _map(jobs, workers, progress, description)
+        cache.update({keys[i]: result for i, result in zip(missing, results, strict=True)})
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            temporary = path.with_suffix(f".{os.getpid()}.tmp")
+            temporary.write_text(json.dumps(cache))
+            os.replace(temporary, path)
+        except OSError as error:  # a read-only home: the optimum is still returned, just not kept
+            print(f"warning: could not cache optimal energies in {path.parent}: {error}", file=sys.stderr)
+    values = [cache[k] for k in keys]
+    energies = np.array([v if isinstance(v, float) else math.nan for v in values])
+    failures = [f"episode {i}: {v}" for i, v in enumerate(values) if not isinstance(v, float)]
+    return energies, failures
+
+
+def _map(jobs: list[Any], workers: int, progress: bool, description: str) -> list[float | str]:
+    workers = workers or min(os.cpu_count() or 1, 8)
+    bar: Any = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=len(jobs), desc=description, unit="plan", leave=False)
+    results: list[float | str] = []
+    if workers <= 1 or len(jobs) < 4:
+        for job in jobs:
+            results.append(_solve_energy(job))
+            if bar is not None:
+                bar.update()
+    else:
+        method = "fork" if sys.platform.startswith("linux") else "spawn"
+        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(method)) as pool:
+            for result in pool.map(_solve_energy, jobs, chunksize=max(1, min(16, len(jobs) // (4 * workers)))):
+                results.append(result)
+                if bar is not None:
+                    bar.update()
+    if bar is not None:
+        bar.close()
+    return results
+
+
+__all__ = ["OPTIMA", "cache_dir", "casadi_available", "goal_frame_starts", "optimal_energies"]
