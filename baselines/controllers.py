@@ -16,7 +16,7 @@ from numpy.typing import ArrayLike
 
 from dwr_gym import model
 from dwr_gym.model import FloatArray
-from dwr_gym.params import check_range, reject_unknown
+from dwr_gym.validation import as_bool, as_float, as_int, coerce_numbers, reject_unknown
 
 K_MAX = 1.0 / (2.0 * math.pi)
 
@@ -52,6 +52,7 @@ class ControllerParams:
     """Base of the parameter dataclasses: validation hook and keyword construction."""
 
     def __post_init__(self) -> None:
+        coerce_numbers(self)
         self.validate()
 
     def validate(self) -> None:
@@ -142,14 +143,14 @@ class PTCParams(ControllerParams):
 
     def validate(self) -> None:
         for name in ("K1", "K2", "K", "Ke", "T_con"):
-            check_range(name, getattr(self, name), 0.0, 1e9, low_inclusive=False)
-        check_range("beta", self.beta, 0.5, 1.0, low_inclusive=False, high_inclusive=False)
-        check_range("k", self.k, 0.0, K_MAX)
+            as_float(name, getattr(self, name), 0.0, 1e9, low_inclusive=False)
+        as_float("beta", self.beta, 0.5, 1.0, low_inclusive=False, high_inclusive=False)
+        as_float("k", self.k, 0.0, K_MAX)
         bound = min(0.6 * self.K1, self.K2)
         if self.K > bound * (1.0 + 1e-12):
             raise ValueError(f"K={self.K!r} is invalid: expected 0 < K <= min(0.6 K1, K2) = {bound:g}")
-        check_range("stop_distance", self.stop_distance, 0.0, 1.0)
-        check_range("max_gain", self.max_gain, 1.0 / self.T_con, 1e9, low_inclusive=False)
+        as_float("stop_distance", self.stop_distance, 0.0, 1.0)
+        as_float("max_gain", self.max_gain, 1.0 / self.T_con, 1e9, low_inclusive=False)
 
     @classmethod
     def paper_fig5(cls, **overrides: Any) -> PTCParams:
@@ -215,12 +216,11 @@ class ConventionalPTCParams(ControllerParams):
 
     def validate(self) -> None:
         for name in ("K1", "K2", "Ke", "T_con"):
-            check_range(name, getattr(self, name), 0.0, 1e9, low_inclusive=False)
-        check_range("k", self.k, 0.0, K_MAX)
-        if isinstance(self.power, bool) or not isinstance(self.power, int) or not 1 <= self.power <= 10:
-            raise ValueError(f"power={self.power!r} is invalid: expected an integer in [1, 10]")
-        check_range("stop_distance", self.stop_distance, 0.0, 1.0)
-        check_range("max_gain", self.max_gain, 1.0 / self.T_con, 1e9, low_inclusive=False)
+            as_float(name, getattr(self, name), 0.0, 1e9, low_inclusive=False)
+        as_float("k", self.k, 0.0, K_MAX)
+        as_int("power", self.power, 1, 10)
+        as_float("stop_distance", self.stop_distance, 0.0, 1.0)
+        as_float("max_gain", self.max_gain, 1.0 / self.T_con, 1e9, low_inclusive=False)
 
 
 class ConventionalPTCController(Controller):
@@ -269,12 +269,12 @@ class FabregasParams(ControllerParams):
     """Optional saturation of u."""
 
     def validate(self) -> None:
-        check_range("K0", self.K0, 0.0, 1e9, low_inclusive=False)
-        check_range("K_omega", self.K_omega, 0.0, 1e9, low_inclusive=False)
-        check_range("K_i", self.K_i, 0.0, 1e9)
-        check_range("dt", self.dt, 0.0, 10.0, low_inclusive=False)
+        as_float("K0", self.K0, 0.0, 1e9, low_inclusive=False)
+        as_float("K_omega", self.K_omega, 0.0, 1e9, low_inclusive=False)
+        as_float("K_i", self.K_i, 0.0, 1e9)
+        as_float("dt", self.dt, 0.0, 10.0, low_inclusive=False)
         if self.speed_limit is not None:
-            check_range("speed_limit", self.speed_limit, 0.0, 1e9, low_inclusive=False)
+            as_float("speed_limit", self.speed_limit, 0.0, 1e9, low_inclusive=False)
 
 
 class FabregasController(Controller):
@@ -330,11 +330,11 @@ class FixedTimeParams(ControllerParams):
 
     def validate(self) -> None:
         for name in ("k1", "k2", "k3", "k4", "Ke"):
-            check_range(name, getattr(self, name), 0.0, 1e9, low_inclusive=False)
-        check_range("a", self.a, 0.0, 1.0, low_inclusive=False, high_inclusive=False)
-        check_range("b", self.b, 1.0, 10.0, low_inclusive=False)
-        check_range("k", self.k, 0.0, K_MAX)
-        check_range("stop_distance", self.stop_distance, 0.0, 1.0)
+            as_float(name, getattr(self, name), 0.0, 1e9, low_inclusive=False)
+        as_float("a", self.a, 0.0, 1.0, low_inclusive=False, high_inclusive=False)
+        as_float("b", self.b, 1.0, 10.0, low_inclusive=False)
+        as_float("k", self.k, 0.0, K_MAX)
+        as_float("stop_distance", self.stop_distance, 0.0, 1.0)
 
 
 class FixedTimeController(Controller):
@@ -387,11 +387,10 @@ class AstolfiParams(ControllerParams):
     """Drive backwards when the goal is behind the robot (|alpha| > pi/2)."""
 
     def validate(self) -> None:
-        check_range("k_rho", self.k_rho, 0.0, 1e9, low_inclusive=False)
-        check_range("k_beta", self.k_beta, -1e9, 0.0, high_inclusive=False)
-        check_range("k_alpha", self.k_alpha, self.k_rho, 1e9, low_inclusive=False)
-        if not isinstance(self.reverse, bool):
-            raise ValueError(f"reverse={self.reverse!r} is invalid: expected True or False")
+        as_float("k_rho", self.k_rho, 0.0, 1e9, low_inclusive=False)
+        as_float("k_beta", self.k_beta, -1e9, 0.0, high_inclusive=False)
+        as_float("k_alpha", self.k_alpha, self.k_rho, 1e9, low_inclusive=False)
+        as_bool("reverse", self.reverse)
 
 
 class AstolfiController(Controller):

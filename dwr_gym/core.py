@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 from dwr_gym import model
 from dwr_gym.model import FloatArray
 from dwr_gym.params import EnvParams
+from dwr_gym.validation import as_pose
 
 if TYPE_CHECKING:
     from dwr_gym.disturbances import Perturbation
@@ -189,15 +190,7 @@ def sample_start(rng: np.random.Generator, params: EnvParams) -> tuple[float, fl
 
 def parse_pose(name: str, value: object) -> tuple[float, float, float]:
     """Validate a pose option (x, y, psi) of reset()."""
-    try:
-        pose = tuple(float(v) for v in value)  # type: ignore[attr-defined]
-    except (TypeError, ValueError):
-        pose = ()
-    if len(pose) != 3 or not all(math.isfinite(v) for v in pose):
-        raise ValueError(
-            f"options[{name!r}]={value!r} is invalid: expected three finite numbers (x [m], y [m], psi [rad])"
-        )
-    return pose  # type: ignore[return-value]
+    return as_pose(f"options[{name!r}]", value)
 
 
 def new_state(

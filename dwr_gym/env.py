@@ -16,6 +16,15 @@ from dwr_gym.params import EnvParams
 
 RENDER_MODES = ("human", "rgb_array")
 RESET_OPTIONS = ("start", "goal", "T_con")
+TRAIL_LIMIT = 4096
+"""Most points the render trail keeps; past it every other point is dropped, so memory stays bounded."""
+
+
+def append_trail(trail: list[tuple[float, float]], point: tuple[float, float]) -> None:
+    """Add a point to the render trail, halving its resolution (the start kept) when it reaches TRAIL_LIMIT."""
+    trail.append(point)
+    if len(trail) > TRAIL_LIMIT:
+        trail[1:] = trail[-1:0:-2][::-1]  # every other point, counted back from the newest
 
 
 def check_render_mode(render_mode: str | None) -> None:
@@ -251,7 +260,7 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
         if self.perturbation is not None:
             info["disturbance"] = self.perturbation.info(scalar=True)
         if self.render_mode is not None:
-            self._trail.append((float(info["pose"][0]), float(info["pose"][1])))
+            append_trail(self._trail, (float(info["pose"][0]), float(info["pose"][1])))
             if self.render_mode == "human":
                 self.render()
         return result.observation, result.reward, bool(result.terminated), bool(result.truncated), info

@@ -8,53 +8,16 @@ from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
 
-import numpy as np
-
 from dwr_gym.model import INTEGRATORS
+from dwr_gym.validation import as_bool, as_choice, as_float, as_int, as_interval, blame, reject_unknown
+
+MIN_T_CON = 1e-3  # [s]
+MIN_DT = 1e-6  # [s]
 
 
-def check_range(
-    name: str,
-    value: Any,
-    low: float = -math.inf,
-    high: float = math.inf,
-    *,
-    low_inclusive: bool = True,
-    high_inclusive: bool = True,
-) -> float:
-    """Return ``value`` as a float, or raise a ValueError naming the parameter, the value and the range."""
-    lo, hi = "[" if low_inclusive else "(", "]" if high_inclusive else ")"
-    allowed = f"a finite number in {lo}{low}, {high}{hi}"
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ValueError(f"{name}={value!r} is invalid: expected {allowed}")
-    value = float(value)
-    below = value < low or (value == low and not low_inclusive)
-    above = value > high or (value == high and not high_inclusive)
-    if not math.isfinite(value) or below or above:
-        raise ValueError(f"{name}={value!r} is invalid: expected {allowed}")
-    return value
-
-
-def check_interval(name: str, value: Any, low: float, high: float) -> tuple[float, float]:
-    """Validate a (min, max) pair inside [low, high] with min <= max."""
-    if not isinstance(value, (tuple, list)) or len(value) != 2:
-        raise ValueError(f"{name}={value!r} is invalid: expected a pair (min, max) within [{low}, {high}]")
-    first = check_range(f"{name}[0]", value[0], low, high)
-    second = check_range(f"{name}[1]", value[1], low, high)
-    if first > second:
-        raise ValueError(f"{name}={value!r} is invalid: min must not exceed max")
-    return first, second
-
-
-def reject_unknown(cls: type, kwargs: dict[str, Any]) -> None:
-    """Raise a ValueError for keywords that are not fields of the dataclass ``cls``."""
-    allowed = {f.name for f in dataclasses.fields(cls)}
-    unknown = sorted(set(kwargs) - allowed)
-    if unknown:
-        raise ValueError(
-            f"unknown parameter(s) {', '.join(map(repr, unknown))} for {cls.__name__}; "
-            f"allowed: {', '.join(sorted(allowed))}"
-        )
+check_range = as_float
+"""Kept as the name earlier code imports: see :func:`dwr_gym.validation.as_float`."""
+check_interval = as_interval
 
 
 @dataclass(frozen=True)
@@ -119,35 +82,23 @@ class EnvParams:
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
-        set_(self, "T_con", check_range("T_con", self.T_con, 0.0, 1e6, low_inclusive=False))
+        set_(self, "T_con", as_float("T_con", self.T_con, MIN_T_CON, 1e6))
         if self.T_con_range is not None:
-            set_(self, "T_con_range", check_interval("T_con_range", self.T_con_range, 1e-6, 1e6))
-        set_(self, "dt", check_range("dt", self.dt, 0.0, self.T_con_min, low_inclusive=False))
-        set_(self, "u_max", check_range("u_max", self.u_max, 0.0, 100.0, low_inclusive=False))
-        set_(self, "omega_max", check_range("omega_max", self.omega_max, 0.0, 100.0, low_inclusive=False))
-        set_(self, "goal_tolerance", check_range("goal_tolerance", self.goal_tolerance, 0.0, 10.0, low_inclusive=False))
+            set_(self, "T_con_range", as_interval("T_con_range", self.T_con_range, MIN_T_CON, 1e6))
+        set_(self, "dt", as_float("dt", self.dt, MIN_DT, 1e6))
+        set_(self, "u_max", as_float("u_max", self.u_max, 0.0, 100.0, low_inclusive=False))
+        set_(self, "omega_max", as_float("omega_max", self.omega_max, 0.0, 100.0, low_inclusive=False))
+        set_(self, "goal_tolerance", as_float("goal_tolerance", self.goal_tolerance, 0.0, 10.0, low_inclusive=False))
         if self.heading_tolerance is not None:
-            set_(
-                self,
-                "heading_tolerance",
-                check_range("heading_tolerance", self.heading_tolerance, 0.0, math.pi, low_inclusive=False),
-            )
-        set_(
-            self, "horizon_factor", check_range("horizon_factor", self.horizon_factor, 1.0, 100.0, low_inclusive=False)
-        )
-        set_(
-            self,
-            "arena_radius",
-            check_range("arena_radius", self.arena_radius, self.u_max * self.dt, 1e6, low_inclusive=False),
-        )
-        start_distance = check_interval("start_distance", self.start_distance, 0.0, self.arena_radius)
-        set_(self, "start_distance", start_distance)
-        set_(self, "start_heading", check_interval("start_heading", self.start_heading, -math.pi, math.pi))
-        if self.integrator not in INTEGRATORS:
-            raise ValueError(f"integrator={self.integrator!r} is invalid: expected one of {', '.join(INTEGRATORS)}")
-        if isinstance(self.substeps, bool) or not isinstance(self.substeps, int) or not 1 <= self.substeps <= 1000:
-            raise ValueError(f"substeps={self.substeps!r} is invalid: expected an integer in [1, 1000]")
-        set_(self, "k", check_range("k", self.k, 0.0, 1.0 / (2.0 * math.pi)))
+            tolerance = as_float("heading_tolerance", self.heading_tolerance, 0.0, math.pi, low_inclusive=False)
+            set_(self, "heading_tolerance", tolerance)
+        set_(self, "horizon_factor", as_float("horizon_factor", self.horizon_factor, 1.0, 100.0, low_inclusive=False))
+        set_(self, "arena_radius", as_float("arena_radius", self.arena_radius, 0.0, 1e6, low_inclusive=False))
+        set_(self, "start_distance", as_interval("start_distance", self.start_distance, 0.0, 1e6))
+        set_(self, "start_heading", as_interval("start_heading", self.start_heading, -math.pi, math.pi))
+        set_(self, "integrator", as_choice("integrator", self.integrator, INTEGRATORS))
+        set_(self, "substeps", as_int("substeps", self.substeps, 1, 1000))
+        set_(self, "k", as_float("k", self.k, 0.0, 1.0 / (2.0 * math.pi)))
         for name in (
             "progress_weight",
             "time_weight",
@@ -158,15 +109,40 @@ class EnvParams:
             "late_penalty",
             "arena_penalty",
         ):
-            set_(self, name, check_range(name, getattr(self, name), 0.0, 1e6))
-        set_(self, "shaping_discount", check_range("shaping_discount", self.shaping_discount, 0.0, 1.0))
-        if not isinstance(self.zero_terminal_potential, (bool, np.bool_)):
-            raise ValueError(
-                f"zero_terminal_potential={self.zero_terminal_potential!r} is invalid: expected True or False"
+            set_(self, name, as_float(name, getattr(self, name), 0.0, 1e6))
+        set_(self, "shaping_discount", as_float("shaping_discount", self.shaping_discount, 0.0, 1.0))
+        set_(self, "zero_terminal_potential", as_bool("zero_terminal_potential", self.zero_terminal_potential))
+        set_(self, "time_gain_cap", as_float("time_gain_cap", self.time_gain_cap, 1.0, 1e6))
+        set_(self, "observation_noise", as_float("observation_noise", self.observation_noise, 0.0, 10.0))
+        set_(self, "actuation_noise", as_float("actuation_noise", self.actuation_noise, 0.0, 10.0))
+        self._check_consistency()
+
+    def _check_consistency(self) -> None:
+        """Checks between parameters; each error names the one of the pair that the user set."""
+        if self.dt > self.T_con_min:
+            self._conflict(
+                blame(self, "dt", "T_con_range" if self.T_con_range is not None else "T_con"),
+                f"dt <= T_con (dt={self.dt:g} s, smallest T_con={self.T_con_min:g} s)",
             )
-        set_(self, "time_gain_cap", check_range("time_gain_cap", self.time_gain_cap, 1.0, 1e6))
-        set_(self, "observation_noise", check_range("observation_noise", self.observation_noise, 0.0, 10.0))
-        set_(self, "actuation_noise", check_range("actuation_noise", self.actuation_noise, 0.0, 10.0))
+        step = self.u_max * self.dt
+        if step >= self.arena_radius:
+            self._conflict(
+                blame(self, "arena_radius", "dt", "u_max"),
+                f"one step's travel u_max * dt = {step:g} m below arena_radius={self.arena_radius:g} m",
+            )
+        if self.goal_tolerance >= self.arena_radius:
+            self._conflict(
+                blame(self, "goal_tolerance", "arena_radius"),
+                f"goal_tolerance={self.goal_tolerance:g} m below arena_radius={self.arena_radius:g} m",
+            )
+        if self.start_distance[1] > self.arena_radius:
+            self._conflict(
+                blame(self, "start_distance", "arena_radius"),
+                f"start_distance={self.start_distance} within arena_radius={self.arena_radius:g} m",
+            )
+
+    def _conflict(self, name: str, expected: str) -> None:
+        raise ValueError(f"{name}={getattr(self, name)!r} is invalid: expected {expected}")
 
     @classmethod
     def from_kwargs(cls, **kwargs: Any) -> EnvParams:

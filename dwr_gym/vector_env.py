@@ -13,8 +13,12 @@ from numpy.typing import NDArray
 
 from dwr_gym import core, model
 from dwr_gym.disturbances import make_perturbation, split_env_kwargs
-from dwr_gym.env import check_render_mode, parse_reset_options, parse_T_con_option, spec_with_horizon
+from dwr_gym.env import append_trail, check_render_mode, parse_reset_options, parse_T_con_option, spec_with_horizon
 from dwr_gym.params import EnvParams
+from dwr_gym.validation import POSE_LIMIT, as_choice, as_int
+
+MAX_NUM_ENVS = 1_000_000
+"""More robots than this would take gigabytes for the state alone; larger values are refused."""
 
 Trail = list[tuple[float, float]]
 
@@ -37,8 +41,11 @@ def _pose_batch(name: str, value: Any, n: int) -> tuple[NDArray[np.float64], NDA
     array = np.asarray(value, dtype=np.float64)
     if array.shape == (3,):
         array = np.broadcast_to(array, (n, 3))
-    if array.shape != (n, 3) or not np.all(np.isfinite(array)):
-        raise ValueError(f"options[{name!r}] of shape {array.shape} is invalid: expected finite (3,) or ({n}, 3)")
+    if array.shape != (n, 3) or not np.all(np.abs(array) <= POSE_LIMIT):
+        raise ValueError(
+            f"options[{name!r}] of shape {array.shape} is invalid: expected (3,) or ({n}, 3) finite numbers "
+            f"within [-{POSE_LIMIT:g}, {POSE_LIMIT:g}]"
+        )
     return array[:, 0].copy(), array[:, 1].copy(), array[:, 2].copy()
 
 
@@ -81,11 +88,8 @@ class DWRPointStabilizationVectorEnv(VectorEnv):
         autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
         **kwargs: Any,
     ) -> None:
-        if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
-            raise ValueError(f"num_envs={num_envs!r} is invalid: expected an integer >= 1")
-        if dtype not in ("float64", "float32"):
-            raise ValueError(f"dtype={dtype!r} is invalid: expected 'float64' or 'float32'")
-        self.dtype = dtype
+        num_envs = as_int("num_envs", num_envs, 1, MAX_NUM_ENVS)
+        self.dtype = as_choice("dtype", dtype, ("float64", "float32"))
         self.autoreset_mode = parse_autoreset_mode(autoreset_mode)
         self.metadata = {**type(self).metadata, "autoreset_mode": self.autoreset_mode}
         kwargs, drive, disturbances = split_env_kwargs(kwargs)
@@ -99,6 +103,7 @@ class DWRPointStabilizationVectorEnv(VectorEnv):
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self._state = core.TaskState.zeros(self.num_envs, np.dtype(dtype).type)
+        self._started = False  # step() before the first reset() is an error
         self._rngs: list[np.random.Generator] = []
         self._all = np.ones(self.num_envs, dtype=bool)
         self._needs_reset = np.zeros(self.num_envs, dtype=bool)  # episodes that ended in the last step
@@ -154,9 +159,14 @@ class DWRPointStabilizationVectorEnv(VectorEnv):
         super().reset(seed=seed if isinstance(seed, (int, np.integer)) or seed is None else None)
         self._seed_sub_envs(seed)
         options = dict(options or {})
-        mask = np.asarray(options.pop("reset_mask", self._all), dtype=bool)
-        if mask.shape != (self.num_envs,):
-            raise ValueError(f"options['reset_mask'] of shape {mask.shape} is invalid: expected ({self.num_envs},)")
+        mask = np.asarray(options.pop("reset_mask", self._all))
+        if mask.shape != (self.num_envs,) or not (mask.dtype == np.bool_ or np.isin(mask, (0, 1)).all()):
+            raise ValueError(
+                f"options['reset_mask'] of shape {mask.shape} is invalid: expected ({self.num_envs},) booleans"
+            )
+        mask = mask.astype(bool)
+        if not self._started and not mask.all():
+            raise ResetNeeded("the first reset() must reset every sub-env: drop options['reset_mask']")
         parse_reset_options({k: (0.0, 0.0, 0.0) for k in options})  # rejects unknown option names
         index = np.flatnonzero(mask)
         start = _pose_batch("start", options["start"], self.num_envs) if "start" in options else None
@@ -169,12 +179,14 @@ class DWRPointStabilizationVectorEnv(VectorEnv):
                     f"options['T_con'] of shape {T_con.shape} is invalid: expected one number or ({self.num_envs},)"
                 )
             T_con = np.broadcast_to(T_con, (self.num_envs,))[index]
-        self._reset_envs(
-            index,
-            None if start is None else tuple(a[index] for a in start),
-            None if goal is None else tuple(a[index] for a in goal),
-            T_con,
-        )
+        if index.size:
+            self._reset_envs(
+                index,
+                None if start is None else tuple(a[index] for a in start),
+                None if goal is None else tuple(a[index] for a in goal),
+                T_con,
+            )
+        self._started = True
         coords = self._state.coordinates(self.params.k)
         obs = core.observe(self._state, coords, self.params, self.single_observation_space,
                            self._noise(3, self.params.observation_noise))  # fmt: skip
@@ -225,6 +237,8 @@ class DWRPointStabilizationVectorEnv(VectorEnv):
     def step(
         self, actions: NDArray[np.float32]
     ) -> tuple[NDArray[np.float32], NDArray[np.float64], NDArray[np.bool_], NDArray[np.bool_], dict[str, Any]]:
+        if not self._started:
+            raise ResetNeeded("call reset() before step()")
         actions = np.asarray(actions)
         if actions.shape != (self.num_envs, 2):
             raise ValueError(f"actions of shape {actions.shape} are invalid: expected ({self.num_envs}, 2)")
@@ -259,7 +273,7 @@ class DWRPointStabilizationVectorEnv(VectorEnv):
         if self._trails:
             pose = infos["pose"]
             for i, trail in enumerate(self._trails):
-                trail.append((float(pose[i, 0]), float(pose[i, 1])))
+                append_trail(trail, (float(pose[i, 0]), float(pose[i, 1])))
             if restart is not None:
                 self._start_trails(restart, pose)
         if self.render_mode == "human":

@@ -62,6 +62,11 @@ def test_evaluate_by_prescribed_time_prints_one_block_per_T_con(tmp_path: Path) 
         (["evaluate", "--env-kwargs", "T_con"], "expected KEY=VALUE"),
         (["evaluate", "--agent", "no/such/agent.zip"], "no/such/agent.zip"),
         (["reproduce", "--dt", "0"], "--dt 0.0 is invalid"),
+        (["evaluate", "--seed", "-1"], "--seed -1 is invalid"),
+        (["evaluate", "--n", "1e9"], "--n 1000000000 is invalid"),
+        (["evaluate", "--n", "many"], "invalid value 'many'"),
+        (["evaluate", "--out", "/proc/version"], "it is a file"),
+        (["evaluate", "--env-kwargs", "start_distance=(1.5, 3.0)", "goal_tolerance=6"], "goal_tolerance=6.0"),
     ],
 )
 def test_bad_input_is_one_line_and_exit_code_2(args: list[str], message: str) -> None:

@@ -117,8 +117,7 @@ def test_save_load_and_resume_round_trip(tmp_path: Path) -> None:
     _, policy = load_agent(run_dir / "model.zip")
     obs = np.random.default_rng(0).uniform(-1, 1, (5, 10)).astype(np.float32)
     np.testing.assert_array_equal(policy.predict(obs, deterministic=True)[0], model.predict(obs, deterministic=True)[0])
-    checkpoint = sorted((run_dir / "checkpoints").glob("*.zip"))[0]
-    resumed = tiny("ppo", False, run_dir, total_timesteps=512, resume=str(checkpoint))
+    resumed = tiny("ppo", False, run_dir, total_timesteps=512, resume=str(run_dir / "model.zip"))
     train(resumed)
     assert PPO.load(run_dir / "model.zip").num_timesteps >= 512
     rows = (run_dir / "evaluations.csv").read_text().splitlines()
@@ -155,6 +154,8 @@ def test_zoo_yaml_hyperparameters(tmp_path: Path) -> None:
         (["--num-envs", "0"], "--num-envs 0 is invalid"),
         (["--residual-scale", "9"], "--residual-scale 9.0 is invalid"),
         (["--expert", "pid"], "--expert 'pid' is invalid"),
+        (["--device", "gpu"], "--device 'gpu' is invalid"),
+        (["--total-timesteps", "1e5", "--seed", "-1"], "--seed -1 is invalid"),
     ],
 )
 def test_train_bad_input_exits_2_before_training(args: list[str], message: str, tmp_path: Path) -> None:
@@ -174,7 +175,7 @@ def test_train_cli_end_to_end_and_refuses_to_overwrite(tmp_path: Path) -> None:
     assert "saved run/model.zip" in result.stdout
     assert "n_steps: 32" in (tmp_path / "run" / "config.yaml").read_text()
     again = dwr_gym(*args, cwd=tmp_path)
-    assert again.returncode == 2 and "already holds a trained model" in again.stderr
+    assert again.returncode == 2 and "already holds a run" in again.stderr
 
 
 def test_ctrl_c_saves_the_current_model(tmp_path: Path) -> None:

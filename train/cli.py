@@ -7,15 +7,49 @@ error on stderr and exit code 2.
 from __future__ import annotations
 
 import argparse
+import ast
 import json
 import platform
 import sys
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, NoReturn
 
 
 class UsageError(Exception):
     """Bad user input: printed as one line, exit code 2."""
+
+
+class Parser(argparse.ArgumentParser):
+    """An ArgumentParser whose errors are one line (no usage block), exit code 2, like every other bad input."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+def count(text: str) -> int:
+    """An argparse type for counts and seeds: accepts 1000, 1e3 and 1_000."""
+    from dwr_gym.validation import as_int
+
+    try:
+        return as_int("value", text.replace("_", ""), 0, 10**12, text=True)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"invalid value {text!r}: expected a non-negative integer") from None
+
+
+def check_writable_dir(flag: str, path: str) -> None:
+    """Create ``path`` if needed and check a file can be written in it, before any work starts."""
+    import tempfile
+    from pathlib import Path
+
+    out = Path(path)
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"{flag} {path!r} is invalid: it is a file, expected a directory")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=out):
+            pass
+    except OSError as error:
+        raise UsageError(f"{flag} {path!r} is not writable: {error.strerror or error}") from None
 
 
 def parse_env_kwargs(items: Sequence[str] | None) -> dict[str, Any]:
@@ -28,7 +62,10 @@ def parse_env_kwargs(items: Sequence[str] | None) -> dict[str, Any]:
         try:
             value = json.loads(raw)
         except json.JSONDecodeError:
-            value = raw
+            try:  # Python literals such as (1.5, 3.0) or None
+                value = ast.literal_eval(raw)
+            except (ValueError, SyntaxError, MemoryError, RecursionError):
+                value = raw
         kwargs[key] = tuple(value) if isinstance(value, list) else value
     return kwargs
 
@@ -113,6 +150,33 @@ EVAL_COLUMNS = [
 ]
 
 
+def json_safe(value: Any) -> Any:
+    """``value`` with NaN and inf as null (bare NaN is not JSON) and numpy scalars as Python numbers."""
+    import math
+
+    if isinstance(value, dict):
+        return {str(k): json_safe(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [json_safe(v) for v in value]
+    if hasattr(value, "item") and not isinstance(value, (str, bytes)):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+FAILS_BY_DESIGN = {
+    "fabregas": "fabregas is the slow law of ref. [9] (u = K0 d p, not prescribed-time): the paper compares it at "
+    "T_con = 70 s (paper-fig7); it cannot arrive within T_con = 20 s, so its success there is 0 % by design",
+}
+
+
+def table_notes(rows: list[dict[str, Any]]) -> str:
+    """One line per policy whose low success rate the table alone would not explain."""
+    failing = {row["policy"] for row in rows if row["policy"] in FAILS_BY_DESIGN and row["success_rate"] < 0.5}
+    return "\n".join(f"note: {FAILS_BY_DESIGN[name]}" for name in sorted(failing))
+
+
 def write_results(rows: list[dict[str, Any]], out_dir: str, stem: str) -> list[str]:
     """Write rows as CSV and JSON into ``out_dir``; returns the paths written."""
     import csv
@@ -125,7 +189,7 @@ def write_results(rows: list[dict[str, Any]], out_dir: str, stem: str) -> list[s
         writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
         writer.writeheader()
         writer.writerows(rows)
-    json_path.write_text(json.dumps(rows, indent=2, default=float) + "\n")
+    json_path.write_text(json.dumps(json_safe(rows), indent=2, allow_nan=False) + "\n")
     return [str(csv_path), str(json_path)]
 
 
@@ -191,8 +255,11 @@ def checked_selection(args: argparse.Namespace) -> list[str]:
             raise UsageError(
                 f"--scenarios {name!r} is invalid: expected any of {', '.join(SCENARIO_SETS + ROBUSTNESS_SETS)}"
             )
-    if args.n < 1:
-        raise UsageError(f"--n {args.n} is invalid: expected an integer >= 1")
+    if not 1 <= args.n <= 10**7:
+        raise UsageError(f"--n {args.n} is invalid: expected an integer in [1, 1e7]")
+    if not 0 <= args.seed < 2**32:
+        raise UsageError(f"--seed {args.seed} is invalid: expected an integer in [0, 2**32 - 1]")
+    check_writable_dir("--out", args.out)
     return list(names)
 
 
@@ -228,7 +295,7 @@ def add_scenario_arguments(p: argparse.ArgumentParser, out: str) -> None:
         help=f"scenario sets: any of {', '.join(SCENARIO_SETS)} (default: these), or the imperfect robots' "
         f"{', '.join(ROBUSTNESS_SETS)} (see 'Robustness' in the README)",
     )
-    p.add_argument("--n", type=int, default=1000, help="number of random start poses for 'random' (default: 1000)")
+    p.add_argument("--n", type=count, default=1000, help="number of random start poses for 'random' (default: 1000)")
     p.add_argument("--seed", type=int, default=0, help="seed of the random scenario set (default: 0)")
     p.add_argument("--out", default=out, help=f"output directory (default: {out})")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")  # fmt: skip
@@ -246,6 +313,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     rows = evaluate_sets(policies, args.scenarios, args.n, args.seed, env_kwargs, progress=not args.no_progress,
                           optimum=checked_optimum(args), T_cons=args.T_con)  # fmt: skip
     print_blocks(rows, EVAL_COLUMNS)
+    if table_notes(rows):
+        print(table_notes(rows))
     for path in write_results(rows, args.out, "evaluation"):
         print(f"wrote {path}")
     return 0
@@ -287,6 +356,7 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
         import matplotlib  # noqa: F401
     except ImportError as error:
         raise UsageError('matplotlib is not installed: pip install "dwr-gym[plots]"') from error
+    check_writable_dir("--out", args.out)
     claims = reproduce(args.out, dt=args.dt, gif=not args.no_gif)
     width = max(len(c.verdict) for c in claims)
     for claim in claims:
@@ -330,17 +400,26 @@ def add_train_parser(sub: Any) -> None:
             p.add_argument(flag, action="store_true", default=argparse.SUPPRESS, help=text)
         elif f.name == "env_kwargs":
             p.add_argument(flag, nargs="*", metavar="KEY=VALUE", default=argparse.SUPPRESS, help=text)
-        else:
-            kind = {"int": int, "float": float}.get(type(f.default).__name__, str)
-            p.add_argument(flag, type=kind, default=argparse.SUPPRESS, help=text)
+        elif f.name == "hyperparams":
+            p.add_argument(flag, nargs="+", metavar="FILE|KEY=VALUE", default=argparse.SUPPRESS, help=text)
+        else:  # numbers are read as text and coerced by TrainConfig.validate, so 1e5 and 3e-4 work
+            p.add_argument(flag, default=argparse.SUPPRESS, help=text)
     p.set_defaults(func=cmd_train)
+
+
+def split_hyperparams(items: Sequence[str]) -> tuple[str | None, list[str]]:
+    """``--hyperparams`` items: at most one YAML file, and KEY=VALUE (or KEY:VALUE) overrides."""
+    from pathlib import Path
+
+    files = [item for item in items if "=" not in item and (":" not in item or Path(item).is_file())]
+    if len(files) > 1:
+        raise UsageError(f"--hyperparams {files!r} is invalid: expected at most one YAML file")
+    return (files[0] if files else None), [item for item in items if item not in files]
 
 
 def cmd_train(args: argparse.Namespace) -> int:
     """Train an agent; bad input ends before any training starts."""
-    from pathlib import Path
-
-    from train.config import ConfigError, TrainConfig, resolve_hyperparams
+    from train.config import ConfigError, TrainConfig, parse_overrides, resolve_hyperparams
 
     given = {k: v for k, v in vars(args).items() if k not in ("func", "command")}
     if "env_kwargs" in given:
@@ -349,35 +428,21 @@ def cmd_train(args: argparse.Namespace) -> int:
         import stable_baselines3  # noqa: F401
     except ImportError as error:
         raise UsageError('stable-baselines3 is not installed: pip install "dwr-gym[train]"') from error
-    from train.training import load_config, train
+    from train.training import RunDirError, resume_config, train
 
     try:
+        if "hyperparams" in given:
+            given["hyperparams"], overrides = split_hyperparams(given["hyperparams"])
+            given["hyperparam_overrides"] = parse_overrides(overrides)
         if "resume" in given:
-            from train.agents import AgentLoadError, find_run_dir
-
-            checkpoint = Path(given["resume"])
-            if not checkpoint.is_file():
-                raise ConfigError(f"--resume {str(checkpoint)!r} is invalid: no such checkpoint file")
-            try:
-                run_dir = find_run_dir(checkpoint.parent)
-            except AgentLoadError as error:
-                raise ConfigError(str(error)) from error
-            config = load_config(run_dir)
-            for key in ("total_timesteps", "progress", "device"):
-                if key in given:
-                    setattr(config, key, given[key])
-            config.resume, config.run_dir = str(checkpoint), str(run_dir)
+            config = resume_config(given)
         else:
             config = TrainConfig(**given)
-        config.validate()
-        config = resolve_hyperparams(config, set(given))
-        config.validate()
-    except ConfigError as error:
-        raise UsageError(str(error)) from error
-    try:
+            config.validate()
+            config = resolve_hyperparams(config, set(given))
         train(config, command=["dwr-gym", *sys.argv[1:]])
-    except ConfigError as error:  # raised before any training starts, e.g. a run directory already used
-        raise UsageError(str(error)) from error
+    except (ConfigError, RunDirError) as error:  # all raised before any training starts
+        raise UsageError(str(error)) from None
     except KeyboardInterrupt:
         return 130
     return 0
@@ -419,6 +484,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
     rows = compare(agents, run_dirs, controllers, args.scenarios, args.n, args.seed, Path(args.out),
                    progress=not args.no_progress, optimum=checked_optimum(args), T_cons=args.T_con)  # fmt: skip
     print_blocks(rows, EVAL_COLUMNS)
+    if table_notes(rows):
+        print(table_notes(rows))
     for path in write_results(rows, args.out, "comparison"):
         print(f"wrote {path}")
     for name in ("trajectories.png", "time_series.png", "learning_curves.png"):
@@ -502,7 +569,7 @@ def cmd_imitate(args: argparse.Namespace) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``dwr-gym``."""
-    parser = argparse.ArgumentParser(prog="dwr-gym", description=__doc__.splitlines()[0])
+    parser = Parser(prog="dwr-gym", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     info = sub.add_parser("info", help="versions, the registered env and its defaults")
     info.set_defaults(func=cmd_info)
@@ -529,6 +596,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except UsageError as error:
         print(f"dwr-gym {args.command}: error: {error}", file=sys.stderr)
         return 2
+    except OSError as error:  # e.g. a disk that fills up or a directory removed during the run
+        print(f"dwr-gym {args.command}: error: {error}", file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":

@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from train.evaluation import RolloutResult, evaluate, evaluate_sets, make_scenario
-from train.plotting import pyplot, save
+from train.plotting import legend_outside, pyplot, save
 
 TRAJECTORY_SCENARIO = "paper-fig5"
 TIME_SERIES_INDEX = 4  # psi0 = pi in paper-fig5, the hardest start
@@ -54,8 +54,8 @@ def plot_trajectories(results: dict[str, RolloutResult], labels: tuple[str, ...]
             ax.plot(tr["x"][:, i], tr["y"][:, i], linewidth=1.2, label=start)
         ax.plot([0.8], [0.0], "k*", markersize=10)
         ax.set_title(f"{label}: {result.success.mean():.0%} before T_con", fontsize=9)
-        ax.set_aspect("equal")
-    axes.flat[0].legend(fontsize=6, loc="lower left")
+        ax.set(aspect="equal", xlabel="x [m]", ylabel="y [m]")
+    legend_outside(axes.flat[n - 1], title="initial heading", fontsize=7)
     for ax in list(axes.flat)[n:]:
         ax.set_visible(False)
     fig.suptitle("Trajectories from the eight Figure 5 headings (T_con = 20 s)")
@@ -76,7 +76,7 @@ def plot_time_series(results: dict[str, RolloutResult], path: Path) -> None:
     for ax, unit in zip(axes, ("d [m]", "u [m/s]", "omega [rad/s]"), strict=True):
         ax.axvline(20.0, color="k", linestyle="--", linewidth=1)
         ax.set(xlabel="t [s]", ylabel=unit)
-    axes[0].legend(fontsize=8)
+    legend_outside(axes[-1])
     fig.suptitle("Start (0, 0, pi), goal (0.8, 0, 0), T_con = 20 s")
     save(fig, path, dpi=110)
 
@@ -96,8 +96,8 @@ def plot_learning_curves(run_dirs: dict[str, Path], path: Path) -> None:
         steps = [float(r["timesteps"]) for r in rows]
         for ax, key in zip(axes, ("success_rate", "final_heading_error_mean", "return_mean"), strict=True):
             ax.plot(steps, [float(r[key]) for r in rows], marker="o", markersize=3, label=label)
-    for ax, title in zip(axes, ("success rate (arrival before T_con)", "final |psi - psi_d| [rad]", "return"),
-                         strict=True):  # fmt: skip
-        ax.set(xlabel="env steps", title=title)
-    axes[0].legend(fontsize=8)
+    for ax, title, unit in zip(axes, ("success rate (arrival before T_con)", "final |psi - psi_d|", "return"),
+                               ("fraction of episodes", "[rad]", "return per episode [-]"), strict=True):  # fmt: skip
+        ax.set(xlabel="env steps", ylabel=unit, title=title)
+    legend_outside(axes[-1])
     save(fig, path, dpi=110)

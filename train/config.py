@@ -10,13 +10,19 @@ from __future__ import annotations
 import ast
 import dataclasses
 import inspect
-import math
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from dwr_gym.validation import as_bool, as_choice, as_float, as_int
+
 ALGORITHMS: tuple[str, ...] = ("ppo", "sac", "td3")
 ENV_ID = "DWRPointStabilization-v0"
+ENV_SECTION = re.compile(r"^(dwr_gym:)?DWRPointStabilization-v\d+$")
+MAX_TIMESTEPS = 10**10
+MAX_TRAIN_ENVS = 4096
+"""More training envs than this give rollouts of little use and risk exhausting memory; larger values are refused."""
 ZOO_KEYS_UNSUPPORTED = ("normalize", "frame_stack", "env_wrapper", "callback", "vec_env_wrapper")
 
 
@@ -43,44 +49,62 @@ class TrainConfig:
     env_kwargs: dict[str, Any] = field(
         default_factory=dict, metadata={"help": "env keywords KEY=VALUE, e.g. T_con=25 heading_weight=5"}
     )
-    hyperparams: str | None = option(None, "YAML file of hyperparameters in rl-zoo3's format")
+    hyperparams: str | None = option(
+        None, "YAML file of hyperparameters in rl-zoo3's format, and/or KEY=VALUE overrides (e.g. learning_rate=1e-4)"
+    )
+    hyperparam_overrides: dict[str, Any] = field(
+        default_factory=dict, metadata={"help": "hyperparameters given as KEY=VALUE on the command line", "cli": False}
+    )
     eval_freq: int = option(20_000, "evaluate every this many env steps on a fixed seeded scenario set")
     eval_episodes: int = option(100, "size of the fixed random scenario set used for evaluation")
     eval_seed: int = option(12345, "seed of the evaluation scenario set (kept apart from the training seed)")
     checkpoint_freq: int = option(50_000, "save a checkpoint every this many env steps")
     run_dir: str | None = option(None, "output directory (default: runs/<algo>[-residual]-seed<seed>)")
-    device: str = option("cpu", "torch device")
+    device: str = option("cpu", "torch device: auto, cpu, cuda, cuda:N or mps; the config records the one used")
     resume: str | None = option(None, "checkpoint (.zip) to continue from; its run's config is reused")
+    overwrite: bool = option(False, "delete the outputs of an earlier run in --run-dir and start afresh")
     progress: bool = option(True, "show a progress bar")
     algo_kwargs: dict[str, Any] = field(
         default_factory=dict, metadata={"help": "resolved hyperparameters (defaults, then the YAML file)", "cli": False}
     )
 
     def validate(self) -> None:
-        """Raise ConfigError naming the option, the value and what is allowed."""
-        if self.algo not in ALGORITHMS:
-            raise ConfigError(f"--algo {self.algo!r} is invalid: expected one of {', '.join(ALGORITHMS)}")
-        positive = ("total_timesteps", "num_envs", "eval_freq", "eval_episodes", "checkpoint_freq")
-        for name in positive:
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise ConfigError(f"--{name.replace('_', '-')} {value!r} is invalid: expected a positive integer")
-        if not (isinstance(self.residual_scale, (int, float)) and 0 < self.residual_scale <= 2):
-            raise ConfigError(f"--residual-scale {self.residual_scale!r} is invalid: expected a number in (0, 2]")
+        """Coerce the options to their types, or raise ConfigError naming the option, the value and what is allowed."""
+        try:
+            self._coerce()
+        except ValueError as error:
+            raise ConfigError(str(error)) from None
         from baselines.controllers import CONTROLLER_NAMES
+        from dwr_gym.params import EnvParams
 
         if self.expert not in CONTROLLER_NAMES:
             raise ConfigError(f"--expert {self.expert!r} is invalid: expected one of {', '.join(CONTROLLER_NAMES)}")
-        from dwr_gym.params import EnvParams
-
         try:
             EnvParams.from_kwargs(**self.env_kwargs)
         except ValueError as error:
-            raise ConfigError(f"invalid env keyword: {error}") from error
+            raise ConfigError(f"invalid env keyword: {error}") from None
         if self.hyperparams is not None and not Path(self.hyperparams).is_file():
             raise ConfigError(f"--hyperparams {self.hyperparams!r} is invalid: no such file")
-        if self.resume is not None and not Path(self.resume).is_file():
-            raise ConfigError(f"--resume {self.resume!r} is invalid: no such checkpoint file")
+        if self.resume is not None and not Path(self.resume).exists():
+            raise ConfigError(f"--resume {self.resume!r} is invalid: no such run directory or checkpoint file")
+        self.device = check_device(self.device)
+
+    def _coerce(self) -> None:
+        self.algo = as_choice("--algo", self.algo, ALGORITHMS)
+        self.total_timesteps = as_int("--total-timesteps", self.total_timesteps, 1, MAX_TIMESTEPS, text=True)
+        self.num_envs = as_int("--num-envs", self.num_envs, 1, MAX_TRAIN_ENVS, text=True)
+        self.seed = as_int("--seed", self.seed, 0, 2**32 - 1, text=True)
+        self.eval_seed = as_int("--eval-seed", self.eval_seed, 0, 2**32 - 1, text=True)
+        self.eval_freq = as_int("--eval-freq", self.eval_freq, 1, MAX_TIMESTEPS, text=True)
+        self.eval_episodes = as_int("--eval-episodes", self.eval_episodes, 1, 100_000, text=True)
+        self.checkpoint_freq = as_int("--checkpoint-freq", self.checkpoint_freq, 1, MAX_TIMESTEPS, text=True)
+        self.residual_scale = as_float(
+            "--residual-scale", self.residual_scale, 0.0, 2.0, low_inclusive=False, text=True
+        )
+        for name in ("residual", "overwrite", "progress"):
+            setattr(self, name, as_bool(f"--{name}", getattr(self, name)))
+        if not isinstance(self.env_kwargs, dict) or not isinstance(self.hyperparam_overrides, dict):
+            raise ValueError("env_kwargs and hyperparam_overrides must be mappings")
 
     def default_run_dir(self) -> str:
         return f"runs/{self.algo}{'-residual' if self.residual else ''}-seed{self.seed}"
@@ -170,19 +194,15 @@ def load_zoo_yaml(path: str) -> dict[str, Any]:
 
     try:
         data = yaml.safe_load(Path(path).read_text())
-    except yaml.YAMLError as error:
-        raise ConfigError(f"--hyperparams {path!r} is invalid: {str(error).splitlines()[0]}") from error
+    except (yaml.YAMLError, UnicodeDecodeError, OSError) as error:
+        raise ConfigError(f"--hyperparams {path!r} is invalid: {str(error).splitlines()[0]}") from None
     if not isinstance(data, dict):
         raise ConfigError(f"--hyperparams {path!r} is invalid: expected a mapping {{{ENV_ID}: {{...}}}}")
-    for key in (ENV_ID, f"dwr_gym:{ENV_ID}"):
-        if key in data:
-            section = data[key]
-            break
-    else:
-        if len(data) == 1:
-            section = next(iter(data.values()))
-        else:
-            raise ConfigError(f"--hyperparams {path!r} is invalid: no section {ENV_ID!r}")
+    sections = [key for key in data if isinstance(key, str) and ENV_SECTION.match(key)]
+    if not sections:
+        found = ", ".join(map(repr, data))[:80]
+        raise ConfigError(f"--hyperparams {path!r} is for another env ({found}): expected a section {ENV_ID!r}")
+    section = data[ENV_ID] if ENV_ID in data else data[sections[0]]
     if not isinstance(section, dict):
         raise ConfigError(f"--hyperparams {path!r} is invalid: the section must be a mapping")
     unsupported = sorted(set(section) & set(ZOO_KEYS_UNSUPPORTED))
@@ -191,21 +211,85 @@ def load_zoo_yaml(path: str) -> dict[str, Any]:
     return dict(section)
 
 
+def parse_overrides(items: list[str]) -> dict[str, Any]:
+    """``KEY=VALUE`` (or rl-zoo3's ``KEY:VALUE``) pairs; VALUE is read as YAML, so 3e-4 and [64, 64] work."""
+    import yaml
+
+    overrides: dict[str, Any] = {}
+    for item in items:
+        positions = [i for i in (item.find("="), item.find(":")) if i >= 0]
+        cut = min(positions) if positions else len(item)
+        key, sep, raw = item[:cut], item[cut : cut + 1], item[cut + 1 :]
+        if not sep or not key.strip() or not raw.strip():
+            raise ConfigError(f"--hyperparams item {item!r} is invalid: expected KEY=VALUE, e.g. learning_rate=1e-4")
+        try:
+            overrides[key.strip()] = yaml.safe_load(raw)
+        except yaml.YAMLError:
+            overrides[key.strip()] = raw
+    return overrides
+
+
 def resolve_hyperparams(config: TrainConfig, explicit: set[str]) -> TrainConfig:
     """Merge defaults, the YAML file and the command line (``explicit`` names the options the user gave)."""
     params = default_hyperparams(config.algo, config.residual)
-    if config.hyperparams is not None:
-        zoo = load_zoo_yaml(config.hyperparams)
-        if "n_timesteps" in zoo and "total_timesteps" not in explicit:
-            config.total_timesteps = int(float(zoo.pop("n_timesteps")))
-        zoo.pop("n_timesteps", None)
-        if "n_envs" in zoo and "num_envs" not in explicit:
-            config.num_envs = int(zoo.pop("n_envs"))
-        zoo.pop("n_envs", None)
-        params.update(zoo_to_sb3(zoo, config.hyperparams))
-    check_algo_kwargs(config.algo, params)
-    config.algo_kwargs = params
+    layers = [load_zoo_yaml(config.hyperparams)] if config.hyperparams is not None else []
+    layers.append(dict(config.hyperparam_overrides))
+    for layer, source in zip(layers, ("YAML", "--hyperparams")[-len(layers) :], strict=True):
+        try:
+            if "n_timesteps" in layer:
+                steps = as_int(f"n_timesteps ({source})", layer.pop("n_timesteps"), 1, MAX_TIMESTEPS, text=True)
+                if "total_timesteps" not in explicit:
+                    config.total_timesteps = steps
+            if "n_envs" in layer:
+                envs = as_int(f"n_envs ({source})", layer.pop("n_envs"), 1, MAX_TRAIN_ENVS, text=True)
+                if "num_envs" not in explicit:
+                    config.num_envs = envs
+        except ValueError as error:
+            raise ConfigError(str(error)) from None
+        if isinstance(layer.get("policy_kwargs"), str):
+            layer["policy_kwargs"] = parse_policy_kwargs(layer["policy_kwargs"])
+        params.update(layer)
+    config.algo_kwargs = check_algo_kwargs(config.algo, params)
     return config
+
+
+ACTIVATIONS = ("nn.Tanh", "nn.ReLU", "nn.ELU", "nn.LeakyReLU", "nn.SiLU", "nn.GELU", "nn.Sigmoid")
+_INT_KEYS = {"n_steps": 1, "batch_size": 1, "n_epochs": 1, "buffer_size": 1, "learning_starts": 0,
+             "gradient_steps": -1, "target_update_interval": 1, "policy_delay": 1, "stats_window_size": 1}  # fmt: skip
+_FLOAT_KEYS = {"gamma": (0.0, 1.0), "gae_lambda": (0.0, 1.0), "tau": (0.0, 1.0), "ent_coef": (0.0, 1e6),
+               "vf_coef": (0.0, 1e6), "max_grad_norm": (0.0, 1e6), "clip_range": (0.0, 1e6),
+               "action_noise_sigma": (0.0, 10.0), "target_policy_noise": (0.0, 10.0),
+               "target_noise_clip": (0.0, 10.0)}  # fmt: skip
+
+
+def _check_policy_kwargs(value: Any) -> dict[str, Any]:
+    if not isinstance(value, dict):
+        raise ConfigError(f"policy_kwargs={value!r} is invalid: expected a mapping such as dict(net_arch=[64, 64])")
+    kwargs = dict(value)
+    arch = kwargs.get("net_arch")
+    layers = list(arch.values()) if isinstance(arch, dict) else [arch]
+    for sizes in layers if arch is not None else []:
+        if not isinstance(sizes, list) or not sizes:
+            raise ConfigError(f"policy_kwargs net_arch={arch!r} is invalid: expected a list of layer sizes")
+        try:
+            [as_int("net_arch layer", size, 1, 65536) for size in sizes]
+        except ValueError as error:
+            raise ConfigError(f"policy_kwargs net_arch={arch!r} is invalid: {error}") from None
+    if "activation_fn" in kwargs:
+        name = str(kwargs["activation_fn"])
+        name = name if name.startswith("nn.") else f"nn.{name.split('.')[-1]}"
+        if name not in ACTIVATIONS:
+            raise ConfigError(
+                f"policy_kwargs activation_fn={kwargs['activation_fn']!r} is invalid: expected one of "
+                f"{', '.join(ACTIVATIONS)}"
+            )
+        kwargs["activation_fn"] = name
+    if "log_std_init" in kwargs:
+        try:
+            kwargs["log_std_init"] = as_float("log_std_init", kwargs["log_std_init"], -20.0, 5.0, text=True)
+        except ValueError as error:
+            raise ConfigError(f"policy_kwargs {error}") from None
+    return kwargs
 
 
 def algorithm_class(algo: str) -> Any:
@@ -215,23 +299,72 @@ def algorithm_class(algo: str) -> Any:
     return {"ppo": stable_baselines3.PPO, "sac": stable_baselines3.SAC, "td3": stable_baselines3.TD3}[algo]
 
 
-def check_algo_kwargs(algo: str, params: dict[str, Any]) -> None:
-    """Reject hyperparameters the algorithm does not take, before any training starts."""
-    accepted = set(inspect.signature(algorithm_class(algo).__init__).parameters) - {"self", "env"}
+def check_algo_kwargs(algo: str, params: dict[str, Any]) -> dict[str, Any]:
+    """The hyperparameters coerced to their types; unknown or ill-typed ones raise ConfigError before any work."""
+    accepted = set(inspect.signature(algorithm_class(algo).__init__).parameters) - {"self", "env", "device", "seed"}
     accepted |= {"action_noise_sigma"}
     unknown = sorted(set(params) - accepted)
     if unknown:
         raise ConfigError(f"hyperparameter(s) {unknown} are not accepted by {algo.upper()}")
-    lr = params.get("learning_rate")
-    if isinstance(lr, str) and not (lr.startswith("lin_") and _is_number(lr[4:])):
-        raise ConfigError(f"learning_rate {lr!r} is invalid: expected a number or 'lin_<number>'")
-
-
-def _is_number(text: str) -> bool:
+    checked = dict(params)
     try:
-        return math.isfinite(float(text))
-    except ValueError:
-        return False
+        for key, low in _INT_KEYS.items():
+            if key in checked:
+                checked[key] = as_int(key, checked[key], low, 10**9, text=True)
+        for key, (low, high) in _FLOAT_KEYS.items():
+            if key in checked and not (key == "ent_coef" and isinstance(checked[key], str) and "auto" in checked[key]):
+                checked[key] = as_float(key, checked[key], low, high, text=True)
+        lr = checked.get("learning_rate")
+        if isinstance(lr, str) and lr.startswith("lin_"):
+            as_float("learning_rate", lr[4:], 0.0, 1.0, low_inclusive=False, text=True)
+        elif lr is not None:
+            checked["learning_rate"] = as_float("learning_rate", lr, 0.0, 1.0, low_inclusive=False, text=True)
+    except ValueError as error:
+        hint = " or 'lin_<number>'" if "learning_rate" in str(error) else ""
+        raise ConfigError(f"{error}{hint}") from None
+    if "policy_kwargs" in checked:
+        checked["policy_kwargs"] = _check_policy_kwargs(checked["policy_kwargs"] or {})
+    if "policy" in checked and checked["policy"] != "MlpPolicy":
+        raise ConfigError(f"policy={checked['policy']!r} is invalid: expected 'MlpPolicy' (observations are a vector)")
+    return checked
+
+
+def check_device(device: Any) -> str:
+    """The torch device to use: 'auto' picks cuda, then mps, then cpu; an absent device is a ConfigError."""
+    text = str(device).strip().lower()
+    if not re.fullmatch(r"auto|cpu|mps|cuda(:\d+)?", text):
+        raise ConfigError(f"--device {device!r} is invalid: expected auto, cpu, cuda, cuda:N or mps")
+    if text == "cpu":
+        return text
+    import torch
+
+    cuda, mps = (
+        torch.cuda.is_available(),
+        bool(getattr(torch.backends, "mps", None)) and torch.backends.mps.is_available(),
+    )
+    if text == "auto":
+        return "cuda" if cuda else "mps" if mps else "cpu"
+    if text == "mps" and not mps:
+        raise ConfigError("--device 'mps' is invalid: this machine has no MPS (Apple GPU) device; use cpu or auto")
+    if text.startswith("cuda"):
+        if not cuda:
+            raise ConfigError(f"--device {text!r} is invalid: torch sees no CUDA device here; use cpu or auto")
+        index = int(text.partition(":")[2] or 0)
+        if index >= torch.cuda.device_count():
+            raise ConfigError(f"--device {text!r} is invalid: only {torch.cuda.device_count()} CUDA device(s)")
+    return text
+
+
+def rollout_rounding(config: TrainConfig) -> str | None:
+    """A note when PPO's rollouts round the budget up (it collects n_steps * num_envs steps per update)."""
+    if config.algo != "ppo":
+        return None
+    chunk = int(config.algo_kwargs.get("n_steps", 2048)) * config.num_envs
+    rounded = -(-config.total_timesteps // chunk) * chunk
+    if rounded == config.total_timesteps:
+        return None
+    return (f"note: PPO collects n_steps * num_envs = {chunk} steps per update, so --total-timesteps "
+            f"{config.total_timesteps} runs {rounded} steps")  # fmt: skip
 
 
 def build_algo_kwargs(params: dict[str, Any]) -> dict[str, Any]:

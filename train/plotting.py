@@ -18,8 +18,15 @@ def pyplot() -> Any:
     return plt
 
 
+def legend_outside(ax: Any, below: bool = False, **kwargs: Any) -> None:
+    """The legend to the right of ``ax`` (or below it), outside the plotted data."""
+    place = {"loc": "upper center", "bbox_to_anchor": (0.5, -0.2)} if below else {
+        "loc": "upper left", "bbox_to_anchor": (1.02, 1.0)}  # fmt: skip
+    ax.legend(borderaxespad=0.0, **place, **{"fontsize": 8, **kwargs})
+
+
 def save(fig: Any, path: Path, dpi: int = 120) -> None:
-    """Lay out, write and close a figure."""
+    """Lay out, write (legends outside the axes included) and close a figure."""
     fig.tight_layout()
-    fig.savefig(path, dpi=dpi)
+    fig.savefig(path, dpi=dpi, bbox_inches="tight")
     pyplot().close(fig)

@@ -17,7 +17,7 @@ from baselines.controllers import PTCParams
 from dwr_gym import model
 from train.evaluation import FIG5_HEADINGS, RolloutResult, evaluate, make_scenario
 from train.optimum import casadi_available
-from train.plotting import pyplot, save
+from train.plotting import legend_outside, pyplot, save
 
 FIG6_T_CON = (20.0, 25.0, 30.0, 35.0)
 FIG8_T_CON = (25.0, 50.0)
@@ -72,7 +72,7 @@ def reproduce(out_dir: str | Path = "results/reproduce", dt: float = 0.01, gif: 
     ax_a.set(xlabel="x [m]", ylabel="y [m]", title="(a) motion trajectory", aspect="equal")
     ax_b.axvline(20.0, color="k", linestyle="--", linewidth=1)
     ax_b.set(xlabel="t [s]", ylabel="e_psi [rad]", title="(b) orientation error (6)")
-    ax_a.legend(fontsize=7)
+    legend_outside(ax_b, fontsize=7)
     fig.suptitle("Figure 5: any initial yaw angle, PTC with K1=2, K2=10, T_con=20 s")
     save(fig, out / "figure5.png")
     worst = float(np.nanmax(fig5.arrival_time))
@@ -97,12 +97,14 @@ def reproduce(out_dir: str | Path = "results/reproduce", dt: float = 0.01, gif: 
         assert tr is not None
         arrivals.append(float(result.arrival_time[0]))
         line = ax_a.plot(tr["time"][:, 0], tr["distance"][:, 0], label=f"T_con = {T_con:.0f} s")[0]
-        ax_b.semilogy(tr["time"][:, 0], np.maximum(tr["lyapunov"][:, 0], 1e-8), color=line.get_color())
+        ax_b.semilogy(
+            tr["time"][:, 0], np.maximum(tr["lyapunov"][:, 0], 1e-8), color=line.get_color(), label=line.get_label()
+        )
         for ax in (ax_a, ax_b):
             ax.axvline(T_con, color=line.get_color(), linestyle="--", linewidth=1)
     ax_a.set(xlabel="t [s]", ylabel="d [m]", title="(a) distance (2)")
-    ax_b.set(xlabel="t [s]", ylabel="L", title="(b) Lyapunov function (21)")
-    ax_a.legend()
+    ax_b.set(xlabel="t [s]", ylabel="L [m^2, rad^2]", title="(b) Lyapunov function (21)")
+    legend_outside(ax_b)
     fig.suptitle("Figure 6: different prescribed times, psi0 = pi")
     save(fig, out / "figure6.png")
     arr = np.array(arrivals)
@@ -127,7 +129,7 @@ def reproduce(out_dir: str | Path = "results/reproduce", dt: float = 0.01, gif: 
     for ax, title, unit in zip(axes, ("(a) distance", "(b) linear velocity", "(c) angular velocity"),
                                ("d [m]", "u [m/s]", "omega [rad/s]"), strict=True):  # fmt: skip
         ax.set(xlabel="t [s]", ylabel=unit, title=title)
-    axes[0].legend()
+    legend_outside(axes[-1])
     fig.suptitle("Figure 7: start (-0.4, 0), psi0 = -178 deg, goal (0.8, 0), T_con = 70 s")
     save(fig, out / "figure7.png")
     peaks = {name: float(r.peak_linear_velocity[0]) for name, r in fig7.items()}
@@ -161,8 +163,8 @@ def reproduce(out_dir: str | Path = "results/reproduce", dt: float = 0.01, gif: 
         ax_b.plot(tr["time"][1:, 0], np.cumsum((u**2 + w**2) * dt), **style)
     ax_a.plot([0.8], [0.0], "k*", markersize=12)
     ax_a.set(xlabel="x [m]", ylabel="y [m]", title="(a) trajectories", aspect="equal")
-    ax_b.set(xlabel="t [s]", ylabel="integral of u^2 + omega^2 [m^2/s + rad^2/s]", title="(b) energy")
-    ax_b.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0))
+    ax_b.set(xlabel="t [s]", ylabel="integral of u^2 + omega^2 dt [m^2/s, rad^2/s]", title="(b) energy")
+    legend_outside(ax_b)
     fig.suptitle("Figure 9: trajectory and energy consumption")
     save(fig, out / "figure9.png")
     if optimal7 is not None:
@@ -185,7 +187,7 @@ def reproduce(out_dir: str | Path = "results/reproduce", dt: float = 0.01, gif: 
         earlier.append(times)
         ax.axvline(T_con, color="k", linestyle="--", linewidth=1)
         ax.set(xlabel="t [s]", ylabel="d [m]", title=f"T_con = {T_con:.0f} s")
-        ax.legend(fontsize=8)
+        legend_outside(ax, below=True)
     fig.suptitle("Figure 8: settling time, fractional against conventional PTC (psi0 = pi)")
     save(fig, out / "figure8.png")
     claims.append(Claim(

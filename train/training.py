@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+import os
 import sys
 import time
 from collections.abc import Callable
@@ -12,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from train.config import ConfigError, TrainConfig, algorithm_class, build_algo_kwargs
+from train.config import ConfigError, TrainConfig, algorithm_class, build_algo_kwargs, rollout_rounding
 
 CONFIG_FILE = "config.yaml"
 MODEL_FILE = "model.zip"
@@ -80,11 +81,45 @@ def as_policy(model: Any, config: TrainConfig) -> Any:
     return ResidualPolicy(model, make_expert(config), config.residual_scale)
 
 
-def make_eval_callback(
-    config: TrainConfig, run_dir: Path, on_evaluation: Callable[[dict[str, Any]], None] | None = None
+STATE_FILE = "run_state.json"
+RESUME_FILE = "resume_state.pkl"
+LOCK_FILE = ".lock"
+RUN_OUTPUTS = (MODEL_FILE, "best_model.zip", EVAL_FILE, CONFIG_FILE, STATE_FILE, RESUME_FILE, "replay_buffer.pkl",
+               "checkpoints", "tb")  # fmt: skip
+
+
+class RunDirError(ConfigError):
+    """A run directory that cannot be used as asked (in use, or holding another run)."""
+
+
+class InterruptRequestedError(Exception):
+    """Raised by the run callback at a rollout boundary after Ctrl-C, once everything is saved."""
+
+
+def read_state(run_dir: Path) -> dict[str, Any]:
+    """The run's progress: timesteps and wall time of the last save, best score, whether it finished."""
+    path = run_dir / STATE_FILE
+    return json.loads(path.read_text()) if path.is_file() else {}
+
+
+def resume_command(run_dir: Path) -> str:
+    return f"dwr-gym train --resume {run_dir}"
+
+
+def make_run_callback(
+    config: TrainConfig,
+    run_dir: Path,
+    env: Any,
+    state: dict[str, Any],
+    on_evaluation: Callable[[dict[str, Any]], None] | None = None,
 ) -> Any:
-    """A callback that evaluates on a fixed seeded scenario set, logs to TensorBoard and evaluations.csv,
-    and hands each evaluation's row to ``on_evaluation`` (how ``dwr-gym sweep`` reports to Ray Tune)."""
+    """Evaluation on a fixed seeded scenario set (TensorBoard, evaluations.csv, best_model.zip) and checkpoints;
+    each evaluation's row also goes to ``on_evaluation`` (how ``dwr-gym sweep`` reports to Ray Tune).
+
+    Checkpoints are taken at rollout boundaries, with the env and the random generators, so that a run
+    resumed from one continues exactly as the uninterrupted run would have. Ctrl-C sets a flag; the next
+    boundary saves a checkpoint and raises :class:`InterruptRequestedError`.
+    """
     from stable_baselines3.common.callbacks import BaseCallback
 
     from dwr_gym.params import EnvParams
@@ -92,34 +127,68 @@ def make_eval_callback(
 
     params = EnvParams.from_kwargs(**config.env_kwargs)
     scenario = make_scenario("random", n=config.eval_episodes, seed=config.eval_seed, env_kwargs=config.env_kwargs)
-    every = max(1, config.eval_freq // config.num_envs)
 
-    class ScenarioEvalCallback(BaseCallback):
+    class RunCallback(BaseCallback):
         def __init__(self) -> None:
             super().__init__()
-            self.best = -np.inf
-            self.start = time.time()
+            self.best = float(state.get("best_score", -np.inf))
+            self.start = time.time() - float(state.get("wall_time", 0.0))
+            self.last_eval = int(state.get("last_eval", -1))
+            self.last_checkpoint = int(state.get("timesteps", 0))
             self.csv_path = run_dir / EVAL_FILE
+            self.interrupt_requested = False
 
         def _on_training_start(self) -> None:
             if not self.csv_path.exists():
                 with self.csv_path.open("w", newline="") as handle:
                     csv.writer(handle).writerow(EVAL_FIELDS)
-            self._evaluate()
+            if self.last_eval < 0:
+                self._evaluate()
 
         def _on_step(self) -> bool:
-            if self.n_calls % every == 0:
+            if self.num_timesteps // config.eval_freq > max(self.last_eval, 0) // config.eval_freq:
                 self._evaluate()
             return True
 
+        def _on_rollout_start(self) -> None:
+            due = self.num_timesteps - self.last_checkpoint >= config.checkpoint_freq
+            if self.num_timesteps > self.last_checkpoint and (due or self.interrupt_requested):
+                self.checkpoint()
+            if self.interrupt_requested:
+                raise InterruptRequestedError
+
+        def wall_time(self) -> float:
+            return round(time.time() - self.start, 2)
+
+        def checkpoint(self, finished: bool = False) -> None:
+            """Save model.zip, a numbered checkpoint, the env and generators, then the run state (last)."""
+            import pickle
+            import random
+
+            import torch
+
+            steps = self.num_timesteps
+            (run_dir / "checkpoints").mkdir(exist_ok=True)
+            self.model.save(run_dir / "checkpoints" / f"{config.algo}_{steps}_steps.zip")
+            if hasattr(self.model, "replay_buffer") and self.model.replay_buffer is not None:
+                self.model.save_replay_buffer(run_dir / "replay_buffer.pkl")
+            generators = {"torch": torch.get_rng_state(), "numpy": np.random.get_state(), "random": random.getstate()}
+            with (run_dir / RESUME_FILE).open("wb") as handle:
+                pickle.dump({"timesteps": steps, "env": env_snapshot(env), "generators": generators}, handle)
+            self.model.save(run_dir / MODEL_FILE)
+            self.last_checkpoint = steps
+            write_state(run_dir, {"timesteps": steps, "wall_time": self.wall_time(), "best_score": self.best,
+                                  "last_eval": self.last_eval, "finished": finished})  # fmt: skip
+
         def _evaluate(self) -> None:
             summary = rollout(as_policy(self.model, config), params, scenario.starts, scenario.goals).summary()
-            row = {"timesteps": self.num_timesteps, "wall_time": round(time.time() - self.start, 2),
+            row = {"timesteps": self.num_timesteps, "wall_time": self.wall_time(),
                    **{k: summary[k] for k in EVAL_FIELDS[2:]}}  # fmt: skip
             with self.csv_path.open("a", newline="") as handle:
                 csv.writer(handle).writerow([row[k] for k in EVAL_FIELDS])
             for key in EVAL_FIELDS[2:]:
                 self.logger.record(f"eval/{key}", row[key])
+            self.last_eval = self.num_timesteps
             score = summary["return_mean"]
             if score > self.best:
                 self.best = score
@@ -127,16 +196,155 @@ def make_eval_callback(
             if on_evaluation is not None:
                 on_evaluation(row)
 
-    return ScenarioEvalCallback()
+    return RunCallback()
 
 
-def prepare_run_dir(config: TrainConfig) -> Path:
-    """The run directory; refuses to overwrite a finished run unless resuming into it."""
+def _layers(env: Any) -> list[Any]:
+    """The wrappers of a VecEnv stack, outermost first, down to the native vector env."""
+    layers = [env]
+    while hasattr(layers[-1], "venv"):
+        layers.append(layers[-1].venv)
+    return layers
+
+
+def env_snapshot(env: Any) -> list[dict[str, Any]]:
+    """The state of every layer of the training env (robots, generators, episode statistics), picklable."""
+    import pickle
+
+    def picklable(value: Any) -> bool:
+        try:
+            pickle.dumps(value)
+        except Exception:  # e.g. a compiled CasADi solver in the 'optimal' expert: rebuilt from the config
+            return False
+        return True
+
+    skip = ("venv", "class_attributes")
+    return [{k: v for k, v in vars(layer).items() if k not in skip and picklable(v)} for layer in _layers(env)]
+
+
+def restore_env(env: Any, snapshot: list[dict[str, Any]]) -> None:
+    """Put a fresh training env, built from the same config, back in the state of ``snapshot``."""
+    for layer, attributes in zip(_layers(env), snapshot, strict=True):
+        for key, value in attributes.items():
+            setattr(layer, key, value)
+
+
+def write_state(run_dir: Path, state: dict[str, Any]) -> None:
+    """Write run_state.json atomically (a kill leaves the old or the new file, never half of one)."""
+    tmp = run_dir / (STATE_FILE + ".tmp")
+    tmp.write_text(json.dumps(state, indent=2) + "\n")
+    tmp.replace(run_dir / STATE_FILE)
+
+
+def checkpoint_steps(path: Path, state: dict[str, Any]) -> int | None:
+    """The step count of a checkpoint: from its name (algo_<steps>_steps.zip), or the run state for model.zip."""
+    import re
+
+    match = re.search(r"_(\d+)_steps\.zip$", path.name)
+    if match:
+        return int(match.group(1))
+    return int(state["timesteps"]) if path.name == MODEL_FILE and "timesteps" in state else None
+
+
+def resume_config(given: dict[str, Any]) -> TrainConfig:
+    """The saved config of the run to resume (``given['resume']``: its directory or its newest checkpoint)."""
+    from train.agents import AgentLoadError, find_run_dir
+
+    target = Path(given["resume"])
+    if not target.exists():
+        raise ConfigError(f"--resume {str(target)!r} is invalid: no such run directory or checkpoint")
+    allowed = {"resume", "total_timesteps", "progress", "device"}
+    extra = sorted(set(given) - allowed)
+    if extra:
+        flags = ", ".join("--" + name.replace("_", "-") for name in extra)
+        raise ConfigError(f"--resume reuses the run's saved config; {flags} cannot be changed (only "
+                          f"--total-timesteps, --device, --no-progress)")  # fmt: skip
+    try:
+        run_dir = find_run_dir(target if target.is_dir() else target.parent)
+    except AgentLoadError as error:
+        raise ConfigError(str(error)) from None
+    state = read_state(run_dir)
+    if "timesteps" not in state or not (run_dir / MODEL_FILE).is_file():
+        raise ConfigError(f"--resume {str(target)!r} is invalid: {str(run_dir)!r} has no checkpoint to resume from")
+    checkpoint = target if target.is_file() else run_dir / MODEL_FILE
+    steps = checkpoint_steps(checkpoint, state)
+    if steps != state["timesteps"]:
+        raise ConfigError(
+            f"--resume {str(target)!r} is invalid: the run is at {state['timesteps']} steps and this checkpoint "
+            f"at {steps}; resuming from it would replace newer results. Resume with: {resume_command(run_dir)}"
+        )
+    config = load_config(run_dir)
+    for key in ("total_timesteps", "progress", "device"):
+        if key in given:
+            setattr(config, key, given[key])
+    config.resume, config.run_dir = str(checkpoint), str(run_dir)
+    config.validate()
+    if config.total_timesteps <= state["timesteps"]:
+        raise ConfigError(
+            f"--total-timesteps {config.total_timesteps} is invalid: the run has done {state['timesteps']} steps "
+            "already; give a larger budget to continue it"
+        )
+    return config
+
+
+class RunLock:
+    """An exclusive lock on a run directory, held for the whole run and released by the OS if the process dies."""
+
+    def __init__(self, run_dir: Path) -> None:
+        self.path = run_dir / LOCK_FILE
+        self.handle: Any = None
+
+    def acquire(self) -> None:
+        self.handle = self.path.open("a+")
+        try:
+            import fcntl
+
+            fcntl.flock(self.handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except ImportError:  # no fcntl (Windows): no lock
+            return
+        except OSError:
+            self.handle.seek(0)
+            owner = self.handle.read().strip() or "another process"
+            self.handle.close()
+            raise RunDirError(
+                f"--run-dir {str(self.path.parent)!r} is in use by a running training ({owner})"
+            ) from None
+        self.handle.seek(0)
+        self.handle.truncate()
+        self.handle.write(f"pid {os.getpid()}")
+        self.handle.flush()
+
+    def release(self) -> None:
+        if self.handle is not None:
+            self.handle.close()
+            self.handle = None
+
+
+def prepare_run_dir(config: TrainConfig) -> tuple[Path, RunLock]:
+    """The run directory, locked; refuses one holding another run unless resuming it or --overwrite."""
+    import shutil
+
     run_dir = Path(config.run_dir or config.default_run_dir())
-    if config.resume is None and (run_dir / MODEL_FILE).exists():
-        raise ConfigError(f"--run-dir {str(run_dir)!r} already holds a trained model: choose another or use --resume")
-    run_dir.mkdir(parents=True, exist_ok=True)
-    return run_dir
+    if run_dir.exists() and not run_dir.is_dir():
+        raise RunDirError(f"--run-dir {str(run_dir)!r} is invalid: it is a file, expected a directory")
+    try:
+        run_dir.mkdir(parents=True, exist_ok=True)
+        lock = RunLock(run_dir)
+        lock.acquire()
+    except OSError as error:
+        raise RunDirError(f"--run-dir {str(run_dir)!r} is not writable: {error.strerror or error}") from None
+    leftovers = sorted(name for name in RUN_OUTPUTS if (run_dir / name).exists())
+    if leftovers and config.resume is None:
+        if not config.overwrite:
+            lock.release()
+            raise RunDirError(
+                f"--run-dir {str(run_dir)!r} already holds a run ({', '.join(leftovers)}): continue it with "
+                f"{resume_command(run_dir)}, choose another --run-dir, or add --overwrite to delete it"
+            )
+        for name in leftovers:
+            path = run_dir / name
+            shutil.rmtree(path) if path.is_dir() else path.unlink()
+    return run_dir, lock
 
 
 def train(
@@ -144,47 +352,96 @@ def train(
     command: list[str] | None = None,
     on_evaluation: Callable[[dict[str, Any]], None] | None = None,
 ) -> Path:
-    """Train as configured; returns the run directory. Ctrl-C saves the current model and re-raises.
+    """Train as configured; returns the run directory. ``on_evaluation`` receives each periodic
+    evaluation as a dict of EVAL_FIELDS (e.g. to report it to a tuner).
 
-    ``on_evaluation`` receives each periodic evaluation as a dict of EVAL_FIELDS (e.g. to report it to a tuner).
+    Ctrl-C saves a checkpoint at the next rollout boundary (a second Ctrl-C saves at once), prints the
+    command that resumes, and raises KeyboardInterrupt.
     """
-    from stable_baselines3.common.callbacks import CallbackList, CheckpointCallback
+    import pickle
+    import random
+    import signal
+    import threading
+
+    import torch
 
     config.validate()
-    run_dir = prepare_run_dir(config)
-    config.run_dir = str(run_dir)
-    algo = algorithm_class(config.algo)
-    env = make_training_env(config)
-    if config.resume is not None:
-        model = algo.load(config.resume, env=env, device=config.device, tensorboard_log=str(run_dir / "tb"))
-        model.set_random_seed(config.seed)
-    else:
-        model = algo(env=env, seed=config.seed, device=config.device, tensorboard_log=str(run_dir / "tb"), verbose=0,
-                     **build_algo_kwargs(config.algo_kwargs))  # fmt: skip
-        if config.residual:
-            from train.residual import zero_init_last_layer
-
-            zero_init_last_layer(model)
-    save_config(config, run_dir, {"command": command or sys.argv})
-    callbacks = CallbackList([
-        make_eval_callback(config, run_dir, on_evaluation),
-        CheckpointCallback(max(1, config.checkpoint_freq // config.num_envs), str(run_dir / "checkpoints"),
-                           name_prefix=config.algo),
-    ])  # fmt: skip
-    remaining = config.total_timesteps - (model.num_timesteps if config.resume else 0)
-    start = time.time()
+    run_dir, lock = prepare_run_dir(config)
     try:
-        if remaining > 0:
-            model.learn(remaining, callback=callbacks, progress_bar=config.progress,
+        config.run_dir = str(run_dir)
+        note = rollout_rounding(config)
+        if note and config.resume is None:
+            print(note, file=sys.stderr)
+        algo = algorithm_class(config.algo)
+        state = read_state(run_dir) if config.resume is not None else {}
+        if config.resume is not None:
+            with (run_dir / RESUME_FILE).open("rb") as handle:
+                saved = pickle.load(handle)
+            env = make_training_env(config)
+            restore_env(env, saved["env"])
+            model = algo.load(
+                config.resume, env=env, device=config.device, tensorboard_log=str(run_dir / "tb"), force_reset=False
+            )  # continue the saved episodes
+            if (run_dir / "replay_buffer.pkl").is_file() and hasattr(model, "load_replay_buffer"):
+                model.load_replay_buffer(run_dir / "replay_buffer.pkl")
+            torch.set_rng_state(saved["generators"]["torch"])
+            np.random.set_state(saved["generators"]["numpy"])
+            random.setstate(saved["generators"]["random"])
+            truncate_log(run_dir / EVAL_FILE, model.num_timesteps)
+        else:
+            env = make_training_env(config)
+            try:
+                model = algo(env=env, seed=config.seed, device=config.device, tensorboard_log=str(run_dir / "tb"),
+                             verbose=0, **build_algo_kwargs(config.algo_kwargs))  # fmt: skip
+            except (TypeError, ValueError, AssertionError) as error:
+                raise ConfigError(f"hyperparameters rejected by {config.algo.upper()}: {error}") from None
+            if config.residual:
+                from train.residual import zero_init_last_layer
+
+                zero_init_last_layer(model)
+        save_config(config, run_dir, {"command": command or sys.argv})
+        callback = make_run_callback(config, run_dir, env, state, on_evaluation)
+        remaining = config.total_timesteps - model.num_timesteps
+
+        def on_sigint(signum: int, frame: Any) -> None:
+            if callback.interrupt_requested:
+                raise KeyboardInterrupt
+            callback.interrupt_requested = True
+            print("\ninterrupt: saving at the end of this rollout (Ctrl-C again to stop at once)", file=sys.stderr)
+
+        main_thread = threading.current_thread() is threading.main_thread()
+        previous = signal.signal(signal.SIGINT, on_sigint) if main_thread else None
+        start = time.time()
+        try:
+            model.learn(remaining, callback=callback, progress_bar=config.progress,
                         reset_num_timesteps=config.resume is None, tb_log_name=config.algo)  # fmt: skip
-    except KeyboardInterrupt:
-        model.save(run_dir / MODEL_FILE)
-        print(f"\ninterrupted at {model.num_timesteps} steps: saved {run_dir / MODEL_FILE}", file=sys.stderr)
-        raise
+        except (InterruptRequestedError, KeyboardInterrupt):
+            if model.num_timesteps > callback.last_checkpoint or not (run_dir / MODEL_FILE).exists():
+                callback.checkpoint()
+            print(f"interrupted at {model.num_timesteps} steps: saved {run_dir / MODEL_FILE}\n"
+                  f"resume with: {resume_command(run_dir)}", file=sys.stderr)  # fmt: skip
+            raise KeyboardInterrupt from None
+        finally:
+            if main_thread:
+                signal.signal(signal.SIGINT, previous)
+            env.close()
+        callback.checkpoint(finished=True)
     finally:
-        env.close()
-    model.save(run_dir / MODEL_FILE)
+        lock.release()
     elapsed = time.time() - start
-    print(f"trained {model.num_timesteps} steps in {elapsed:.0f} s ({model.num_timesteps / max(elapsed, 1e-9):.0f} "
+    done = model.num_timesteps - int(state.get("timesteps", 0))
+    print(f"trained {model.num_timesteps} steps ({done} in {elapsed:.0f} s, {done / max(elapsed, 1e-9):.0f} "
           f"steps/s); saved {run_dir / MODEL_FILE}")  # fmt: skip
     return run_dir
+
+
+def truncate_log(path: Path, steps: int) -> None:
+    """Drop evaluation rows logged after the checkpoint a run resumes from, so the log stays monotonic."""
+    if not path.is_file():
+        return
+    with path.open(newline="") as handle:
+        rows = list(csv.reader(handle))
+    kept = [rows[0], *(row for row in rows[1:] if row and int(float(row[0])) <= steps)]
+    if len(kept) != len(rows):
+        with path.open("w", newline="") as handle:
+            csv.writer(handle).writerows(kept)
