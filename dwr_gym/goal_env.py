@@ -145,9 +145,11 @@ class DWRPointStabilizationGoalEnv(gym.Env[dict[str, NDArray[np.float32]], NDArr
         goal_low = np.array([-reach, -reach, -1, -1], dtype=np.float32)
         goal_high = np.array([reach, reach, 1, 1], dtype=np.float32)
         goal_space = spaces.Box(goal_low, goal_high, dtype=np.float32)
-        self.observation_space = spaces.Dict({
-            "observation": spaces.Box(np.append(goal_low, np.float32(0.0)),
-                                      np.append(goal_high, np.float32(self.params.horizon_factor)), dtype=np.float32),
+        self._observation_box = spaces.Box(np.append(goal_low, np.float32(0.0)),
+                                           np.append(goal_high, np.float32(self.params.horizon_factor)),
+                                           dtype=np.float32)  # fmt: skip
+        self.observation_space = spaces.Dict({  # type: ignore[assignment]
+            "observation": self._observation_box,
             "achieved_goal": goal_space,
             "desired_goal": goal_space,
         })  # fmt: skip
@@ -165,7 +167,7 @@ class DWRPointStabilizationGoalEnv(gym.Env[dict[str, NDArray[np.float32]], NDArr
     def _observe(self) -> dict[str, NDArray[np.float32]]:
         assert self._state is not None
         achieved = pose_to_goal(*self._state.world_pose())
-        space = self.observation_space["observation"]
+        space = self._observation_box
         time_fraction = self._state.step_count * (self.params.dt / self.params.T_con)
         obs = np.clip(np.append(achieved, np.float32(time_fraction)), space.low, space.high)
         desired = pose_to_goal(self._state.goal_x, self._state.goal_y, self._state.goal_psi)

@@ -76,3 +76,23 @@ def test_two_trial_sweep_on_local_ray_then_resume(tmp_path: Path) -> None:
     assert main(args) == 2  # refuses to overwrite a sweep
     assert main([*args, "--resume"]) == 0
     assert [m.stat().st_mtime_ns for m in models] == stamps  # finished runs are not trained again
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [(["--param", "gamma=uniform:1:0"], "--param 'gamma=uniform:1:0' is invalid"),
+     (["--param", "not_a_hyperparameter=1,2"], "not_a_hyperparameter"),
+     (["--search", "optuna"], "--search optuna needs at least one --param"),
+     (["--resources-per-trial", "cpu=-1"], "--resources-per-trial 'cpu=-1' is invalid"),
+     (["--seeds", "0"], "--seeds 0 is invalid")],
+)  # fmt: skip
+def test_bad_sweep_input_is_one_line_before_ray_starts(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], extra: list[str], message: str
+) -> None:
+    pytest.importorskip("ray")
+    from train.cli import main
+
+    assert main(["sweep", "--out", str(tmp_path / "s"), *extra]) == 2
+    err = capsys.readouterr().err.strip()
+    assert message in err and len(err.splitlines()) == 1
+    assert not (tmp_path / "s").exists()

@@ -376,7 +376,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             run_config=tune.RunConfig(name="sweep", storage_path=str(experiment), verbose=1),
         )
     results = tuner.fit()
-    errors = [r.error for r in results if r.error is not None]
+    errors = results.errors
     ray.shutdown()
     report(out, metric, base)
     if errors:
