@@ -187,10 +187,10 @@ def test_bad_settings_name_the_setting_and_the_range(kwargs: dict[str, Any], mes
 @pytest.mark.parametrize(
     ("build", "message"),
     [
-        (lambda: DifferentialDrive(-0.03, 0.16), "wheel_radius=-0.03 is invalid: expected a finite number in (0.0, 10.0]"),
+        (lambda: DifferentialDrive(-0.03, 0.16), "wheel_radius=-0.03 is invalid: expected a finite number in (0, 10]"),
         (lambda: DifferentialDrive(0.03, 0.16, max_wheel_speed=0.0), "max_wheel_speed=0.0 is invalid"),
         (lambda: ActuatorFault(wheel="third"), "ActuatorFault.wheel='third' is invalid: expected 'left' or 'right'"),
-        (lambda: ActuatorFault(fraction=1.5), "ActuatorFault.fraction=1.5 is invalid: expected a finite number in [0.0, 1.0]"),
+        (lambda: ActuatorFault(fraction=1.5), "ActuatorFault.fraction=1.5 is invalid: expected a finite number in [0, 1]"),
         (lambda: InputDelay(-1), "InputDelay.steps=-1 is invalid: expected an integer >= 0"),
         (lambda: MeasurementDropout(1.0), "MeasurementDropout.probability=1.0 is invalid"),
         (lambda: VelocityRandomWalk(0.1, math.nan), "VelocityRandomWalk.angular_intensity=nan is invalid"),

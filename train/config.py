@@ -246,9 +246,7 @@ def resolve_hyperparams(config: TrainConfig, explicit: set[str]) -> TrainConfig:
                     config.num_envs = envs
         except ValueError as error:
             raise ConfigError(str(error)) from None
-        if isinstance(layer.get("policy_kwargs"), str):
-            layer["policy_kwargs"] = parse_policy_kwargs(layer["policy_kwargs"])
-        params.update(layer)
+        params.update(zoo_to_sb3(layer, config.hyperparams if source == "YAML" else "--hyperparams"))
     config.algo_kwargs = check_algo_kwargs(config.algo, params)
     return config
 
