@@ -9,6 +9,7 @@ with the defaults of :data:`V1_DEFAULTS`: T_con drawn per episode and a reward w
 
 from __future__ import annotations
 
+import sys
 from importlib.metadata import PackageNotFoundError, version
 
 import gymnasium
@@ -56,6 +57,11 @@ def register_envs() -> None:
 
 
 register_envs()
+
+if "rl_zoo3.exp_manager" in sys.modules:  # imported by `python -m rl_zoo3.train --gym-packages dwr_gym`
+    from dwr_gym.zoo import use_our_hyperparameters
+
+    use_our_hyperparameters()
 
 __all__ = [
     "ENV_ID",
