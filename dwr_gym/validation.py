@@ -137,7 +137,7 @@ def as_interval(name: str, value: Any, low: float, high: float) -> tuple[float, 
     first, second = _sequence(name, value, 2, expected)
     pair = as_float(f"{name}[0]", first, low, high), as_float(f"{name}[1]", second, low, high)
     if pair[0] > pair[1]:
-        raise ValueError(f"{_show(name, repr(pair))} is invalid: min must not exceed max")
+        raise ValueError(f"{_show(name, _describe(value))} is invalid: min must not exceed max")
     return pair
 
 
