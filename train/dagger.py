@@ -68,6 +68,9 @@ class DaggerConfig:
     """Passes over the data per fit."""
     batch_size: int = 2048
     learning_rate: float = 1e-3
+    near_goal_weight: float = 0.0
+    """Weight each sample by (1 + near_goal_weight * 0.05 m / max(d, 1 cm)) / mean: the last centimetres
+    decide arrival, where the commands are small and an unweighted loss hardly sees their errors."""
     net_arch: list[int] = field(default_factory=lambda: [256, 256])
     """Hidden layers of the actor (ReLU)."""
     workers: int = 2
@@ -228,6 +231,8 @@ def fit(model: Any, data: Dataset, config: DaggerConfig, rng: np.random.Generato
     optimizer = torch.optim.Adam(params, lr=config.learning_rate)
     obs = torch.as_tensor(data[0])
     target = torch.as_tensor(data[1])
+    weight = 1.0 + config.near_goal_weight * 0.05 / torch.clamp(obs[:, 0], min=0.01)
+    weight = (weight / weight.mean())[:, None]
     n = obs.shape[0]
     schedule = torch.optim.lr_scheduler.CosineAnnealingLR(optimizer, config.epochs * math.ceil(n / config.batch_size))
     loss_value = math.nan
@@ -238,7 +243,7 @@ def fit(model: Any, data: Dataset, config: DaggerConfig, rng: np.random.Generato
             index = permutation[begin : begin + config.batch_size]
             features = policy.extract_features(obs[index], policy.pi_features_extractor)
             mean = policy.action_net(policy.mlp_extractor.forward_actor(features))
-            loss = torch.nn.functional.mse_loss(mean, target[index])
+            loss = torch.mean(weight[index] * (mean - target[index]) ** 2)
             optimizer.zero_grad()
             loss.backward()
             optimizer.step()
@@ -297,8 +302,29 @@ def run(config: DaggerConfig, run_dir: Path, command: list[str]) -> Path:
         writer = csv.DictWriter(handle, fieldnames=list(curve[0]))
         writer.writeheader()
         writer.writerows(curve)
+    plot_learning_curve(curve, config.eval_T_con, run_dir / "learning_curve.png")
     print(f"cloned in {time.time() - began:.0f} s from {len(data[0])} samples; saved {run_dir / MODEL_FILE}")
     return run_dir
+
+
+def plot_learning_curve(curve: list[dict[str, Any]], T_cons: tuple[float, ...], path: Path) -> None:
+    """Success, final heading error and energy at each evaluation T_con against the DAgger round."""
+    try:
+        from train.plotting import pyplot, save
+
+        plt = pyplot()
+    except ImportError:  # the plots extra is optional
+        return
+    rounds = [row["round"] for row in curve]
+    fig, axes = plt.subplots(1, 3, figsize=(13, 3.6))
+    labels = ("success (arrival by T_con)", "final |psi - psi_d| [rad]", "energy [m^2/s + rad^2/s]")
+    for ax, key, label in zip(axes, ("success", "heading", "energy"), labels, strict=True):
+        for T in T_cons:
+            ax.plot(rounds, [row[f"{key}_T{int(T)}"] for row in curve], marker="o", label=f"T_con = {T:g} s")
+        ax.set(xlabel="DAgger round (0: demonstrations only)", ylabel=label)
+    axes[0].legend(fontsize=8)
+    fig.suptitle("DAgger on minimum-energy plans: fixed evaluation starts 0.3-3 m away")
+    save(fig, path, dpi=100)
 
 
 def main(argv: list[str] | None = None) -> None:
