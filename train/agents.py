@@ -6,7 +6,11 @@ from pathlib import Path
 from typing import Any
 
 PRETRAINED_DIR = Path(__file__).parent / "pretrained"
-PRETRAINED = {"residual-ppo": PRETRAINED_DIR / "residual_ppo", "ppo": PRETRAINED_DIR / "ppo"}
+PRETRAINED = {
+    "residual-ppo": PRETRAINED_DIR / "residual_ppo",
+    "ppo": PRETRAINED_DIR / "ppo",
+    "dagger": PRETRAINED_DIR / "dagger",
+}
 
 
 class AgentLoadError(Exception):

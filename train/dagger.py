@@ -1,0 +1,343 @@
+"""DAgger on minimum-energy plans: one network that drives to the full pose by any T_con.
+
+The minimum-energy plan of :mod:`baselines.optimal` from a pose with a time left is, by the principle of
+optimality, the same plan as seen from any later state on it, so the optimal command is a function of the
+observation (pose relative to the goal, t / T_con, T_con). This module learns that function:
+
+1. **Demonstrations**: plans from random starts and prescribed times (the env's ``T_con_range`` and
+   ``start_distance``), each arriving at ``arrival_fraction * T_con`` so that the network has a margin
+   before the deadline, sampled at every control period as (observation, normalised command) pairs.
+2. **DAgger rounds**: the network drives; from states it visits, plans are solved again over the time
+   left and added to the data, so it learns to recover from its own errors.
+
+Unlike ``dwr-gym imitate`` (:mod:`train.imitation`, which records the re-planning ``optimal``
+controller under action noise), the labels here are whole plans solved from the states the *network*
+reaches, so the data follows the student's own mistakes (Ross, Gordon, Bagnell 2011).
+
+The network is the actor of a stable-baselines3 PPO policy, saved with a ``config.yaml`` like any
+``dwr-gym train`` run: ``load_agent`` and ``dwr-gym evaluate --agents`` read it, and at run time it is
+the network alone (the optimiser is only used to make the training data). Needs the ``optimal`` and
+``train`` extras.
+
+    python -m train.dagger --run-dir runs/dagger_s0 --seed 0
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import math
+import multiprocessing
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from dwr_gym import V1_DEFAULTS, core, model
+from dwr_gym.params import EnvParams
+from train.config import TrainConfig
+
+#: Observations (M, 10) and normalised commands (M, 2) of demonstration samples.
+Dataset = tuple[NDArray[np.float32], NDArray[np.float32]]
+
+
+@dataclass
+class DaggerConfig:
+    """Everything a DAgger run needs; written into the run's config.yaml (under ``dagger``)."""
+
+    seed: int = 0
+    """Seed of the demonstration starts, the network initialisation and the DAgger rollouts."""
+    episodes: int = 400
+    """Demonstration plans from random starts."""
+    dagger_rounds: int = 2
+    """Rounds of rollouts by the network followed by re-planned labels."""
+    dagger_episodes: int = 200
+    """Network rollouts per DAgger round."""
+    replans_per_episode: int = 3
+    """States per DAgger rollout from which a plan is solved again."""
+    arrival_fraction: float = 0.85
+    """The plans arrive at this fraction of T_con: a margin for the network's errors."""
+    hold_steps: int = 5
+    """Control periods each planned command is held (the optimal controller's grid; < 1 % of energy)."""
+    epochs: int = 40
+    """Passes over the data per fit."""
+    batch_size: int = 2048
+    learning_rate: float = 1e-3
+    near_goal_weight: float = 0.0
+    """Weight each sample by (1 + near_goal_weight * 0.05 m / max(d, 1 cm)) / mean: the last centimetres
+    decide arrival, where the commands are small and an unweighted loss hardly sees their errors."""
+    net_arch: list[int] = field(default_factory=lambda: [256, 256])
+    """Hidden layers of the actor (ReLU)."""
+    workers: int = 2
+    """Solver processes."""
+    eval_episodes: int = 100
+    """Random starts of the evaluation after each fit (the learning curve)."""
+    eval_T_con: tuple[float, ...] = (10.0, 20.0, 40.0, 60.0)
+    """Prescribed times [s] of the evaluation after each fit."""
+    env_kwargs: dict[str, Any] = field(default_factory=lambda: dict(V1_DEFAULTS))
+    """The env the agent is for (DWRPointStabilization-v1's defaults)."""
+
+
+def _solve(job: tuple[tuple[float, float, float], float, float, float, float, int]) -> Any:
+    """(states, commands) of one plan on the env's grid of control periods, or None when there is none."""
+    from baselines.optimal import InfeasibleArrivalTimeError, OptimalControlError, solve_minimum_energy
+
+    start, arrival, dt, u_max, omega_max, hold = job
+    try:
+        plan = solve_minimum_energy(start, arrival, dt, u_max, omega_max, heading=True, hold_steps=hold)
+    except (InfeasibleArrivalTimeError, OptimalControlError):
+        return None
+    commands = np.repeat(plan.commands, hold, axis=0)  # command of every control period
+    x, y, psi = (np.repeat(plan.states[:-1, i], hold) for i in range(3))
+    offset = np.tile(np.arange(hold) * dt, plan.intervals)
+    # states within a held interval: the exact arc of eq. (1) from the interval's first state
+    x, y, psi = model.integrate_unicycle(x, y, psi, commands[:, 0], commands[:, 1], offset, "exact", 1)
+    return np.stack([x, y, psi], axis=1), commands
+
+
+def solve_plans(jobs: list[Any], workers: int) -> list[Any]:
+    """Solve the jobs in parallel, sorted by length so that each worker reuses its cached solvers."""
+    order = sorted(range(len(jobs)), key=lambda i: jobs[i][1])
+    sorted_jobs = [jobs[i] for i in order]
+    if workers <= 1:
+        solved = [_solve(job) for job in sorted_jobs]
+    else:
+        chunk = max(1, len(jobs) // (4 * workers))
+        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+            solved = list(pool.map(_solve, sorted_jobs, chunksize=chunk))
+    results: list[Any] = [None] * len(jobs)
+    for index, result in zip(order, solved, strict=True):
+        results[index] = result
+    return results
+
+
+def observations(
+    states: NDArray[np.float64], steps: NDArray[np.int64], T_con: float, d0: float, e0: float, params: EnvParams
+) -> NDArray[np.float32]:
+    """The env's observations at goal-frame poses ``states`` (M, 3) after ``steps`` control periods."""
+    n = states.shape[0]
+    state = core.TaskState.zeros(n)
+    pose = (states[:, 0].copy(), states[:, 1].copy(), model.wrap_angle(states[:, 2]))
+    zeros = np.zeros(n)
+    core.reset_robots(state, slice(None), pose, (zeros, zeros, zeros), params, np.full(n, T_con))
+    state.step_count[:] = steps
+    state.initial_distance[:] = d0
+    state.initial_orientation_error[:] = e0
+    return core.observe(state, state.coordinates(params.k), params, core.observation_space(params))
+
+
+def labelled_samples(
+    plan: Any, first_step: int, T_con: float, d0: float, e0: float, params: EnvParams
+) -> Dataset | None:
+    """(observations, normalised commands) along a plan that starts ``first_step`` periods into an episode."""
+    if plan is None:
+        return None
+    states, commands = plan
+    keep = np.hypot(states[:, 0], states[:, 1]) <= params.arena_radius
+    steps = first_step + np.arange(states.shape[0])
+    obs = observations(states[keep], steps[keep], T_con, d0, e0, params)
+    actions = np.clip(commands[keep] / np.array([params.u_max, params.omega_max]), -1.0, 1.0).astype(np.float32)
+    return obs, actions
+
+
+def demonstrations(config: DaggerConfig, params: EnvParams, rng: np.random.Generator) -> Dataset:
+    """Plans from random starts and prescribed times, arriving at ``arrival_fraction`` T_con."""
+    episodes = []
+    for _ in range(config.episodes):
+        start = core.sample_start(rng, params)
+        T_con = core.sample_T_con(rng, params)
+        episodes.append((start, T_con))
+    jobs = [(start, config.arrival_fraction * T, params.dt, params.u_max, params.omega_max, config.hold_steps)
+            for start, T in episodes]  # fmt: skip
+    data = []
+    for (start, T_con), plan in zip(episodes, solve_plans(jobs, config.workers), strict=True):
+        coords = core.error_coordinates(*start, params.k)
+        samples = labelled_samples(plan, 0, T_con, float(coords.distance), float(coords.orientation_error), params)
+        if samples is not None:
+            data.append(samples)
+    return concatenate(data)
+
+
+def concatenate(data: list[Dataset]) -> Dataset:
+    """One dataset of several (an empty one when there are none)."""
+    if not data:
+        return np.zeros((0, len(core.OBSERVATION_NAMES)), np.float32), np.zeros((0, 2), np.float32)
+    return np.concatenate([d[0] for d in data]), np.concatenate([d[1] for d in data])
+
+
+def dagger_samples(policy: Any, config: DaggerConfig, params: EnvParams, rng: np.random.Generator) -> Dataset:
+    """Let the network drive from random starts, then re-plan from states it visits over the time left."""
+    from train.evaluation import rollout
+
+    n = config.dagger_episodes
+    starts = np.array([core.sample_start(rng, params) for _ in range(n)])
+    T_con = np.array([core.sample_T_con(rng, params) for _ in range(n)])
+    result = rollout(policy, params, starts, np.zeros((n, 3)), record=True, T_con=T_con)
+    traj = result.trajectory
+    assert traj is not None
+    poses = np.stack([traj["x"], traj["y"], traj["psi"]], axis=-1)  # (steps + 1, n, 3), goal at the origin
+    ended = np.where(np.isnan(result.arrival_time), poses.shape[0] - 1, result.arrival_time / params.dt)
+    jobs, meta = [], []
+    for i in range(n):
+        length = round(float(ended[i]))
+        coords = core.error_coordinates(*starts[i], params.k)
+        for step in rng.integers(1, max(2, length), size=config.replans_per_episode):
+            x, y, psi = poses[step, i]
+            if math.hypot(x, y) <= params.goal_tolerance:
+                continue
+            time_left = T_con[i] - step * params.dt
+            # the original target while there is time for it, else most of what is left before T_con
+            arrival = config.arrival_fraction * T_con[i] - step * params.dt
+            if arrival < 0.5 * time_left:
+                arrival = config.arrival_fraction * time_left
+            if arrival <= params.dt * config.hold_steps:
+                continue
+            jobs.append(((float(x), float(y), float(psi)), arrival, params.dt, params.u_max, params.omega_max,
+                         config.hold_steps))  # fmt: skip
+            meta.append((int(step), float(T_con[i]), float(coords.distance), float(coords.orientation_error)))
+    data = []
+    for (step, T, d0, e0), plan in zip(meta, solve_plans(jobs, config.workers), strict=True):
+        samples = labelled_samples(plan, step, T, d0, e0, params)
+        if samples is not None:
+            data.append(samples)
+    return concatenate(data)
+
+
+def make_model(config: DaggerConfig) -> Any:
+    """An untrained PPO model on the env whose actor is the network to clone into."""
+    import torch
+    from stable_baselines3 import PPO
+
+    from dwr_gym.sb3 import make_sb3_vec_env
+
+    env = make_sb3_vec_env(4, seed=config.seed, **config.env_kwargs)
+    policy_kwargs = {"net_arch": {"pi": list(config.net_arch), "vf": [64, 64]}, "activation_fn": torch.nn.ReLU,
+                     "log_std_init": -2.0}  # fmt: skip
+    return PPO("MlpPolicy", env, seed=config.seed, device="cpu", gamma=0.999, policy_kwargs=policy_kwargs)
+
+
+def fit(model: Any, data: Dataset, config: DaggerConfig, rng: np.random.Generator) -> float:
+    """Regress the actor's mean action on the demonstrated commands (MSE); returns the last epoch's loss."""
+    import torch
+
+    policy = model.policy
+    params = [*policy.features_extractor.parameters(), *policy.mlp_extractor.policy_net.parameters(),
+              *policy.action_net.parameters()]  # fmt: skip
+    optimizer = torch.optim.Adam(params, lr=config.learning_rate)
+    obs = torch.as_tensor(data[0])
+    target = torch.as_tensor(data[1])
+    weight = 1.0 + config.near_goal_weight * 0.05 / torch.clamp(obs[:, 0], min=0.01)
+    weight = (weight / weight.mean())[:, None]
+    n = obs.shape[0]
+    schedule = torch.optim.lr_scheduler.CosineAnnealingLR(optimizer, config.epochs * math.ceil(n / config.batch_size))
+    loss_value = math.nan
+    for _ in range(config.epochs):
+        permutation = torch.as_tensor(rng.permutation(n))
+        total = 0.0
+        for begin in range(0, n, config.batch_size):
+            index = permutation[begin : begin + config.batch_size]
+            features = policy.extract_features(obs[index], policy.pi_features_extractor)
+            mean = policy.action_net(policy.mlp_extractor.forward_actor(features))
+            loss = torch.mean(weight[index] * (mean - target[index]) ** 2)
+            optimizer.zero_grad()
+            loss.backward()
+            optimizer.step()
+            schedule.step()
+            total += float(loss.detach()) * index.shape[0]
+        loss_value = total / n
+    return loss_value
+
+
+def evaluate_by_T_con(policy: Any, params: EnvParams, T_cons: tuple[float, ...], n: int, seed: int) -> list[dict]:
+    """Success, final heading error and energy of ``policy`` at each T_con on the same random starts."""
+    from train.evaluation import rollout
+
+    rng = np.random.default_rng(seed)
+    starts = np.array([core.sample_start(rng, params) for _ in range(n)])
+    rows = []
+    for T in T_cons:
+        result = rollout(policy, params, starts, np.zeros((n, 3)), T_con=np.full(n, T))
+        rows.append({"T_con": T, "success": float(result.success.mean()),
+                     "heading": float(np.mean(result.final_heading_error)), "energy": float(np.mean(result.energy))})  # fmt: skip
+    return rows
+
+
+def run(config: DaggerConfig, run_dir: Path, command: list[str]) -> Path:
+    """Collect, clone, run the DAgger rounds, save model.zip, config.yaml and evaluations.csv in ``run_dir``."""
+    import csv
+
+    import torch
+
+    from train.training import EVAL_FILE, MODEL_FILE, save_config
+
+    if (run_dir / MODEL_FILE).exists():
+        raise SystemExit(f"--run-dir {str(run_dir)!r} already holds a trained model: choose another")
+    run_dir.mkdir(parents=True, exist_ok=True)
+    torch.manual_seed(config.seed)
+    torch.set_num_threads(1)
+    params = EnvParams.from_kwargs(**config.env_kwargs)
+    rng = np.random.default_rng(config.seed)
+    began = time.time()
+    model = make_model(config)
+    data = demonstrations(config, params, rng)
+    curve = []
+    for round_ in range(config.dagger_rounds + 1):
+        loss = fit(model, data, config, rng)
+        rows = evaluate_by_T_con(model, params, config.eval_T_con, config.eval_episodes, 12345)
+        curve.append({"round": round_, "samples": len(data[0]), "wall_time": round(time.time() - began, 1),
+                      "loss": loss, **{f"{k}_T{int(r['T_con'])}": r[k] for r in rows for k in ("success", "heading", "energy")}})  # fmt: skip
+        print(curve[-1], flush=True)
+        if round_ < config.dagger_rounds:
+            data = concatenate([data, dagger_samples(model, config, params, rng)])
+    model.save(run_dir / MODEL_FILE)
+    train_config = TrainConfig(algo="ppo", total_timesteps=1, num_envs=4, seed=config.seed,
+                               env_kwargs=dict(config.env_kwargs), run_dir=str(run_dir), progress=False)  # fmt: skip
+    save_config(train_config, run_dir, {"dagger": dataclasses.asdict(config), "command": command})
+    with (run_dir / EVAL_FILE).open("w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=list(curve[0]))
+        writer.writeheader()
+        writer.writerows(curve)
+    plot_learning_curve(curve, config.eval_T_con, run_dir / "learning_curve.png")
+    print(f"cloned in {time.time() - began:.0f} s from {len(data[0])} samples; saved {run_dir / MODEL_FILE}")
+    return run_dir
+
+
+def plot_learning_curve(curve: list[dict[str, Any]], T_cons: tuple[float, ...], path: Path) -> None:
+    """Success, final heading error and energy at each evaluation T_con against the DAgger round."""
+    try:
+        from train.plotting import pyplot, save
+
+        plt = pyplot()
+    except ImportError:  # the plots extra is optional
+        return
+    rounds = [row["round"] for row in curve]
+    fig, axes = plt.subplots(1, 3, figsize=(13, 3.6))
+    labels = ("success (arrival by T_con)", "final |psi - psi_d| [rad]", "energy [m^2/s + rad^2/s]")
+    for ax, key, label in zip(axes, ("success", "heading", "energy"), labels, strict=True):
+        for T in T_cons:
+            ax.plot(rounds, [row[f"{key}_T{int(T)}"] for row in curve], marker="o", label=f"T_con = {T:g} s")
+        ax.set(xlabel="DAgger round (0: demonstrations only)", ylabel=label)
+    axes[0].legend(fontsize=8)
+    fig.suptitle("DAgger on minimum-energy plans: fixed evaluation starts 0.3-3 m away")
+    save(fig, path, dpi=100)
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--run-dir", required=True)
+    for f in dataclasses.fields(DaggerConfig):
+        if f.type in ("int", "float"):
+            parser.add_argument(f"--{f.name.replace('_', '-')}", type=int if f.type == "int" else float,
+                                default=f.default)  # fmt: skip
+    args = parser.parse_args(argv)
+    values = {k: v for k, v in vars(args).items() if k != "run_dir"}
+    run(DaggerConfig(**values), Path(args.run_dir), ["python", "-m", "train.dagger", *(argv or sys.argv[1:])])
+
+
+if __name__ == "__main__":
+    main()
