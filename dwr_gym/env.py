@@ -69,7 +69,53 @@ def spec_with_horizon(spec: EnvSpec | None, params: EnvParams) -> EnvSpec | None
     return dataclasses.replace(spec, max_episode_steps=min(spec.max_episode_steps or steps, steps))
 
 
-class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]):
+class HorizonSpec:
+    """``spec`` with the horizon in ``max_episode_steps`` (see :func:`spec_with_horizon`); needs ``self.params``."""
+
+    params: EnvParams
+    _spec: EnvSpec | None = None
+
+    @property
+    def spec(self) -> EnvSpec | None:
+        """The registration, with ``max_episode_steps`` the number of steps after which an episode truncates."""
+        return self._spec
+
+    @spec.setter
+    def spec(self, spec: EnvSpec | None) -> None:
+        self._spec = spec_with_horizon(spec, self.params)
+
+
+class OneRobotRendering:
+    """``render()`` and ``close()`` of an env of one robot (``_state``, ``_trail``, ``params``, ``render_mode``)."""
+
+    render_mode: str | None
+    metadata: dict[str, Any]
+    params: EnvParams
+    _state: core.TaskState | None
+    _trail: list[tuple[float, float]]
+    _renderer: Any = None
+
+    def render(self) -> NDArray[np.uint8] | None:
+        if self.render_mode is None:
+            gym.logger.warn(
+                'render() called without a render_mode; pass render_mode="rgb_array" or "human" to gym.make'
+            )
+            return None
+        if self._state is None:
+            raise gym.error.ResetNeeded("call reset() before render()")
+        if self._renderer is None:
+            from dwr_gym.rendering import Renderer
+
+            self._renderer = Renderer(self.render_mode, self.metadata["render_fps"])
+        return self._renderer.draw_robot(self._state, 0, self._trail, self.params)
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+
+class DWRPointStabilizationEnv(HorizonSpec, OneRobotRendering, gym.Env[NDArray[np.float32], NDArray[np.float32]]):
     r"""Drive a differential wheeled robot to a goal within a prescribed time T_con.
 
     ## Description
@@ -197,15 +243,6 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
         self._renderer: Any = None
         self._spec: EnvSpec | None = None
 
-    @property  # type: ignore[override]
-    def spec(self) -> EnvSpec | None:
-        """The registration, with ``max_episode_steps`` the number of steps after which this env truncates."""
-        return self._spec
-
-    @spec.setter
-    def spec(self, spec: EnvSpec | None) -> None:
-        self._spec = spec_with_horizon(spec, self.params)
-
     def _noise(self, size: int, sigma: float) -> NDArray[np.float64] | None:
         return self.np_random.standard_normal(size) if sigma > 0 else None
 
@@ -264,25 +301,6 @@ class DWRPointStabilizationEnv(gym.Env[NDArray[np.float32], NDArray[np.float32]]
             if self.render_mode == "human":
                 self.render()
         return result.observation, result.reward, bool(result.terminated), bool(result.truncated), info
-
-    def render(self) -> NDArray[np.uint8] | None:
-        if self.render_mode is None:
-            gym.logger.warn(
-                'render() called without a render_mode; pass render_mode="rgb_array" or "human" to gym.make'
-            )
-            return None
-        if self._state is None:
-            raise gym.error.ResetNeeded("call reset() before render()")
-        if self._renderer is None:
-            from dwr_gym.rendering import Renderer
-
-            self._renderer = Renderer(self.render_mode, self.metadata["render_fps"])
-        return self._renderer.draw_robot(self._state, 0, self._trail, self.params)
-
-    def close(self) -> None:
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
 
 
 __all__ = ["DWRPointStabilizationEnv", "spec_with_horizon"]

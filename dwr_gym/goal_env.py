@@ -18,7 +18,7 @@ from gymnasium import spaces
 from numpy.typing import NDArray
 
 from dwr_gym import core, model
-from dwr_gym.env import check_render_mode, parse_reset_options
+from dwr_gym.env import OneRobotRendering, check_render_mode, parse_reset_options
 from dwr_gym.params import EnvParams
 
 GOAL_ENV_ID = "DWRPointStabilizationGoal-v0"
@@ -77,7 +77,7 @@ def goal_reward(
     )
 
 
-class DWRPointStabilizationGoalEnv(gym.Env[dict[str, NDArray[np.float32]], NDArray[np.float32]]):
+class DWRPointStabilizationGoalEnv(OneRobotRendering, gym.Env[dict[str, NDArray[np.float32]], NDArray[np.float32]]):
     r"""Drive a differential wheeled robot to a goal pose given in the observation: the goal-conditioned task.
 
     ## Description
@@ -223,23 +223,6 @@ class DWRPointStabilizationGoalEnv(gym.Env[dict[str, NDArray[np.float32]], NDArr
             if self.render_mode == "human":
                 self.render()
         return obs, reward, terminated, bool(truncated), info
-
-    def render(self) -> NDArray[np.uint8] | None:
-        if self.render_mode is None:
-            gym.logger.warn('render() called without a render_mode; pass render_mode="rgb_array" or "human"')
-            return None
-        if self._state is None:
-            raise gym.error.ResetNeeded("call reset() before render()")
-        if self._renderer is None:
-            from dwr_gym.rendering import Renderer
-
-            self._renderer = Renderer(self.render_mode, self.metadata["render_fps"])
-        return self._renderer.draw_robot(self._state, 0, self._trail, self.params)
-
-    def close(self) -> None:
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
 
 
 __all__ = ["GOAL_ENV_ID", "DWRPointStabilizationGoalEnv", "goal_reward", "goal_success"]

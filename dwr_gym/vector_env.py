@@ -13,7 +13,7 @@ from numpy.typing import NDArray
 
 from dwr_gym import core, model
 from dwr_gym.disturbances import make_perturbation, split_env_kwargs
-from dwr_gym.env import append_trail, check_render_mode, parse_reset_options, parse_T_con_option, spec_with_horizon
+from dwr_gym.env import HorizonSpec, append_trail, check_render_mode, parse_reset_options, parse_T_con_option
 from dwr_gym.params import EnvParams
 from dwr_gym.validation import POSE_LIMIT, as_choice, as_int
 
@@ -49,7 +49,7 @@ def _pose_batch(name: str, value: Any, n: int) -> tuple[NDArray[np.float64], NDA
     return array[:, 0].copy(), array[:, 1].copy(), array[:, 2].copy()
 
 
-class DWRPointStabilizationVectorEnv(VectorEnv):
+class DWRPointStabilizationVectorEnv(HorizonSpec, VectorEnv):
     """The native vector version of DWRPointStabilization-v0 (same keywords, same math, N robots at once).
 
     ``gymnasium.make_vec("DWRPointStabilization-v0", num_envs=N)`` returns it. ``autoreset_mode``
@@ -110,15 +110,6 @@ class DWRPointStabilizationVectorEnv(VectorEnv):
         self._trails: list[Trail] = [[] for _ in range(self.num_envs)] if render_mode is not None else []
         self._renderer: Any = None
         self._spec: EnvSpec | None = None
-
-    @property  # type: ignore[override]
-    def spec(self) -> EnvSpec | None:
-        """The registration, with ``max_episode_steps`` the number of steps after which each sub-env truncates."""
-        return self._spec
-
-    @spec.setter
-    def spec(self, spec: EnvSpec | None) -> None:
-        self._spec = spec_with_horizon(spec, self.params)
 
     def _seed_sub_envs(self, seed: int | list[int | None] | None) -> None:
         if seed is None:
