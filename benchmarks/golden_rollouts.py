@@ -1,0 +1,89 @@
+"""Record (or check) the seeded float64 rollouts that pin the env's results while it is made faster.
+
+    python benchmarks/golden_rollouts.py --write   # record tests/data/golden_rollouts.npz (done once, before a change)
+    python benchmarks/golden_rollouts.py           # largest difference of the current code from the record
+
+The record holds, for DWRPointStabilization-v0 and -v1: 300 steps of the native vector env (16 robots,
+random actions, autoreset) and of the PTC law in it, and one single-env episode under random actions;
+observations, rewards, flags, poses, energies and every reward term. tests/test_golden.py compares them to 1e-12.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+import dwr_gym  # noqa: F401
+from baselines import ExpertPolicy, PTCController
+
+PATH = Path(__file__).resolve().parents[1] / "tests" / "data" / "golden_rollouts.npz"
+ENV_IDS = ("DWRPointStabilization-v0", "DWRPointStabilization-v1")
+
+
+def vector_rollout(env_id: str, policy: str, steps: int = 300, n: int = 16) -> dict[str, np.ndarray]:
+    """Stack of what the vector env returns over ``steps`` steps under random actions or the PTC law."""
+    kwargs: dict[str, Any] = {"T_con": 5.0} if env_id.endswith("v0") else {"T_con_range": (3.0, 8.0)}
+    envs = gym.make_vec(env_id, num_envs=n, **kwargs)
+    obs, _ = envs.reset(seed=7)
+    rng = np.random.default_rng(3)
+    expert = ExpertPolicy.from_env(envs, PTCController())
+    out: dict[str, list[np.ndarray]] = {}
+    for _ in range(steps):
+        action = rng.uniform(-1.2, 1.2, (n, 2)).astype(np.float32) if policy == "random" else expert(obs)
+        obs, reward, terminated, truncated, info = envs.step(action)
+        record = {"obs": obs, "reward": reward, "terminated": terminated, "truncated": truncated,
+                  "pose": info["pose"], "energy": info["energy"], "distance": info["distance"],
+                  **{f"term_{k}": v for k, v in info["reward_terms"].items() if not k.startswith("_")}}  # fmt: skip
+        for key, value in record.items():
+            out.setdefault(key, []).append(np.array(value, dtype=np.float32 if key == "obs" else np.float64))
+    envs.close()
+    return {key: np.stack(values) for key, values in out.items()}
+
+
+def single_rollout(env_id: str, steps: int = 300) -> dict[str, np.ndarray]:
+    """One single env under random actions, reset when an episode ends."""
+    env = gym.make(env_id, T_con=5.0)
+    obs, _ = env.reset(seed=11)
+    rng = np.random.default_rng(5)
+    rows = []
+    for _ in range(steps):
+        obs, reward, terminated, truncated, info = env.step(rng.uniform(-1, 1, 2).astype(np.float32))
+        rows.append(np.concatenate([obs, [reward, terminated, truncated, info["energy"]], info["pose"]]))
+        if terminated or truncated:
+            obs, _ = env.reset()
+    env.close()
+    return {"single": np.array(rows, dtype=np.float64)}
+
+
+def rollouts() -> dict[str, np.ndarray]:
+    """Every recorded array, keyed "<env id>/<rollout>/<name>"."""
+    arrays = {}
+    for env_id in ENV_IDS:
+        for policy in ("random", "ptc"):
+            for key, value in vector_rollout(env_id, policy).items():
+                arrays[f"{env_id}/{policy}/{key}"] = value
+        for key, value in single_rollout(env_id).items():
+            arrays[f"{env_id}/{key}"] = value
+    return arrays
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--write", action="store_true", help="record the current code's rollouts")
+    args = parser.parse_args()
+    arrays = rollouts()
+    if args.write:
+        np.savez_compressed(PATH, **arrays)
+        print(f"wrote {PATH} ({len(arrays)} arrays)")
+        return
+    golden = np.load(PATH)
+    worst = max((float(np.max(np.abs(arrays[k] - golden[k]))), k) for k in golden.files)
+    print(f"largest difference from the record: {worst[0]:.3e} ({worst[1]})")
+
+
+if __name__ == "__main__":
+    main()
