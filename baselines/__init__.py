@@ -13,6 +13,8 @@ from baselines.controllers import (
     FabregasParams,
     FixedTimeController,
     FixedTimeParams,
+    PrescribedTimeAstolfiController,
+    PrescribedTimeAstolfiParams,
     PTCController,
     PTCParams,
     make_controller,
@@ -35,6 +37,8 @@ __all__ = [
     "FixedTimeParams",
     "PTCController",
     "PTCParams",
+    "PrescribedTimeAstolfiController",
+    "PrescribedTimeAstolfiParams",
     "controller_input_from_observation",
     "make_controller",
 ]

@@ -7,95 +7,22 @@ values are presets. All the mathematics comes from :mod:`dwr_gym.model`.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
-from typing import Any, ClassVar, NamedTuple
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
+from baselines.base import K_MAX, Controller, ControllerInput, ControllerParams, prescribed_time, signed_power
+from baselines.polar import (
+    AstolfiController,
+    AstolfiParams,
+    PrescribedTimeAstolfiController,
+    PrescribedTimeAstolfiParams,
+)
 from dwr_gym import model
 from dwr_gym.model import FloatArray
-from dwr_gym.validation import as_bool, as_float, as_int, coerce_numbers, reject_unknown
-
-K_MAX = 1.0 / (2.0 * math.pi)
-
-
-class ControllerInput(NamedTuple):
-    """What every law needs, in the goal frame; arrays of shape (N,)."""
-
-    distance: FloatArray  # d, eq. (2) [m]
-    azimuth: FloatArray  # alpha, eq. (3) [rad]
-    heading: FloatArray  # psi relative to the goal heading [rad]
-    time: FloatArray  # t since the episode start [s]
-    initial_distance: FloatArray  # d_0 [m]
-    initial_orientation_error: FloatArray  # e_psi0 [rad]
-    prescribed_time: FloatArray | None = None  # T_con [s] if known from the observation, else the law's own
-
-    @classmethod
-    def from_pose(
-        cls, x: ArrayLike, y: ArrayLike, psi: ArrayLike, time: ArrayLike, initial: tuple[ArrayLike, ArrayLike]
-    ) -> ControllerInput:
-        """Build the input from goal-frame poses; ``initial`` is (d_0, e_psi0)."""
-        x, y, psi = (np.atleast_1d(np.asarray(v, dtype=np.float64)) for v in (x, y, psi))
-        dist, alpha = model.distance(x, y), model.azimuth(x, y)
-        n = dist.shape
-        return cls(
-            dist, alpha, model.wrap_angle(psi), np.broadcast_to(np.asarray(time, dtype=np.float64), n),
-            np.broadcast_to(np.asarray(initial[0], dtype=np.float64), n),
-            np.broadcast_to(np.asarray(initial[1], dtype=np.float64), n),
-        )  # fmt: skip
-
-
-@dataclass(frozen=True)
-class ControllerParams:
-    """Base of the parameter dataclasses: validation hook and keyword construction."""
-
-    def __post_init__(self) -> None:
-        coerce_numbers(self)
-        self.validate()
-
-    def validate(self) -> None:
-        """Raise ValueError naming the parameter, the value and the allowed range."""
-
-    @classmethod
-    def from_kwargs(cls, **kwargs: Any) -> Any:
-        """Build from keywords, rejecting unknown ones."""
-        reject_unknown(cls, kwargs)
-        return cls(**kwargs)
-
-
-class Controller:
-    """A batched feedback law (u, omega) = law(input)."""
-
-    name: ClassVar[str] = "controller"
-    params: ControllerParams
-
-    def __call__(self, inputs: ControllerInput) -> tuple[FloatArray, FloatArray]:
-        u, omega = self.compute(inputs)
-        # Guard: no NaN or inf may leave a controller, whatever the state.
-        return np.nan_to_num(u, nan=0.0, posinf=0.0, neginf=0.0), np.nan_to_num(omega, nan=0.0, posinf=0.0, neginf=0.0)
-
-    def compute(self, inputs: ControllerInput) -> tuple[FloatArray, FloatArray]:
-        """The law itself; subclasses implement it."""
-        raise NotImplementedError
-
-    def reset(self, mask: ArrayLike | None = None) -> None:
-        """Reset internal state (only stateful laws have any) for the robots in ``mask``."""
-
-    def __repr__(self) -> str:
-        return f"{type(self).__name__}({self.params})"
-
-
-def prescribed_time(inputs: ControllerInput, own: float) -> FloatArray | float:
-    """T_con from the input when the caller observed it (an expert acting on the env), else the law's own."""
-    return own if inputs.prescribed_time is None else inputs.prescribed_time
-
-
-def signed_power(x: ArrayLike, exponent: float) -> FloatArray:
-    """|x|^exponent sign(x)."""
-    x = np.asarray(x, dtype=np.float64)
-    return np.sign(x) * np.abs(x) ** exponent
+from dwr_gym.validation import as_float, as_int
 
 
 def feedforward_angular_velocity(
@@ -373,50 +300,16 @@ class FixedTimeController(Controller):
         return np.where(moving, u, 0.0), np.where(moving, omega, 0.0)
 
 
-# ---------------------------------------------------------------------------------------------
-# Astolfi's polar-coordinate pose stabilizer
-# ---------------------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class AstolfiParams(ControllerParams):
-    """v = k_rho rho, omega = k_alpha alpha + k_beta beta with k_rho > 0, k_beta < 0, k_alpha > k_rho."""
-
-    k_rho: float = 0.3  # [1/s]
-    k_alpha: float = 0.8  # [1/s]
-    k_beta: float = -0.15  # [1/s]
-    reverse: bool = True
-    """Drive backwards when the goal is behind the robot (|alpha| > pi/2)."""
-
-    def validate(self) -> None:
-        as_float("k_rho", self.k_rho, 0.0, 1e9, low_inclusive=False)
-        as_float("k_beta", self.k_beta, -1e9, 0.0, high_inclusive=False)
-        as_float("k_alpha", self.k_alpha, self.k_rho, 1e9, low_inclusive=False)
-        as_bool("reverse", self.reverse)
-
-
-class AstolfiController(Controller):
-    """Astolfi (1999) / Siegwart's polar law, the one that also steers the final heading to the goal's."""
-
-    name = "astolfi"
-
-    def __init__(self, params: AstolfiParams | None = None, **kwargs: Any) -> None:
-        self.params: AstolfiParams = params if params is not None else AstolfiParams.from_kwargs(**kwargs)
-
-    def compute(self, inputs: ControllerInput) -> tuple[FloatArray, FloatArray]:
-        p = self.params
-        rho = inputs.distance
-        alpha = model.bearing_error(inputs.azimuth, inputs.heading)
-        direction = np.ones_like(rho)
-        if p.reverse:
-            behind = np.abs(alpha) > 0.5 * np.pi
-            direction = np.where(behind, -1.0, 1.0)
-            alpha = np.where(behind, model.wrap_angle(alpha + np.pi), alpha)
-        beta = model.wrap_angle(-inputs.heading - alpha)
-        return direction * p.k_rho * rho, p.k_alpha * alpha + p.k_beta * beta
-
-
 CONTROLLERS: dict[str, type[Controller]] = {
     cls.name: cls
-    for cls in (PTCController, ConventionalPTCController, FabregasController, FixedTimeController, AstolfiController)
+    for cls in (
+        PTCController,
+        ConventionalPTCController,
+        FabregasController,
+        FixedTimeController,
+        AstolfiController,
+        PrescribedTimeAstolfiController,
+    )
 }
 PARAMS: dict[str, type[ControllerParams]] = {
     "ptc": PTCParams,
@@ -424,6 +317,7 @@ PARAMS: dict[str, type[ControllerParams]] = {
     "fabregas": FabregasParams,
     "fixed-time": FixedTimeParams,
     "astolfi": AstolfiParams,
+    "pt-astolfi": PrescribedTimeAstolfiParams,
 }
 
 
@@ -433,7 +327,7 @@ CONTROLLER_NAMES: tuple[str, ...] = (*CONTROLLERS, "optimal")
 
 
 def make_controller(name: str, **kwargs: Any) -> Controller:
-    """A controller by its name ('ptc', 'conventional-ptc', 'fabregas', 'fixed-time', 'astolfi', 'optimal')."""
+    """A controller by its name (one of :data:`CONTROLLER_NAMES`)."""
     if name == "optimal":
         from baselines.nmpc import OptimalController, OptimalParams
 
@@ -458,5 +352,7 @@ __all__ = [
     "FixedTimeParams",
     "PTCController",
     "PTCParams",
+    "PrescribedTimeAstolfiController",
+    "PrescribedTimeAstolfiParams",
     "make_controller",
 ]
