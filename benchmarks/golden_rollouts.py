@@ -24,22 +24,35 @@ PATH = Path(__file__).resolve().parents[1] / "tests" / "data" / "golden_rollouts
 ENV_IDS = ("DWRPointStabilization-v0", "DWRPointStabilization-v1")
 
 
-def vector_rollout(env_id: str, policy: str, steps: int = 300, n: int = 16) -> dict[str, np.ndarray]:
-    """Stack of what the vector env returns over ``steps`` steps under random actions or the PTC law."""
+RECORDED = 16
+"""Robots recorded per vector rollout. A rollout may run more (``num_envs``): sub-env i draws as
+``reset(seed=s + i)`` whatever the count, so the first ones are the same robots, and large batches exercise
+the torch-computed functions of dwr_gym.model (numpy's below ``TORCH_MIN_SIZE``)."""
+
+
+def vector_rollout(env_id: str, policy: str, steps: int = 300, num_envs: int = RECORDED) -> dict[str, np.ndarray]:
+    """Stack of what the vector env returns for its first RECORDED robots over ``steps`` steps under random
+    actions or the PTC law."""
+    n = num_envs
     kwargs: dict[str, Any] = {"T_con": 5.0} if env_id.endswith("v0") else {"T_con_range": (3.0, 8.0)}
     envs = gym.make_vec(env_id, num_envs=n, **kwargs)
     obs, _ = envs.reset(seed=7)
-    rng = np.random.default_rng(3)
+    rng, other = np.random.default_rng(3), np.random.default_rng(4)
     expert = ExpertPolicy.from_env(envs, PTCController())
     out: dict[str, list[np.ndarray]] = {}
     for _ in range(steps):
-        action = rng.uniform(-1.2, 1.2, (n, 2)).astype(np.float32) if policy == "random" else expert(obs)
+        if policy == "random":
+            action = rng.uniform(-1.2, 1.2, (RECORDED, 2)).astype(np.float32)
+            action = np.concatenate([action, other.uniform(-1.2, 1.2, (n - RECORDED, 2)).astype(np.float32)])
+        else:
+            action = expert(obs)
         obs, reward, terminated, truncated, info = envs.step(action)
         record = {"obs": obs, "reward": reward, "terminated": terminated, "truncated": truncated,
                   "pose": info["pose"], "energy": info["energy"], "distance": info["distance"],
                   **{f"term_{k}": v for k, v in info["reward_terms"].items() if not k.startswith("_")}}  # fmt: skip
         for key, value in record.items():
-            out.setdefault(key, []).append(np.array(value, dtype=np.float32 if key == "obs" else np.float64))
+            value = np.array(value[:RECORDED], dtype=np.float32 if key == "obs" else np.float64)
+            out.setdefault(key, []).append(value)
     envs.close()
     return {key: np.stack(values) for key, values in out.items()}
 
@@ -59,12 +72,12 @@ def single_rollout(env_id: str, steps: int = 300) -> dict[str, np.ndarray]:
     return {"single": np.array(rows, dtype=np.float64)}
 
 
-def rollouts() -> dict[str, np.ndarray]:
-    """Every recorded array, keyed "<env id>/<rollout>/<name>"."""
+def rollouts(num_envs: int = RECORDED) -> dict[str, np.ndarray]:
+    """Every recorded array, keyed "<env id>/<rollout>/<name>", the vector env running ``num_envs`` robots."""
     arrays = {}
     for env_id in ENV_IDS:
         for policy in ("random", "ptc"):
-            for key, value in vector_rollout(env_id, policy).items():
+            for key, value in vector_rollout(env_id, policy, num_envs=num_envs).items():
                 arrays[f"{env_id}/{policy}/{key}"] = value
         for key, value in single_rollout(env_id).items():
             arrays[f"{env_id}/{key}"] = value
@@ -75,14 +88,16 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--write", action="store_true", help="record the current code's rollouts")
     args = parser.parse_args()
-    arrays = rollouts()
     if args.write:
+        arrays = rollouts()
         np.savez_compressed(PATH, **arrays)
         print(f"wrote {PATH} ({len(arrays)} arrays)")
         return
     golden = np.load(PATH)
-    worst = max((float(np.max(np.abs(arrays[k] - golden[k]))), k) for k in golden.files)
-    print(f"largest difference from the record: {worst[0]:.3e} ({worst[1]})")
+    for num_envs in (RECORDED, 1024):
+        arrays = rollouts(num_envs)
+        worst = max((float(np.max(np.abs(arrays[k] - golden[k]))), k) for k in golden.files)
+        print(f"num_envs={num_envs}: largest difference from the record {worst[0]:.3e} ({worst[1]})")
 
 
 if __name__ == "__main__":

@@ -49,15 +49,68 @@ class _ScalarMath:
         return value
 
 
-#: The namespace the functions use for Python floats; numpy itself serves arrays.
+#: The namespace the functions use for Python floats; numpy (or :data:`ARRAY_MATH`) serves arrays.
 SCALAR_MATH: Any = _ScalarMath
+
+#: Below this many elements numpy's own float64 functions beat torch's (whose call costs a few microseconds).
+TORCH_MIN_SIZE = 512
+_torch: Any = None  # the torch module once imported; False if it cannot be
+
+
+def _torch_module() -> Any:
+    global _torch
+    if _torch is None:
+        try:
+            import torch
+
+            _torch = torch
+        except ImportError:  # torch is a dependency of the package, but the math must not need it
+            _torch = False
+    return _torch
+
+
+def _vectorised(name: str) -> Any:
+    """numpy's float64 function ``name``, computed by torch for large contiguous float64 arrays.
+
+    This numpy evaluates float64 sin, cos, tanh, arcsin and arctan2 one element at a time; torch's
+    kernels use SIMD (SLEEF, within 1 ulp), 2-3x faster here. Results agree with numpy's to about 1e-16.
+    """
+    numpy_fn = getattr(np, name)
+    torch_name = {"arctan2": "atan2", "arcsin": "asin"}.get(name, name)
+
+    def usable(a: Any, shape: tuple[int, ...]) -> bool:
+        return type(a) is np.ndarray and a.dtype == np.float64 and a.shape == shape and a.flags.c_contiguous and a.flags.writeable  # fmt: skip
+
+    def fn(*args: Any) -> Any:
+        first = args[0]
+        if type(first) is np.ndarray and first.size >= TORCH_MIN_SIZE and all(usable(a, first.shape) for a in args):
+            torch = _torch_module()
+            if torch:
+                return getattr(torch, torch_name)(*map(torch.from_numpy, args)).numpy()
+        return numpy_fn(*args)
+
+    fn.__name__ = name
+    return fn
+
+
+class _ArrayMath:
+    """numpy, with the float64 transcendental functions of :func:`_vectorised` (the namespace of arrays)."""
+
+    sin, cos, tanh, arcsin, arctan2 = (staticmethod(_vectorised(n)) for n in ("sin", "cos", "tanh", "arcsin", "arctan2"))
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(np, name)
+
+
+#: The namespace the functions use for numpy arrays.
+ARRAY_MATH: Any = _ArrayMath()
 
 
 def namespace(*values: Any) -> Any:
-    """numpy if any value is an array, else :data:`SCALAR_MATH`."""
+    """:data:`ARRAY_MATH` (numpy) if any value is an array, else :data:`SCALAR_MATH`."""
     for value in values:
         if type(value) is not float and isinstance(value, np.ndarray):
-            return np
+            return ARRAY_MATH
     return SCALAR_MATH
 
 
@@ -101,6 +154,24 @@ def unicycle_derivative(
     return u * xp.cos(psi), u * xp.sin(psi), angular_velocity + 0.0 * u  # type: ignore[operator]
 
 
+#: Below this |h| the series of sin(h) / h to h^8 is exact to rounding (its first omitted term is h^10 / 11!).
+SINC_SERIES_LIMIT = 0.1
+
+
+def sinc(h: ArrayLike) -> FloatArray:
+    """sin(h) / h, equal to 1 at h = 0: a polynomial where |h| <= SINC_SERIES_LIMIT (no division, no sine),
+    sin(h) / h elsewhere."""
+    h2 = h * h  # type: ignore[operator]
+    series = 1.0 + h2 * (-1.0 / 6.0 + h2 * (1.0 / 120.0 + h2 * (-1.0 / 5040.0 + h2 * (1.0 / 362880.0))))
+    if namespace(h) is SCALAR_MATH:
+        return series if abs(h) <= SINC_SERIES_LIMIT else math.sin(h) / h  # type: ignore[arg-type, operator, return-value]
+    if np.max(h2, initial=0.0) > SINC_SERIES_LIMIT * SINC_SERIES_LIMIT:
+        large = np.abs(h) > SINC_SERIES_LIMIT
+        safe = np.where(large, h, 1.0)
+        series = np.where(large, np.sin(safe) / safe, series)
+    return series  # type: ignore[no-any-return]
+
+
 def unicycle_step_exact(
     x: ArrayLike, y: ArrayLike, psi: ArrayLike, linear_velocity: ArrayLike, angular_velocity: ArrayLike, dt: float
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -112,9 +183,7 @@ def unicycle_step_exact(
     """
     xp = namespace(psi, angular_velocity)
     half_turn = 0.5 * dt * angular_velocity  # type: ignore[operator]
-    straight = half_turn == 0.0
-    safe = xp.where(straight, 1.0, half_turn)
-    chord = linear_velocity * dt * xp.where(straight, 1.0, xp.sin(safe) / safe)  # type: ignore[operator]
+    chord = linear_velocity * dt * sinc(half_turn)  # type: ignore[operator]
     mid_heading = psi + half_turn  # type: ignore[operator]
     return x + chord * xp.cos(mid_heading), y + chord * xp.sin(mid_heading), wrap_angle(mid_heading + half_turn)  # type: ignore[operator]
 
@@ -165,7 +234,7 @@ def integrate_unicycle(
 # ---------------------------------------------------------------------------------------------
 def distance(x: ArrayLike, y: ArrayLike) -> FloatArray:
     """Distance to the goal at the origin, eq. (2)."""
-    return namespace(x, y).hypot(x, y)
+    return namespace(x, y).sqrt(x * x + y * y)  # type: ignore[operator]  # positions are bounded: no overflow
 
 
 def azimuth(x: ArrayLike, y: ArrayLike) -> FloatArray:

@@ -218,10 +218,13 @@ class DWRPointStabilizationVectorEnv(HorizonSpec, VectorEnv):
             self.perturbation.reset(index, obs[index])
             infos["disturbance"] = self.perturbation.info()
         reset_infos = core.infos(fresh, coords, self.params)
-        for key in core.INFO_KEYS:  # copies: in SAME_STEP mode final_info keeps the step's arrays
-            infos[key] = infos[key].copy()
+        keep = self.autoreset_mode is AutoresetMode.SAME_STEP  # final_info keeps the step's arrays: write on copies
+        for key in core.INFO_KEYS:
+            if keep:
+                infos[key] = infos[key].copy()
             infos[key][index] = reset_infos[key]
-        infos["reward_terms"] = {k: v.copy() for k, v in infos["reward_terms"].items()}
+        if keep:
+            infos["reward_terms"] = {k: v.copy() for k, v in infos["reward_terms"].items()}
         for term in core.REWARD_TERMS:
             infos["reward_terms"][term][index] = 0.0
 

@@ -21,10 +21,11 @@ def load_script():  # benchmarks/ is not a package
 
 
 @pytest.mark.filterwarnings("ignore:.*out of date")
-def test_seeded_rollouts_equal_the_record_to_1e_12() -> None:
+@pytest.mark.parametrize("num_envs", [16, 1024])  # numpy's functions, and torch's (dwr_gym.model.TORCH_MIN_SIZE)
+def test_seeded_rollouts_equal_the_record_to_1e_12(num_envs: int) -> None:
     script = load_script()
     golden = np.load(script.PATH)
-    arrays = script.rollouts()
+    arrays = script.rollouts(num_envs)
     assert sorted(arrays) == sorted(golden.files)
     for key in golden.files:
         new, old = arrays[key], golden[key]
