@@ -96,7 +96,9 @@ def _vectorised(name: str) -> Any:
 class _ArrayMath:
     """numpy, with the float64 transcendental functions of :func:`_vectorised` (the namespace of arrays)."""
 
-    sin, cos, tanh, arcsin, arctan2 = (staticmethod(_vectorised(n)) for n in ("sin", "cos", "tanh", "arcsin", "arctan2"))
+    sin, cos, tanh, arcsin, arctan2 = (
+        staticmethod(_vectorised(n)) for n in ("sin", "cos", "tanh", "arcsin", "arctan2")
+    )
 
     def __getattr__(self, name: str) -> Any:
         return getattr(np, name)
