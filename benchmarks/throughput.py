@@ -1,31 +1,39 @@
 """Throughput of DWRPointStabilization-v0 against Gymnasium's CartPole, measured in the same run.
 
-    python benchmarks/throughput.py            # everything (about 2 minutes on 2 cores)
+    python benchmarks/throughput.py            # everything (about 3 minutes on 2 cores)
     python benchmarks/throughput.py --quick    # fewer repeats and sizes
+    python benchmarks/throughput.py --readme   # everything, written into README.md's throughput section
 
 Prints, as medians of several repeats: the cost of one step of our single env and of CartPole-v1
 (both through gym.make, and both unwrapped); env-steps per second of our vector env (float64, the
-default, and dtype="float32"), of Gymnasium's
+default, the same with the numpy-only math of DWR_GYM_TORCH=0, and dtype="float32"), of Gymnasium's
 SyncVectorEnv over our single env, and of Gymnasium's CartPoleVectorEnv at N = 1, 64, 1024, 4096,
 16384; the ratios; our vector env in each autoreset mode on short episodes (many resets); and the time
-to evaluate the PTC law on the `random` set of 10,000 start poses.
+to evaluate the PTC law on the `random` set of 10,000 start poses; then the issue's goals, met or not, and
+the machine and library versions it ran on.
 Timings on shared machines are noisy: compare ratios measured in one run, not absolute numbers.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
+import platform
 import statistics
 import time
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
 import dwr_gym  # noqa: F401
+from dwr_gym import model
 
 SIZES = (1, 64, 1024, 4096, 16384)
+README = Path(__file__).resolve().parents[1] / "README.md"
+BEGIN, END = "<!-- throughput:begin -->", "<!-- throughput:end -->"
 
 
 def median_seconds(fn: Callable[[], Any], number: int, repeats: int) -> float:
@@ -64,59 +72,95 @@ def single_step_costs(env_ids: tuple[str, str], wrapped: bool, repeats: int) -> 
     return statistics.median(costs[0]), statistics.median(costs[1]), statistics.median(ratios)
 
 
-def vector_rate(envs: Any, n: int, repeats: int, steps: int) -> float:
+def vector_stepper(envs: Any, n: int) -> Callable[[], Any]:
+    """A function doing one step of ``envs`` with fixed random actions."""
     envs.reset(seed=0)
     rng = np.random.default_rng(0)
     sample = envs.action_space.sample()
     actions = rng.uniform(-1, 1, size=np.shape(sample)).astype(np.float32) if sample.dtype.kind == "f" else sample
     envs.step(actions)
-    return n / median_seconds(lambda: envs.step(actions), steps, repeats)
+    return lambda: envs.step(actions)
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="fewer repeats and sizes")
-    args = parser.parse_args()
-    repeats = 3 if args.quick else 7
-    sizes = (1, 1024, 4096) if args.quick else SIZES
+def vector_rates(steppers: dict[str, Callable[[], Any]], n: int, repeats: int, steps: int) -> dict[str, float]:
+    """Median env-steps per second of each stepper, measured in turn within each repeat (load drifts hit all)."""
+    times: dict[str, list[float]] = {name: [] for name in steppers}
+    for _ in range(repeats):
+        for name, step in steppers.items():
+            times[name].append(median_seconds(step, steps, 1))
+    return {name: n / statistics.median(values) for name, values in times.items()}
 
-    print("== one step of a single env (median of", repeats, "repeats) ==")
+
+def machine() -> str:
+    """The machine and the libraries the numbers were measured with."""
+    cpu = platform.processor() or platform.machine()
+    try:
+        with open("/proc/cpuinfo") as info:
+            cpu = next(line.split(":", 1)[1].strip() for line in info if line.startswith("model name"))
+    except (OSError, StopIteration):
+        pass
+    torch = model._torch_module()
+    return (
+        f"{cpu}, {os.cpu_count()} cores; Python {platform.python_version()}, numpy {np.__version__}, "
+        f"gymnasium {gym.__version__}, torch {torch.__version__ if torch else 'absent'}"
+    )
+
+
+def run(quick: bool) -> list[str]:
+    """Every measurement, as the lines the benchmark prints."""
+    repeats = 3 if quick else 7
+    sizes = (1, 1024, 4096) if quick else SIZES
+    lines = [f"machine: {machine()}", "", f"== one step of a single env (median of {3 * repeats} repeats) =="]
+    single = {}
     for wrapped in (True, False):
         ours, cart, ratio = single_step_costs(("DWRPointStabilization-v0", "CartPole-v1"), wrapped, 3 * repeats)
+        single[wrapped] = ratio
         label = "gym.make" if wrapped else "unwrapped"
-        print(f"{label:>10}: ours {ours * 1e6:7.1f} us, CartPole-v1 {cart * 1e6:7.1f} us, ratio {ratio:5.2f}x")
+        lines.append(f"{label:>10}: ours {ours * 1e6:7.1f} us, CartPole-v1 {cart * 1e6:7.1f} us, ratio {ratio:5.2f}x")
 
-    print("\n== vector envs: env-steps per second (median) ==")
-    print(f"{'N':>6} {'ours float64':>13} {'ours float32':>13} {'Sync(ours)':>11} {'CartPoleVec':>12} "
-          f"{'f64/CartPole':>13} {'f32/CartPole':>13} {'f64/Sync':>9}")  # fmt: skip
+    lines += ["", "== vector envs: env-steps per second (median); numpy-only is float64 with DWR_GYM_TORCH=0 =="]
+    lines.append(f"{'N':>6} {'ours float64':>13} {'numpy-only':>11} {'ours float32':>13} {'Sync(ours)':>11} "
+                 f"{'CartPoleVec':>12} {'f64/CartPole':>13} {'f32/CartPole':>13} {'f64/Sync':>9}")  # fmt: skip
+    at_4096: dict[str, float] = {}
     for n in sizes:
-        steps = max(10, min(300, 400_000 // n))
-        ours = vector_rate(gym.make_vec("DWRPointStabilization-v0", num_envs=n), n, repeats, steps)
-        fast = vector_rate(gym.make_vec("DWRPointStabilization-v0", num_envs=n, dtype="float32"), n, repeats, steps)
-        sync_steps = max(3, min(100, 20_000 // n))
-        sync = vector_rate(
-            gym.make_vec("DWRPointStabilization-v0", num_envs=n, vectorization_mode="sync"), n, 3, sync_steps
+        steps = max(10, min(100, 200_000 // n))
+        make = gym.make_vec
+        steppers = {
+            "f64": vector_stepper(make("DWRPointStabilization-v0", num_envs=n), n),
+            "f32": vector_stepper(make("DWRPointStabilization-v0", num_envs=n, dtype="float32"), n),
+            "cart": vector_stepper(make("CartPole-v1", num_envs=n, vectorization_mode="vector_entry_point"), n),
+        }
+        rates = vector_rates(steppers, n, repeats, steps)
+        saved = model._torch
+        model._torch = False  # the numpy-only path, as without torch or with DWR_GYM_TORCH=0
+        try:
+            rates.update(vector_rates({"numpy": steppers["f64"]}, n, repeats, steps))
+        finally:
+            model._torch = saved
+        sync_env = make("DWRPointStabilization-v0", num_envs=n, vectorization_mode="sync")
+        rates.update(vector_rates({"sync": vector_stepper(sync_env, n)}, n, 3, max(3, min(100, 20_000 // n))))
+        if n == 4096:
+            at_4096 = rates
+        lines.append(
+            f"{n:>6} {rates['f64'] / 1e6:>11.2f} M {rates['numpy'] / 1e6:>9.2f} M {rates['f32'] / 1e6:>11.2f} M "
+            f"{rates['sync'] / 1e6:>9.3f} M {rates['cart'] / 1e6:>10.2f} M {rates['f64'] / rates['cart']:>13.2f} "
+            f"{rates['f32'] / rates['cart']:>13.2f} {rates['f64'] / rates['sync']:>9.1f}"
         )
-        cart = vector_rate(gym.make_vec("CartPole-v1", num_envs=n, vectorization_mode="vector_entry_point"), n,
-                           repeats, steps)  # fmt: skip
-        print(f"{n:>6} {ours / 1e6:>11.2f} M {fast / 1e6:>11.2f} M {sync / 1e6:>9.3f} M {cart / 1e6:>10.2f} M "
-              f"{ours / cart:>13.2f} {fast / cart:>13.2f} {ours / sync:>9.1f}")  # fmt: skip
 
-    print("\n== autoreset modes: N = 4096, T_con = 2 s and dt = 0.1 s, so every episode ends within 30 steps ==")
-    rates = {}
+    lines += ["", "== autoreset modes: N = 4096, T_con = 2 s and dt = 0.1 s, so every episode ends within 30 steps =="]
+    steppers = {}
     for mode in ("next_step", "same_step"):
         for dtype in ("float64", "float32"):
             envs = gym.make_vec("DWRPointStabilization-v0", num_envs=4096, dtype=dtype, autoreset_mode=mode,
                                 T_con=2.0, dt=0.1)  # fmt: skip
-            rates[mode, dtype] = vector_rate(envs, 4096, repeats, 100)
+            steppers[mode, dtype] = vector_stepper(envs, 4096)
+    rates = vector_rates(steppers, 4096, repeats, 50)  # type: ignore[arg-type]
     for dtype in ("float64", "float32"):
-        next_step, same_step = rates["next_step", dtype], rates["same_step", dtype]
-        print(
-            f"{dtype}: NEXT_STEP (default) {next_step / 1e6:.2f} M, SAME_STEP {same_step / 1e6:.2f} M, "
-            f"ratio {next_step / same_step:.2f}"
-        )
+        next_step, same_step = rates["next_step", dtype], rates["same_step", dtype]  # type: ignore[index]
+        lines.append(f"{dtype}: NEXT_STEP (default) {next_step / 1e6:.2f} M, SAME_STEP {same_step / 1e6:.2f} M, "
+                     f"ratio {next_step / same_step:.2f}")  # fmt: skip
 
-    print("\n== PTC law on the `random` scenario set (10,000 start poses, default T_con and dt) ==")
+    lines += ["", "== PTC law on the `random` scenario set (10,000 start poses, default T_con and dt) =="]
     from train.evaluation import evaluate, make_scenario
 
     scenario = make_scenario("random", n=10_000, seed=0)
@@ -125,7 +169,39 @@ def main() -> None:
         start = time.perf_counter()
         result = evaluate({"ptc": "ptc"}, scenario)["ptc"]
         times.append(time.perf_counter() - start)
-    print(f"median {statistics.median(times):.2f} s, success rate {result.success.mean():.4f}")
+    lines.append(f"median {statistics.median(times):.2f} s, success rate {result.success.mean():.4f}")
+
+    if at_4096:
+        f64, cart = at_4096["f64"], at_4096["cart"]
+        lines += [
+            "",
+            "== the goals of issue 14 ==",
+            f"vector env, float64, N = 4096, >= 10 M env-steps/s: {f64 / 1e6:.2f} M -> {'met' if f64 >= 1e7 else 'not met'}",
+            f"vector env, float64, N = 4096, >= 0.5x CartPoleVectorEnv: {f64 / cart:.2f}x -> "
+            f"{'met' if f64 >= 0.5 * cart else 'not met'}",
+            f"single env step through gym.make <= 1.5x CartPole-v1's: {single[True]:.2f}x -> "
+            f"{'met' if single[True] <= 1.5 else 'not met'}",
+        ]
+    return lines
+
+
+def write_readme(lines: list[str]) -> None:
+    """Replace the README's block between the throughput markers with ``lines``."""
+    text = README.read_text()
+    begin, end = text.index(BEGIN) + len(BEGIN), text.index(END)
+    README.write_text(text[:begin] + "\n```\n" + "\n".join(lines) + "\n```\n" + text[end:])
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="fewer repeats and sizes")
+    parser.add_argument("--readme", action="store_true", help="write the output into README.md's throughput block")
+    args = parser.parse_args()
+    lines = run(args.quick)
+    print("\n".join(lines))
+    if args.readme:
+        write_readme(lines)
+        print(f"wrote {README}")
 
 
 if __name__ == "__main__":

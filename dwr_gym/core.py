@@ -112,9 +112,10 @@ class TaskState:
 
     def world_pose(self) -> tuple[FloatArray, FloatArray, FloatArray]:
         """The robots' poses in the world frame."""
-        if model.namespace(self.x) is not model.SCALAR_MATH and not (
-            self.goal_x.any() or self.goal_y.any() or self.goal_psi.any()
-        ):  # every goal at the origin with heading 0 (the default): the frames coincide
+        if type(self.x) is float:
+            if self.goal_x == 0.0 and self.goal_y == 0.0 and self.goal_psi == 0.0:  # the frames coincide
+                return self.x, self.y, self.psi
+        elif not (self.goal_x.any() or self.goal_y.any() or self.goal_psi.any()):  # every goal at the origin
             return self.x.copy(), self.y.copy(), self.psi.copy()
         dx, dy = model.rotate(self.x, self.y, self.goal_cos, self.goal_sin)
         return self.goal_x + dx, self.goal_y + dy, model.wrap_angle(self.psi + self.goal_psi)
@@ -188,9 +189,12 @@ def observe(
 
 def sample_start(rng: np.random.Generator, params: EnvParams) -> tuple[float, float, float]:
     """A random start pose in the goal frame: distance and heading in their ranges, bearing uniform."""
-    dist = rng.uniform(*params.start_distance)
-    bearing = rng.uniform(-math.pi, math.pi)
-    heading = rng.uniform(*params.start_heading)
+    # Three uniform draws as Generator.uniform(low, high) makes them, low + (high - low) * random(), in one call.
+    (d_low, d_high), (h_low, h_high) = params.start_distance, params.start_heading
+    u_dist, u_bearing, u_heading = rng.random(3).tolist()
+    dist = d_low + (d_high - d_low) * u_dist
+    bearing = -math.pi + (math.pi - -math.pi) * u_bearing
+    heading = h_low + (h_high - h_low) * u_heading
     return dist * math.cos(bearing), dist * math.sin(bearing), heading
 
 
@@ -335,31 +339,55 @@ def transition(
     # Exact shaping in an episodic task gives terminal states the potential 0 (v1); v0 keeps Phi(s') there.
     next_potential = xp.where(terminated, 0.0, lyapunov) if params.zero_terminal_potential else lyapunov
 
-    def weighted(weight: float, term: Any) -> Any:  # a term with weight 0 is 0, and is not computed
-        return term() if weight != 0.0 else (0.0 if scalar else np.zeros_like(coords.distance))
-
-    def time_term() -> Any:
-        time = state.step_count * params.dt if scalar else (state.step_count * params.dt).astype(state.x.dtype)
+    d, dt = coords.distance, params.dt
+    # A term whose weight is 0 is 0 and is not computed.
+    if params.time_weight != 0.0:
+        time = state.step_count * dt if scalar else (state.step_count * dt).astype(state.x.dtype)
         scaling = model.conventional_scaling(time, state.T_con, max_gain=params.time_gain_cap)
-        return -params.time_weight * params.dt * coords.distance * scaling
-
+        time_term = -params.time_weight * dt * d * scaling
+    else:
+        time_term = 0.0 if scalar else np.zeros_like(d)
+    if params.effort_weight != 0.0:
+        effort_term = -params.effort_weight * dt * (a_u * a_u + a_omega * a_omega)
+    else:
+        effort_term = 0.0 if scalar else np.zeros_like(d)
+    energy_term = (
+        -params.energy_weight * dt * power if params.energy_weight != 0.0 else (0.0 if scalar else np.zeros_like(d))
+    )
+    if scalar:
+        arrival_term = params.arrival_bonus if is_success and in_time else 0.0
+        late_term = 0.0 if is_success or in_time else -params.late_penalty * dt
+        arena_term = -params.arena_penalty if out_of_arena else 0.0
+    else:
+        arrival_term = np.where(is_success & in_time, params.arrival_bonus, 0.0)
+        late_term = np.where(is_success | in_time, 0.0, -params.late_penalty * dt)
+        arena_term = np.where(out_of_arena, -params.arena_penalty, 0.0)
     terms = {
         "progress": params.progress_weight * (state.lyapunov - params.shaping_discount * next_potential),
-        "time": weighted(params.time_weight, time_term),
-        "effort": weighted(params.effort_weight, lambda: -params.effort_weight * params.dt * (a_u * a_u + a_omega * a_omega)),
-        "energy": weighted(params.energy_weight, lambda: -params.energy_weight * params.dt * power),
-        "arrival": xp.where(is_success & in_time, params.arrival_bonus, 0.0),
+        "time": time_term,
+        "effort": effort_term,
+        "energy": energy_term,
+        "arrival": arrival_term,
         "heading": heading_term(is_success, coords.psi, params.heading_weight),
-        "late": xp.where(xp.logical_not(is_success | in_time), -params.late_penalty * params.dt, 0.0),
-        "arena": xp.where(out_of_arena, -params.arena_penalty, 0.0),
-    }  # fmt: skip
+        "late": late_term,
+        "arena": arena_term,
+    }
     state.lyapunov = lyapunov
     truncated = (state.step_count >= state.max_steps) & xp.logical_not(terminated)
 
     obs = observe(state, coords, params, space, pose_noise)
     if perturbation is not None:  # the measurement side
         obs = perturbation.measure(obs)
-    reward = sum(terms.values())
+    reward = (
+        terms["progress"]
+        + time_term
+        + effort_term
+        + energy_term
+        + arrival_term
+        + terms["heading"]
+        + late_term
+        + arena_term
+    )
     return StepResult(obs, reward, terminated, truncated, coords, is_success, u, omega, terms)  # type: ignore[arg-type]
 
 

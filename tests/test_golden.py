@@ -21,8 +21,14 @@ def load_script():  # benchmarks/ is not a package
 
 
 @pytest.mark.filterwarnings("ignore:.*out of date")
-@pytest.mark.parametrize("num_envs", [16, 1024])  # numpy's functions, and torch's (dwr_gym.model.TORCH_MIN_SIZE)
-def test_seeded_rollouts_equal_the_record_to_1e_12(num_envs: int) -> None:
+@pytest.mark.parametrize(
+    ("num_envs", "torch"), [(16, True), (1024, True), (1024, False)]
+)  # numpy's functions below dwr_gym.model.TORCH_MIN_SIZE, torch's above unless torch is off (DWR_GYM_TORCH=0)
+def test_seeded_rollouts_equal_the_record_to_1e_12(num_envs: int, torch: bool, monkeypatch: pytest.MonkeyPatch) -> None:
+    from dwr_gym import model
+
+    if not torch:
+        monkeypatch.setattr(model, "_torch", False)
     script = load_script()
     golden = np.load(script.PATH)
     arrays = script.rollouts(num_envs)
