@@ -263,7 +263,9 @@ def commands_from_action(
 ) -> tuple[Any, Any, Any, Any]:
     """Clip normalised actions to [-1, 1]: (a_u, a_omega, u [m/s], omega [rad/s]); (N, 2) in ``dtype``, or one action (2,)."""
     if action.ndim == 1:
-        a_u, a_omega = float(action[0]), float(action[1])
+        a_u, a_omega = action.tolist()
+        if type(a_u) is not float or type(a_omega) is not float:  # integer or boolean actions
+            a_u, a_omega = float(a_u), float(a_omega)
         if not (math.isfinite(a_u) and math.isfinite(a_omega)):
             raise ValueError(f"action={action.tolist()!r} is invalid: expected finite numbers in [-1, 1]")
         a_u, a_omega = min(max(a_u, -1.0), 1.0), min(max(a_omega, -1.0), 1.0)

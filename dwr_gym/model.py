@@ -230,6 +230,8 @@ def integrate_unicycle(
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Advance eq. (1) by one control period ``dt`` with the commands held constant."""
     step = _STEPPERS[integrator]
+    if substeps == 1:  # the default: no loop
+        return step(x, y, psi, linear_velocity, angular_velocity, dt)
     h = dt / substeps
     for _ in range(substeps):
         x, y, psi = step(x, y, psi, linear_velocity, angular_velocity, h)

@@ -197,3 +197,24 @@ def test_rollout_of_the_expert_arrives_for_the_default_random_set() -> None:
     result = rollout(expert, params, scenario.starts, scenario.goals)
     assert result.success.all()
     assert np.nanmax(result.arrival_time) < params.T_con
+
+
+@pytest.mark.parametrize("T_con", [10.0, 60.0])
+def test_pt_astolfi_reaches_the_full_pose_by_any_T_con(T_con: float) -> None:
+    """The law of baselines.polar: every episode in time, the heading too, for a little more energy than PTC."""
+    scenario = make_scenario("random", n=100, seed=4, env_kwargs={"T_con": T_con, "start_distance": (0.3, 3.0)})
+    results = evaluate({"pt-astolfi": "pt-astolfi", "ptc": "ptc"}, scenario)
+    law, ptc = results["pt-astolfi"], results["ptc"]
+    assert law.success.all() and np.nanmax(law.arrival_time) <= T_con
+    assert np.mean(law.final_heading_error) < 0.12 < np.mean(ptc.final_heading_error)
+    assert np.mean(law.energy) < 1.5 * np.mean(ptc.energy)  # 1.04-1.25x on the sets measured
+
+
+def test_pt_astolfi_is_astolfi_on_the_time_scale_of_eq_12() -> None:
+    from baselines.polar import AstolfiController, AstolfiParams, PrescribedTimeAstolfiController
+
+    inputs = ControllerInput.from_pose([1.0, -0.5], [0.3, 0.8], [2.0, -1.0], 4.0, (1.0, 0.5))
+    scaled = PrescribedTimeAstolfiController(T_con=20.0, arrival_fraction=0.5)(inputs)
+    plain = AstolfiController(AstolfiParams(k_rho=1.5, k_alpha=4.7, k_beta=-1.7))(inputs)
+    for a, b in zip(scaled, plain, strict=True):  # rate 1 / (T - t) with T = 0.5 * 20 s, t = 4 s
+        np.testing.assert_allclose(a, b / 6.0, rtol=1e-12)
