@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import warnings
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -50,3 +51,49 @@ def test_a_tiny_cloning_run_saves_an_agent_that_loads_and_acts(tmp_path) -> None
     assert label == "bc" and action.shape == (5, 2) and np.all(np.isfinite(action))
     with pytest.raises(SystemExit, match="already holds a trained model"):
         run(config, run_dir, ["test"])
+
+
+class ConstantModel:
+    """A stand-in network that always answers (0.7, -0.7)."""
+
+    def predict(self, obs, state=None, episode_start=None, deterministic=True):  # type: ignore[no-untyped-def]
+        return np.tile(np.float32([0.7, -0.7]), (np.asarray(obs).shape[0], 1)), state
+
+
+def test_handover_policy_is_the_network_far_and_early_and_the_law_near_or_late() -> None:
+    from baselines import ExpertPolicy, make_controller
+    from train.residual import HandoverPolicy
+
+    law = ExpertPolicy(make_controller("pt-astolfi"), 0.5, 2.0)
+    policy = HandoverPolicy(ConstantModel(), law, distance=0.05, time_fraction=0.9)
+    obs = np.zeros((3, 10), np.float32)
+    obs[:, 0], obs[:, 1], obs[:, 3], obs[:, 7], obs[:, 8] = [1.0, 0.02, 1.0], 1.0, 1.0, 20.0, 1.0
+    obs[:, 6] = [0.5, 0.5, 0.95]  # far and early; near; late
+    action, _ = policy.predict(obs)
+    np.testing.assert_array_equal(action[0], np.float32([0.7, -0.7]))
+    np.testing.assert_array_equal(action[1:], law.predict(obs[1:])[0])
+    single, _ = policy.predict(obs[0])
+    assert single.shape == (2,)
+    with pytest.raises(ValueError, match="time_fraction"):
+        HandoverPolicy(ConstantModel(), law, distance=0.05, time_fraction=0.0)
+
+
+def test_a_run_with_a_handover_section_loads_as_a_handover_policy_and_a_bad_one_is_refused(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    import shutil
+
+    import yaml
+
+    from train.agents import AgentLoadError
+    from train.residual import HandoverPolicy
+
+    run_dir = tmp_path / "agent"
+    shutil.copytree(Path(__file__).resolve().parents[1] / "train" / "pretrained" / "dagger", run_dir)
+    data = yaml.safe_load((run_dir / "config.yaml").read_text())
+    data["handover"] = {"expert": "pt-astolfi", "distance": 0.05, "time_fraction": 0.9}
+    (run_dir / "config.yaml").write_text(yaml.safe_dump(data))
+    _, policy = load_agent(run_dir)
+    assert isinstance(policy, HandoverPolicy) and policy.distance == 0.05 and policy.time_fraction == 0.9
+    data["handover"]["expert"] = "nope"
+    (run_dir / "config.yaml").write_text(yaml.safe_dump(data))
+    with pytest.raises(AgentLoadError, match="handover"):
+        load_agent(run_dir)

@@ -43,7 +43,29 @@ def load_agent(path: str | Path) -> tuple[str, Any]:
     except (ConfigError, ValueError, KeyError, OSError) as error:
         raise AgentLoadError(f"agent {str(path)!r} could not be loaded: {error}") from error
     label = run_dir.name.replace("_", "-") if path.is_dir() else f"{run_dir.name}/{model_path.stem}"
-    return label, as_policy(model, config)
+    policy = as_policy(model, config)
+    handover = load_extra(run_dir).get("handover")
+    if handover:  # a network that hands over to an analytic law for the finish (train.residual.HandoverPolicy)
+        from baselines.controllers import make_controller
+        from baselines.expert import ExpertPolicy
+        from dwr_gym.params import EnvParams
+        from train.residual import HandoverPolicy
+
+        params = EnvParams.from_kwargs(**config.env_kwargs)
+        try:
+            expert = ExpertPolicy(make_controller(handover["expert"]), params.u_max, params.omega_max)
+            policy = HandoverPolicy(policy, expert, handover["distance"], handover["time_fraction"])
+        except (KeyError, TypeError, ValueError) as error:
+            raise AgentLoadError(f"agent {str(path)!r} has an invalid handover section: {error}") from error
+    return label, policy
+
+
+def load_extra(run_dir: Path) -> dict[str, Any]:
+    """The sections of a run's config.yaml besides the TrainConfig (``dagger``, ``handover``, ...)."""
+    import yaml
+
+    data = yaml.safe_load((run_dir / "config.yaml").read_text())
+    return data if isinstance(data, dict) else {}
 
 
 def pretrained_paths() -> dict[str, Path]:

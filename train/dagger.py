@@ -81,6 +81,10 @@ class DaggerConfig:
     """Prescribed times [s] of the evaluation after each fit."""
     env_kwargs: dict[str, Any] = field(default_factory=lambda: dict(V1_DEFAULTS))
     """The env the agent is for (DWRPointStabilization-v1's defaults)."""
+    handover_expert: str = ""
+    """If set (e.g. "pt-astolfi"), the trained network hands over to this analytic law for the finish
+    (train.residual.HandoverPolicy), at the distance and time fraction of HANDOVER_GRID that do best on the
+    evaluation starts (not the benchmark's): all episodes in time first, then the least energy."""
 
 
 def _solve(job: tuple[tuple[float, float, float], float, float, float, float, int]) -> Any:
@@ -267,14 +271,54 @@ def evaluate_by_T_con(policy: Any, params: EnvParams, T_cons: tuple[float, ...],
     return rows
 
 
+#: Hand-over distances [m] and time fractions tried by :func:`select_handover`.
+HANDOVER_GRID = ((0.0, 0.02, 0.05, 0.1, 0.2), (0.8, 0.9, 0.95, 1.0))
+
+
+def handover_policy(model: Any, expert: str, params: EnvParams, distance: float, fraction: float) -> Any:
+    """The network ``model`` handing over to the law ``expert`` within ``distance`` or after ``fraction`` T_con."""
+    from baselines.controllers import make_controller
+    from baselines.expert import ExpertPolicy
+    from train.residual import HandoverPolicy
+
+    law = ExpertPolicy(make_controller(expert), params.u_max, params.omega_max)
+    return HandoverPolicy(model, law, distance, fraction)
+
+
+def select_handover(model: Any, config: DaggerConfig, params: EnvParams) -> tuple[dict[str, Any], list[dict]]:
+    """The hand-over (distance, time fraction) of HANDOVER_GRID that arrives in time most often on the evaluation
+    starts, then (among those in time in >= 99 % at every T_con) spends the least energy; with every row tried."""
+    tried = []
+    for distance in HANDOVER_GRID[0]:
+        for fraction in HANDOVER_GRID[1]:
+            policy = handover_policy(model, config.handover_expert, params, distance, fraction)
+            rows = evaluate_by_T_con(policy, params, config.eval_T_con, config.eval_episodes, 12345)
+            tried.append({"distance": distance, "time_fraction": fraction,
+                          "success": min(r["success"] for r in rows), "heading": max(r["heading"] for r in rows),
+                          "energy": sum(r["energy"] * r["T_con"] for r in rows) / len(rows)})  # fmt: skip  # energy x T_con: each T_con alike
+            print(tried[-1], flush=True)
+    good = [t for t in tried if t["success"] >= 0.99]
+    best = min(good, key=lambda t: t["energy"]) if good else max(tried, key=lambda t: t["success"])
+    return {
+        "expert": config.handover_expert,
+        "distance": best["distance"],
+        "time_fraction": best["time_fraction"],
+    }, tried
+
+
 def run(config: DaggerConfig, run_dir: Path, command: list[str]) -> Path:
     """Collect, clone, run the DAgger rounds, save model.zip, config.yaml and evaluations.csv in ``run_dir``."""
     import csv
 
     import torch
 
+    from baselines.controllers import CONTROLLERS
     from train.training import EVAL_FILE, MODEL_FILE, save_config
 
+    if config.handover_expert and config.handover_expert not in CONTROLLERS:
+        raise SystemExit(
+            f"--handover-expert {config.handover_expert!r} is invalid: expected one of {', '.join(CONTROLLERS)}"
+        )
     if (run_dir / MODEL_FILE).exists():
         raise SystemExit(f"--run-dir {str(run_dir)!r} already holds a trained model: choose another")
     run_dir.mkdir(parents=True, exist_ok=True)
@@ -295,9 +339,14 @@ def run(config: DaggerConfig, run_dir: Path, command: list[str]) -> Path:
         if round_ < config.dagger_rounds:
             data = concatenate([data, dagger_samples(model, config, params, rng)])
     model.save(run_dir / MODEL_FILE)
+    extra: dict[str, Any] = {"dagger": dataclasses.asdict(config), "command": command}
+    if config.handover_expert:
+        extra["handover"], tried = select_handover(model, config, params)
+        extra["handover_tried"] = tried
+        print(f"hand-over: {extra['handover']}", flush=True)
     train_config = TrainConfig(algo="ppo", total_timesteps=1, num_envs=4, seed=config.seed,
                                env_kwargs=dict(config.env_kwargs), run_dir=str(run_dir), progress=False)  # fmt: skip
-    save_config(train_config, run_dir, {"dagger": dataclasses.asdict(config), "command": command})
+    save_config(train_config, run_dir, extra)
     with (run_dir / EVAL_FILE).open("w", newline="") as handle:
         writer = csv.DictWriter(handle, fieldnames=list(curve[0]))
         writer.writeheader()
@@ -331,12 +380,41 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--run-dir", required=True)
     for f in dataclasses.fields(DaggerConfig):
-        if f.type in ("int", "float"):
-            parser.add_argument(f"--{f.name.replace('_', '-')}", type=int if f.type == "int" else float,
-                                default=f.default)  # fmt: skip
+        if f.type in ("int", "float", "str"):
+            kind = {"int": int, "float": float, "str": str}[f.type]  # type: ignore[index]
+            parser.add_argument(f"--{f.name.replace('_', '-')}", type=kind, default=f.default)
+    parser.add_argument("--handover-only", action="store_true",
+                        help="only choose the hand-over of an existing run (needs --handover-expert) and save it in "
+                             "its config.yaml")  # fmt: skip
     args = parser.parse_args(argv)
-    values = {k: v for k, v in vars(args).items() if k != "run_dir"}
+    values = {k: v for k, v in vars(args).items() if k not in ("run_dir", "handover_only")}
+    if args.handover_only:
+        add_handover(Path(args.run_dir), args.handover_expert, args.eval_episodes)
+        return
     run(DaggerConfig(**values), Path(args.run_dir), ["python", "-m", "train.dagger", *(argv or sys.argv[1:])])
+
+
+def add_handover(run_dir: Path, expert: str, eval_episodes: int) -> None:
+    """Choose the hand-over of a trained run (:func:`select_handover`) and write it into its config.yaml."""
+    from stable_baselines3 import PPO
+
+    from baselines.controllers import CONTROLLERS
+    from train.agents import load_extra
+    from train.training import MODEL_FILE, load_config, save_config
+
+    if expert not in CONTROLLERS:
+        raise SystemExit(f"--handover-expert {expert!r} is invalid: expected one of {', '.join(CONTROLLERS)}")
+    if not (run_dir / MODEL_FILE).is_file():
+        raise SystemExit(f"--run-dir {str(run_dir)!r} holds no {MODEL_FILE}: train it first")
+    train_config, extra = load_config(run_dir), load_extra(run_dir)
+    config = DaggerConfig(**{**extra.get("dagger", {}), "handover_expert": expert, "eval_episodes": eval_episodes})
+    params = EnvParams.from_kwargs(**train_config.env_kwargs)
+    model = PPO.load(run_dir / MODEL_FILE, device="cpu")
+    extra["handover"], extra["handover_tried"] = select_handover(model, config, params)
+    extra.pop("config", None)
+    extra.pop("dwr_gym_version", None)
+    save_config(train_config, run_dir, extra)
+    print(f"hand-over: {extra['handover']}; saved in {run_dir / 'config.yaml'}")
 
 
 if __name__ == "__main__":

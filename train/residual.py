@@ -125,3 +125,36 @@ def zero_init_last_layer(model: Any, gain: float = 1e-3) -> None:
         layer.bias.zero_()
     if getattr(model, "actor_target", None) is not None:  # TD3 keeps a target copy of the actor
         model.actor_target.load_state_dict(model.actor.state_dict())
+
+
+class HandoverPolicy:
+    """A learned policy that hands the robot over to an analytic prescribed-time law for the finish.
+
+    The network acts while the robot is farther than ``distance`` from the goal and the time is below
+    ``time_fraction`` T_con; from then on (for that observation) the ``expert`` does. Put as a residual on the
+    law: action = law + w (network - law) with w = 1 before the hand-over and 0 after it. Networks cloned
+    from minimum-energy plans spend little energy but miss the last centimetres (see train.dagger); a
+    prescribed-time law that also steers the heading (``pt-astolfi``) finishes from wherever they are.
+    """
+
+    def __init__(self, model: Any, expert: ExpertPolicy, distance: float, time_fraction: float) -> None:
+        self.model = model
+        self.expert = expert
+        self.distance = check_range("handover distance", distance, 0.0, 1e6)
+        self.time_fraction = check_range("handover time_fraction", time_fraction, 0.0, 1.0, low_inclusive=False)
+
+    def predict(
+        self,
+        observation: NDArray[np.floating],
+        state: Any = None,
+        episode_start: Any = None,
+        deterministic: bool = True,
+    ) -> tuple[NDArray[np.float32], Any]:
+        obs = np.asarray(observation)
+        batch = obs[None] if obs.ndim == 1 else obs
+        learned, state = self.model.predict(batch, state, episode_start, deterministic)
+        expert, _ = self.expert.predict(batch, episode_start=episode_start)
+        # observation features 0 and 6: distance to the goal and t / T_con (dwr_gym.core.OBSERVATION_NAMES)
+        finish = (batch[:, 0] < self.distance) | (batch[:, 6] > self.time_fraction)
+        action = np.where(finish[:, None], expert, np.clip(learned, -1.0, 1.0)).astype(np.float32)
+        return (action[0] if obs.ndim == 1 else action), state
