@@ -1,7 +1,7 @@
 """The prescribed-time goal of the learned agents, measured: any T_con, the full pose, less energy than PTC.
 
-    python benchmarks/prescribed_time_goal.py train/pretrained/bc_optimal
-    python benchmarks/prescribed_time_goal.py runs/bc_optimal_s0 runs/bc_optimal_s1 runs/bc_optimal_s2
+    python benchmarks/prescribed_time_goal.py train/pretrained/dagger_handover
+    python benchmarks/prescribed_time_goal.py runs/dagger_handover_s0 runs/dagger_handover_s1 runs/dagger_handover_s2
 
 On random starts 0.3-3 m away (500 per T_con, seed 0), at each T_con in {10, 20, 40, 60} s, it
 evaluates the given agents (several run directories are treated as training seeds of one agent:

@@ -74,6 +74,11 @@ def test_handover_policy_is_the_network_far_and_early_and_the_law_near_or_late()
     np.testing.assert_array_equal(action[1:], law.predict(obs[1:])[0])
     single, _ = policy.predict(obs[0])
     assert single.shape == (2,)
+    behind = HandoverPolicy(ConstantModel(), law, distance=0.0, time_fraction=1.0, speed_margin=2.0)
+    obs[0, 6] = 0.96  # 0.8 s left for 1 m at 0.5 m/s: less than 2 x the 2 s a straight line takes
+    np.testing.assert_array_equal(behind.predict(obs[:1])[0], law.predict(obs[:1])[0])
+    obs[0, 6] = 0.5  # 10 s left
+    np.testing.assert_array_equal(behind.predict(obs[:1])[0][0], np.float32([0.7, -0.7]))
     with pytest.raises(ValueError, match="time_fraction"):
         HandoverPolicy(ConstantModel(), law, distance=0.05, time_fraction=0.0)
 
@@ -97,3 +102,20 @@ def test_a_run_with_a_handover_section_loads_as_a_handover_policy_and_a_bad_one_
     (run_dir / "config.yaml").write_text(yaml.safe_dump(data))
     with pytest.raises(AgentLoadError, match="handover"):
         load_agent(run_dir)
+
+
+def test_the_shipped_handover_agent_arrives_with_the_heading_for_less_energy_than_ptc() -> None:
+    """The claim of the README's issue-10 table, on a smaller set than the benchmark's (60 starts, T_con 10 and 40)."""
+    from train.agents import PRETRAINED
+    from train.evaluation import evaluate, make_scenario
+    from train.residual import HandoverPolicy
+
+    _, agent = load_agent(PRETRAINED["dagger-handover"])
+    assert isinstance(agent, HandoverPolicy)
+    for T_con in (10.0, 40.0):
+        scenario = make_scenario("random", n=60, seed=21, env_kwargs={"T_con": T_con, "start_distance": (0.3, 3.0)})
+        results = evaluate({"agent": agent, "ptc": "ptc"}, scenario)
+        learned, ptc = results["agent"], results["ptc"]
+        assert learned.success.mean() >= 0.98
+        assert np.mean(learned.final_heading_error) <= 0.12
+        assert np.mean(learned.energy) < np.mean(ptc.energy)

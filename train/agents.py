@@ -10,6 +10,7 @@ PRETRAINED = {
     "residual-ppo": PRETRAINED_DIR / "residual_ppo",
     "ppo": PRETRAINED_DIR / "ppo",
     "dagger": PRETRAINED_DIR / "dagger",
+    "dagger-handover": PRETRAINED_DIR / "dagger_handover",
 }
 
 
@@ -54,7 +55,9 @@ def load_agent(path: str | Path) -> tuple[str, Any]:
         params = EnvParams.from_kwargs(**config.env_kwargs)
         try:
             expert = ExpertPolicy(make_controller(handover["expert"]), params.u_max, params.omega_max)
-            policy = HandoverPolicy(policy, expert, handover["distance"], handover["time_fraction"])
+            policy = HandoverPolicy(
+                policy, expert, handover["distance"], handover["time_fraction"], handover.get("speed_margin", 0.0)
+            )
         except (KeyError, TypeError, ValueError) as error:
             raise AgentLoadError(f"agent {str(path)!r} has an invalid handover section: {error}") from error
     return label, policy

@@ -271,39 +271,37 @@ def evaluate_by_T_con(policy: Any, params: EnvParams, T_cons: tuple[float, ...],
     return rows
 
 
-#: Hand-over distances [m] and time fractions tried by :func:`select_handover`.
-HANDOVER_GRID = ((0.0, 0.02, 0.05, 0.1, 0.2), (0.8, 0.9, 0.95, 1.0))
+#: Hand-overs tried by :func:`select_handover`: (distance [m], time fraction, speed margin) of HandoverPolicy.
+HANDOVER_GRID = [(0.0, f, m) for f in (0.8, 0.85, 0.9, 1.0) for m in (0.0, 1.5, 2.0, 3.0)]
 
 
-def handover_policy(model: Any, expert: str, params: EnvParams, distance: float, fraction: float) -> Any:
-    """The network ``model`` handing over to the law ``expert`` within ``distance`` or after ``fraction`` T_con."""
+def handover_policy(model: Any, expert: str, params: EnvParams, distance: float, fraction: float, margin: float) -> Any:
+    """The network ``model`` handing over to the law ``expert`` (train.residual.HandoverPolicy)."""
     from baselines.controllers import make_controller
     from baselines.expert import ExpertPolicy
     from train.residual import HandoverPolicy
 
     law = ExpertPolicy(make_controller(expert), params.u_max, params.omega_max)
-    return HandoverPolicy(model, law, distance, fraction)
+    return HandoverPolicy(model, law, distance, fraction, margin)
 
 
 def select_handover(model: Any, config: DaggerConfig, params: EnvParams) -> tuple[dict[str, Any], list[dict]]:
-    """The hand-over (distance, time fraction) of HANDOVER_GRID that arrives in time most often on the evaluation
-    starts, then (among those in time in >= 99 % at every T_con) spends the least energy; with every row tried."""
+    """The hand-over of HANDOVER_GRID that, on the evaluation starts (seed 12345, not a benchmark's), arrives in
+    time in >= 99 % of episodes with a mean final heading error <= 0.1 rad at every T_con and spends the least
+    energy; failing that, the one that arrives in time most often. Returns it with every row tried."""
     tried = []
-    for distance in HANDOVER_GRID[0]:
-        for fraction in HANDOVER_GRID[1]:
-            policy = handover_policy(model, config.handover_expert, params, distance, fraction)
-            rows = evaluate_by_T_con(policy, params, config.eval_T_con, config.eval_episodes, 12345)
-            tried.append({"distance": distance, "time_fraction": fraction,
-                          "success": min(r["success"] for r in rows), "heading": max(r["heading"] for r in rows),
-                          "energy": sum(r["energy"] * r["T_con"] for r in rows) / len(rows)})  # fmt: skip  # energy x T_con: each T_con alike
-            print(tried[-1], flush=True)
-    good = [t for t in tried if t["success"] >= 0.99]
-    best = min(good, key=lambda t: t["energy"]) if good else max(tried, key=lambda t: t["success"])
-    return {
-        "expert": config.handover_expert,
-        "distance": best["distance"],
-        "time_fraction": best["time_fraction"],
-    }, tried
+    for distance, fraction, margin in HANDOVER_GRID:
+        policy = handover_policy(model, config.handover_expert, params, distance, fraction, margin)
+        rows = evaluate_by_T_con(policy, params, config.eval_T_con, config.eval_episodes, 12345)
+        tried.append({"distance": distance, "time_fraction": fraction, "speed_margin": margin,
+                      "success": min(r["success"] for r in rows), "heading": max(r["heading"] for r in rows),
+                      "energy": sum(r["energy"] * r["T_con"] for r in rows) / len(rows)})  # fmt: skip  # energy x T_con: each T_con alike
+        print(tried[-1], flush=True)
+    good = [t for t in tried if t["success"] >= 0.99 and t["heading"] <= 0.1]
+    best = min(good, key=lambda t: t["energy"]) if good else max(tried, key=lambda t: (t["success"], -t["heading"]))
+    chosen = {k: best[k] for k in ("distance", "time_fraction", "speed_margin")}
+    selected_on = f"{config.eval_episodes} random starts per T_con in {list(config.eval_T_con)}, seed 12345"
+    return {"expert": config.handover_expert, **chosen, "selected_on": selected_on}, tried
 
 
 def run(config: DaggerConfig, run_dir: Path, command: list[str]) -> Path:

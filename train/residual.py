@@ -130,18 +130,28 @@ def zero_init_last_layer(model: Any, gain: float = 1e-3) -> None:
 class HandoverPolicy:
     """A learned policy that hands the robot over to an analytic prescribed-time law for the finish.
 
-    The network acts while the robot is farther than ``distance`` from the goal and the time is below
-    ``time_fraction`` T_con; from then on (for that observation) the ``expert`` does. Put as a residual on the
-    law: action = law + w (network - law) with w = 1 before the hand-over and 0 after it. Networks cloned
-    from minimum-energy plans spend little energy but miss the last centimetres (see train.dagger); a
+    The network acts until, for the current observation, the robot is within ``distance`` of the goal, or the
+    time is past ``time_fraction`` T_con, or the time left is less than ``speed_margin`` times the straight-line
+    time d / u_max (the network is behind schedule); then the ``expert`` acts. Put as a residual on the law:
+    action = law + w (network - law) with w = 1 before the hand-over and 0 after it. Networks cloned from
+    minimum-energy plans spend little energy but miss the last centimetres (see train.dagger); a
     prescribed-time law that also steers the heading (``pt-astolfi``) finishes from wherever they are.
     """
 
-    def __init__(self, model: Any, expert: ExpertPolicy, distance: float, time_fraction: float) -> None:
+    def __init__(
+        self, model: Any, expert: ExpertPolicy, distance: float, time_fraction: float, speed_margin: float = 0.0
+    ) -> None:
         self.model = model
         self.expert = expert
         self.distance = check_range("handover distance", distance, 0.0, 1e6)
         self.time_fraction = check_range("handover time_fraction", time_fraction, 0.0, 1.0, low_inclusive=False)
+        self.speed_margin = check_range("handover speed_margin", speed_margin, 0.0, 1e6)
+
+    def handing_over(self, batch: NDArray[np.floating]) -> NDArray[np.bool_]:
+        """Which observations (N, 10) the law acts on (features: 0 distance, 6 t / T_con, 7 T_con)."""
+        time_left = batch[:, 7] * (1.0 - batch[:, 6])
+        behind = time_left < self.speed_margin * batch[:, 0] / self.expert.u_max
+        return (batch[:, 0] < self.distance) | (batch[:, 6] > self.time_fraction) | behind
 
     def predict(
         self,
@@ -154,7 +164,5 @@ class HandoverPolicy:
         batch = obs[None] if obs.ndim == 1 else obs
         learned, state = self.model.predict(batch, state, episode_start, deterministic)
         expert, _ = self.expert.predict(batch, episode_start=episode_start)
-        # observation features 0 and 6: distance to the goal and t / T_con (dwr_gym.core.OBSERVATION_NAMES)
-        finish = (batch[:, 0] < self.distance) | (batch[:, 6] > self.time_fraction)
-        action = np.where(finish[:, None], expert, np.clip(learned, -1.0, 1.0)).astype(np.float32)
+        action = np.where(self.handing_over(batch)[:, None], expert, np.clip(learned, -1.0, 1.0)).astype(np.float32)
         return (action[0] if obs.ndim == 1 else action), state
