@@ -2,7 +2,8 @@
 
 Every function takes numpy arrays of matching, broadcastable shapes and returns arrays of the same
 shape: one call handles N robots. Given Python floats instead, the same code runs on the ``math``
-module (see :data:`SCALAR_MATH`), which is what keeps a single robot's step cheap. Nothing here keeps state or knows about Gymnasium; the
+module (see :data:`SCALAR_MATH`), which is what keeps a single robot's step cheap; on large float64
+arrays, its sin, cos, tanh, arcsin and arctan2 are torch's SIMD kernels (see :data:`ARRAY_MATH`). Nothing here keeps state or knows about Gymnasium; the
 single env, the vector env and the controllers in :mod:`baselines` all call these functions, so
 each equation of the paper is written exactly once.
 
