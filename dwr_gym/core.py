@@ -348,31 +348,20 @@ def transition(
         scaling = model.conventional_scaling(time, state.T_con, max_gain=params.time_gain_cap)
         time_term = -params.time_weight * dt * d * scaling
     else:
-        time_term = 0.0 if scalar else np.zeros_like(d)
-    if params.effort_weight != 0.0:
-        effort_term = -params.effort_weight * dt * (a_u * a_u + a_omega * a_omega)
-    else:
-        effort_term = 0.0 if scalar else np.zeros_like(d)
-    energy_term = (
-        -params.energy_weight * dt * power if params.energy_weight != 0.0 else (0.0 if scalar else np.zeros_like(d))
+        time_term = zero_like(d)
+    effort_term = (
+        -params.effort_weight * dt * (a_u * a_u + a_omega * a_omega) if params.effort_weight != 0.0 else zero_like(d)
     )
-    if scalar:
-        arrival_term = params.arrival_bonus if is_success and in_time else 0.0
-        late_term = 0.0 if is_success or in_time else -params.late_penalty * dt
-        arena_term = -params.arena_penalty if out_of_arena else 0.0
-    else:
-        arrival_term = np.where(is_success & in_time, params.arrival_bonus, 0.0)
-        late_term = np.where(is_success | in_time, 0.0, -params.late_penalty * dt)
-        arena_term = np.where(out_of_arena, -params.arena_penalty, 0.0)
+    energy_term = -params.energy_weight * dt * power if params.energy_weight != 0.0 else zero_like(d)
     terms = {
         "progress": params.progress_weight * (state.lyapunov - params.shaping_discount * next_potential),
         "time": time_term,
         "effort": effort_term,
         "energy": energy_term,
-        "arrival": arrival_term,
+        "arrival": xp.where(is_success & in_time, params.arrival_bonus, 0.0),
         "heading": heading_term(is_success, coords.psi, params.heading_weight),
-        "late": late_term,
-        "arena": arena_term,
+        "late": xp.where(xp.logical_not(is_success | in_time), -params.late_penalty * dt, 0.0),
+        "arena": xp.where(out_of_arena, -params.arena_penalty, 0.0),
     }
     state.lyapunov = lyapunov
     truncated = (state.step_count >= state.max_steps) & xp.logical_not(terminated)
@@ -380,17 +369,13 @@ def transition(
     obs = observe(state, coords, params, space, pose_noise)
     if perturbation is not None:  # the measurement side
         obs = perturbation.measure(obs)
-    reward = (
-        terms["progress"]
-        + time_term
-        + effort_term
-        + energy_term
-        + arrival_term
-        + terms["heading"]
-        + late_term
-        + arena_term
-    )
+    reward = sum(terms.values())
     return StepResult(obs, reward, terminated, truncated, coords, is_success, u, omega, terms)  # type: ignore[arg-type]
+
+
+def zero_like(value: Any) -> Any:
+    """0.0 for one robot, a fresh array of zeros like ``value`` for a batch."""
+    return 0.0 if model.namespace(value) is model.SCALAR_MATH else np.zeros_like(value)
 
 
 def heading_term(is_success: Any, psi: Any, weight: float) -> Any:

@@ -47,17 +47,14 @@ def load_agent(path: str | Path) -> tuple[str, Any]:
     policy = as_policy(model, config)
     handover = load_extra(run_dir).get("handover")
     if handover:  # a network that hands over to an analytic law for the finish (train.residual.HandoverPolicy)
-        from baselines.controllers import make_controller
-        from baselines.expert import ExpertPolicy
         from dwr_gym.params import EnvParams
-        from train.residual import HandoverPolicy
+        from train.residual import make_handover_policy
 
-        params = EnvParams.from_kwargs(**config.env_kwargs)
         try:
-            expert = ExpertPolicy(make_controller(handover["expert"]), params.u_max, params.omega_max)
-            policy = HandoverPolicy(
-                policy, expert, handover["distance"], handover["time_fraction"], handover.get("speed_margin", 0.0)
-            )
+            policy = make_handover_policy(
+                policy, handover["expert"], EnvParams.from_kwargs(**config.env_kwargs), handover["distance"],
+                handover["time_fraction"], handover.get("speed_margin", 0.0),
+            )  # fmt: skip
         except (KeyError, TypeError, ValueError) as error:
             raise AgentLoadError(f"agent {str(path)!r} has an invalid handover section: {error}") from error
     return label, policy

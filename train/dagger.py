@@ -83,8 +83,8 @@ class DaggerConfig:
     """The env the agent is for (DWRPointStabilization-v1's defaults)."""
     handover_expert: str = ""
     """If set (e.g. "pt-astolfi"), the trained network hands over to this analytic law for the finish
-    (train.residual.HandoverPolicy), at the distance and time fraction of HANDOVER_GRID that do best on the
-    evaluation starts (not the benchmark's): all episodes in time first, then the least energy."""
+    (train.residual.HandoverPolicy), with the thresholds of HANDOVER_GRID that :func:`select_handover` chooses
+    on the evaluation starts (not a benchmark's)."""
 
 
 def _solve(job: tuple[tuple[float, float, float], float, float, float, float, int]) -> Any:
@@ -275,23 +275,23 @@ def evaluate_by_T_con(policy: Any, params: EnvParams, T_cons: tuple[float, ...],
 HANDOVER_GRID = [(0.0, f, m) for f in (0.8, 0.85, 0.9, 1.0) for m in (0.0, 1.5, 2.0, 3.0)]
 
 
-def handover_policy(model: Any, expert: str, params: EnvParams, distance: float, fraction: float, margin: float) -> Any:
-    """The network ``model`` handing over to the law ``expert`` (train.residual.HandoverPolicy)."""
-    from baselines.controllers import make_controller
-    from baselines.expert import ExpertPolicy
-    from train.residual import HandoverPolicy
+def check_handover_expert(name: str) -> None:
+    """Exit with a one-line message unless ``name`` is an analytic controller."""
+    from baselines.controllers import CONTROLLERS
 
-    law = ExpertPolicy(make_controller(expert), params.u_max, params.omega_max)
-    return HandoverPolicy(model, law, distance, fraction, margin)
+    if name not in CONTROLLERS:
+        raise SystemExit(f"--handover-expert {name!r} is invalid: expected one of {', '.join(CONTROLLERS)}")
 
 
 def select_handover(model: Any, config: DaggerConfig, params: EnvParams) -> tuple[dict[str, Any], list[dict]]:
     """The hand-over of HANDOVER_GRID that, on the evaluation starts (seed 12345, not a benchmark's), arrives in
     time in >= 99 % of episodes with a mean final heading error <= 0.1 rad at every T_con and spends the least
     energy; failing that, the one that arrives in time most often. Returns it with every row tried."""
+    from train.residual import make_handover_policy
+
     tried = []
     for distance, fraction, margin in HANDOVER_GRID:
-        policy = handover_policy(model, config.handover_expert, params, distance, fraction, margin)
+        policy = make_handover_policy(model, config.handover_expert, params, distance, fraction, margin)
         rows = evaluate_by_T_con(policy, params, config.eval_T_con, config.eval_episodes, 12345)
         tried.append({"distance": distance, "time_fraction": fraction, "speed_margin": margin,
                       "success": min(r["success"] for r in rows), "heading": max(r["heading"] for r in rows),
@@ -310,13 +310,10 @@ def run(config: DaggerConfig, run_dir: Path, command: list[str]) -> Path:
 
     import torch
 
-    from baselines.controllers import CONTROLLERS
     from train.training import EVAL_FILE, MODEL_FILE, save_config
 
-    if config.handover_expert and config.handover_expert not in CONTROLLERS:
-        raise SystemExit(
-            f"--handover-expert {config.handover_expert!r} is invalid: expected one of {', '.join(CONTROLLERS)}"
-        )
+    if config.handover_expert:
+        check_handover_expert(config.handover_expert)
     if (run_dir / MODEL_FILE).exists():
         raise SystemExit(f"--run-dir {str(run_dir)!r} already holds a trained model: choose another")
     run_dir.mkdir(parents=True, exist_ok=True)
@@ -396,12 +393,10 @@ def add_handover(run_dir: Path, expert: str, eval_episodes: int) -> None:
     """Choose the hand-over of a trained run (:func:`select_handover`) and write it into its config.yaml."""
     from stable_baselines3 import PPO
 
-    from baselines.controllers import CONTROLLERS
     from train.agents import load_extra
     from train.training import MODEL_FILE, load_config, save_config
 
-    if expert not in CONTROLLERS:
-        raise SystemExit(f"--handover-expert {expert!r} is invalid: expected one of {', '.join(CONTROLLERS)}")
+    check_handover_expert(expert)
     if not (run_dir / MODEL_FILE).is_file():
         raise SystemExit(f"--run-dir {str(run_dir)!r} holds no {MODEL_FILE}: train it first")
     train_config, extra = load_config(run_dir), load_extra(run_dir)

@@ -166,3 +166,13 @@ class HandoverPolicy:
         expert, _ = self.expert.predict(batch, episode_start=episode_start)
         action = np.where(self.handing_over(batch)[:, None], expert, np.clip(learned, -1.0, 1.0)).astype(np.float32)
         return (action[0] if obs.ndim == 1 else action), state
+
+
+def make_handover_policy(
+    model: Any, expert: str, params: Any, distance: float, time_fraction: float, speed_margin: float = 0.0
+) -> HandoverPolicy:
+    """``model`` handing over to the controller named ``expert``, scaled to the action limits of ``params`` (EnvParams)."""
+    from baselines.controllers import make_controller
+
+    law = ExpertPolicy(make_controller(expert), params.u_max, params.omega_max)
+    return HandoverPolicy(model, law, distance, time_fraction, speed_margin)
