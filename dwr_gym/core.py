@@ -110,13 +110,13 @@ class TaskState:
         """Error coordinates of the current poses."""
         return error_coordinates(self.x, self.y, self.psi, k)
 
-    def world_pose(self) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """The robots' poses in the world frame."""
+    def world_pose(self, copy: bool = True) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """The robots' poses in the world frame (with ``copy=False``, maybe the state's own arrays)."""
         if type(self.x) is float:
             if self.goal_x == 0.0 and self.goal_y == 0.0 and self.goal_psi == 0.0:  # the frames coincide
                 return self.x, self.y, self.psi
         elif not (self.goal_x.any() or self.goal_y.any() or self.goal_psi.any()):  # every goal at the origin
-            return self.x.copy(), self.y.copy(), self.psi.copy()
+            return (self.x.copy(), self.y.copy(), self.psi.copy()) if copy else (self.x, self.y, self.psi)
         dx, dy = model.rotate(self.x, self.y, self.goal_cos, self.goal_sin)
         return self.goal_x + dx, self.goal_y + dy, model.wrap_angle(self.psi + self.goal_psi)
 
@@ -170,8 +170,9 @@ def observe(
     features = np.empty((len(OBSERVATION_NAMES), dist.shape[0]), dtype=np.float32)  # filled row by row: contiguous
     features[0] = dist
     with np.errstate(divide="ignore", invalid="ignore"):  # 0 / 0 at the goal, set just below
-        np.divide(-coords.x, dist, out=features[1], casting="same_kind")  # cos(alpha) of eq. (3) without trigonometry
-        np.divide(-coords.y, dist, out=features[2], casting="same_kind")
+        np.divide(coords.x, dist, out=features[1], casting="same_kind")  # -cos(alpha) of eq. (3) without trigonometry
+        np.divide(coords.y, dist, out=features[2], casting="same_kind")
+    np.negative(features[1:3], out=features[1:3])  # -(x / d) is (-x) / d exactly, and cheaper in float32
     at_goal = np.flatnonzero(dist == 0.0)
     if at_goal.size:
         features[1, at_goal], features[2, at_goal] = 1.0, 0.0
@@ -213,7 +214,7 @@ def new_state(
     xp = model.namespace(*start, *goal)
     x, y, psi = model.to_goal_frame(*start, *goal)
     coords = error_coordinates(x, y, psi, params.k)
-    farthest = float(np.max(coords.distance))
+    farthest = coords.distance if xp is model.SCALAR_MATH else float(np.max(coords.distance))
     if farthest > params.arena_radius:
         raise ValueError(
             f"start pose is {farthest:.3f} m from the goal, outside the arena: "
@@ -311,7 +312,9 @@ def transition(
     """
     if action_noise is not None:
         action = np.asarray(action, dtype=np.float64) + params.actuation_noise * action_noise
-    a_u, a_omega, u, omega = commands_from_action(action, params, getattr(state.x, "dtype", np.float64))
+    a_u, a_omega, u, omega = commands_from_action(
+        action, params, np.float64 if type(state.x) is float else state.x.dtype
+    )
     if perturbation is not None:  # the command side: the velocities the robot really has
         u, omega = perturbation.command(u, omega, state.step_count)
     state.x, state.y, state.psi = model.integrate_unicycle(
@@ -342,51 +345,64 @@ def transition(
     next_potential = xp.where(terminated, 0.0, lyapunov) if params.zero_terminal_potential else lyapunov
 
     d, dt = coords.distance, params.dt
-    # A term whose weight is 0 is 0 and is not computed.
+    # A term whose weight is 0 is 0: it is not computed (None here), nor summed.
+    progress = params.progress_weight * (state.lyapunov - params.shaping_discount * next_potential)
+    time_term = effort_term = energy_term = None
     if params.time_weight != 0.0:
         time = state.step_count * dt if scalar else (state.step_count * dt).astype(state.x.dtype)
-        scaling = model.conventional_scaling(time, state.T_con, max_gain=params.time_gain_cap)
-        time_term = -params.time_weight * dt * d * scaling
-    else:
-        time_term = zero_like(d)
-    effort_term = (
-        -params.effort_weight * dt * (a_u * a_u + a_omega * a_omega) if params.effort_weight != 0.0 else zero_like(d)
-    )
-    energy_term = -params.energy_weight * dt * power if params.energy_weight != 0.0 else zero_like(d)
-    terms = {
-        "progress": params.progress_weight * (state.lyapunov - params.shaping_discount * next_potential),
-        "time": time_term,
-        "effort": effort_term,
-        "energy": energy_term,
-        "arrival": xp.where(is_success & in_time, params.arrival_bonus, 0.0),
-        "heading": heading_term(is_success, coords.psi, params.heading_weight),
-        "late": xp.where(xp.logical_not(is_success | in_time), -params.late_penalty * dt, 0.0),
-        "arena": xp.where(out_of_arena, -params.arena_penalty, 0.0),
-    }
+        time_term = (
+            -params.time_weight * dt * d * model.conventional_scaling(time, state.T_con, max_gain=params.time_gain_cap)
+        )
+    if params.effort_weight != 0.0:
+        effort_term = -params.effort_weight * dt * (a_u * a_u + a_omega * a_omega)
+    if params.energy_weight != 0.0:
+        energy_term = -params.energy_weight * dt * power
+    late = xp.where(xp.logical_not(is_success | in_time), -params.late_penalty * dt, 0.0)
+    reward = progress
+    for term in (time_term, effort_term, energy_term, late):
+        if term is not None:
+            reward = reward + term
+    # arrival, heading and arena are 0 but where an episode ends; they are added last, in REWARD_TERMS' order
+    # (late, the term between them there, is 0 where arrival and heading are not).
+    ended = terminated if scalar else np.flatnonzero(terminated)
+    arrival, heading, arena = terminal_terms(is_success, in_time, out_of_arena, ended, coords.psi, params)
+    if scalar:
+        reward = reward + arrival + heading + arena
+    elif ended.size:
+        reward[ended] = reward[ended] + arrival[ended] + heading[ended] + arena[ended]
+    terms = {"progress": progress, "time": time_term, "effort": effort_term, "energy": energy_term,
+             "arrival": arrival, "heading": heading, "late": late, "arena": arena}  # fmt: skip
+    for name in ("time", "effort", "energy"):
+        if terms[name] is None:
+            terms[name] = 0.0 if scalar else np.zeros_like(d)
     state.lyapunov = lyapunov
     truncated = (state.step_count >= state.max_steps) & xp.logical_not(terminated)
 
     obs = observe(state, coords, params, space, pose_noise)
     if perturbation is not None:  # the measurement side
         obs = perturbation.measure(obs)
-    reward = sum(terms.values())
     return StepResult(obs, reward, terminated, truncated, coords, is_success, u, omega, terms)  # type: ignore[arg-type]
 
 
-def zero_like(value: Any) -> Any:
-    """0.0 for one robot, a fresh array of zeros like ``value`` for a batch."""
-    return 0.0 if model.namespace(value) is model.SCALAR_MATH else np.zeros_like(value)
-
-
-def heading_term(is_success: Any, psi: Any, weight: float) -> Any:
-    """The heading term of the reward, weight (cos(psi) - 1) on arrival, else 0; the cosine only where it is needed."""
+def terminal_terms(
+    is_success: Any, in_time: Any, out_of_arena: Any, ended: Any, psi: Any, params: EnvParams
+) -> tuple[Any, Any, Any]:
+    """The reward terms paid when an episode ends: (arrival (in time), heading (weight (cos(psi) - 1) on
+    arrival), arena (on leaving it)). Floats for one robot (``ended`` is whether its episode ended); for a
+    batch, arrays that are 0 but at the indices ``ended`` of the robots whose episodes ended."""
     if model.namespace(psi) is model.SCALAR_MATH:
-        return weight * (math.cos(psi) - 1.0) if is_success else 0.0
-    term = np.zeros_like(psi)
-    arrived = np.flatnonzero(is_success)
-    if arrived.size:
-        term[arrived] = weight * (np.cos(psi[arrived]) - 1.0)
-    return term
+        return (
+            params.arrival_bonus if is_success and in_time else 0.0,
+            params.heading_weight * (math.cos(psi) - 1.0) if is_success else 0.0,
+            -params.arena_penalty if out_of_arena else 0.0,
+        )
+    arrival, heading, arena = np.zeros_like(psi), np.zeros_like(psi), np.zeros_like(psi)
+    if ended.size:
+        success = is_success[ended]
+        arrival[ended] = np.where(success & in_time[ended], params.arrival_bonus, 0.0)
+        heading[ended] = np.where(success, params.heading_weight * (np.cos(psi[ended]) - 1.0), 0.0)
+        arena[ended] = np.where(out_of_arena[ended], -params.arena_penalty, 0.0)
+    return arrival, heading, arena
 
 
 def infos(
@@ -395,8 +411,8 @@ def infos(
     """Infos after a reset (``result`` None) or a step: arrays (N,) and "pose" (N, 3) for a batch, or
     Python scalars and "pose" (3,) for one robot. "pose" is the world pose."""
     xp = model.namespace(coords.distance)
-    zeros = 0.0 * coords.distance
-    x, y, psi = state.world_pose()
+    zeros = 0.0 * coords.distance if result is None else None  # the reset's velocities and reward terms
+    x, y, psi = state.world_pose(copy=False)  # stacked below: copied there
     is_success = (coords.distance <= params.goal_tolerance) if result is None else result.is_success
     scalar = xp is model.SCALAR_MATH
     return {

@@ -18,6 +18,9 @@ from dwr_gym.params import EnvParams
 from dwr_gym.validation import POSE_LIMIT, as_choice, as_int
 
 MAX_NUM_ENVS = 1_000_000
+#: The keys of the masks that Gymnasium's vector infos carry beside each entry.
+_INFO_MASKS = tuple(f"_{key}" for key in (*core.INFO_KEYS, "reward_terms"))
+_TERM_MASKS = tuple(f"_{name}" for name in core.REWARD_TERMS)
 """More robots than this would take gigabytes for the state alone; larger values are refused."""
 
 Trail = list[tuple[float, float]]
@@ -198,8 +201,8 @@ class DWRPointStabilizationVectorEnv(HorizonSpec, VectorEnv):
     def _with_masks(self, infos: dict[str, Any], mask: NDArray[np.bool_] | None = None) -> dict[str, Any]:
         """Add the masks ``_key`` that Gymnasium's vector infos carry: all True, or ``mask`` after a partial reset."""
         mask = self._all if mask is None else mask
-        infos["reward_terms"].update({f"_{name}": mask for name in core.REWARD_TERMS})
-        infos.update({f"_{key}": mask for key in (*core.INFO_KEYS, "reward_terms")})
+        infos["reward_terms"].update(dict.fromkeys(_TERM_MASKS, mask))
+        infos.update(dict.fromkeys(_INFO_MASKS, mask))
         return infos
 
     def _start_trails(self, index: NDArray[np.intp], pose: NDArray[np.floating]) -> None:
@@ -255,7 +258,7 @@ class DWRPointStabilizationVectorEnv(HorizonSpec, VectorEnv):
             done = terminated | truncated
             if done.any():
                 infos["final_obs"], infos["_final_obs"] = obs.copy(), done
-                infos["final_info"] = {**infos, **{f"_{key}": done for key in (*core.INFO_KEYS, "reward_terms")}}
+                infos["final_info"] = {**infos, **dict.fromkeys(_INFO_MASKS, done)}
                 infos["_final_info"] = done
                 restart = np.flatnonzero(done)
                 self._restart(restart, obs, infos)
