@@ -10,6 +10,7 @@ import pytest
 from gymnasium.vector import AutoresetMode, SyncVectorEnv
 
 import dwr_gym  # noqa: F401
+from dwr_gym import core
 from dwr_gym.vector_env import DWRPointStabilizationVectorEnv
 
 ENV_ID = "DWRPointStabilization-v0"
@@ -105,6 +106,35 @@ def test_vector_env_matches_sync_vector_env_step_by_step(mode: AutoresetMode, nu
         ended = done
     assert dones > 2 * num_envs  # autoreset was exercised
     assert terminated.dtype == bool
+
+
+@pytest.mark.filterwarnings("ignore:.*out of date")
+@pytest.mark.parametrize("env_id", ["DWRPointStabilization-v0", "DWRPointStabilization-v1"])
+def test_terminal_reward_terms_are_paid_where_episodes_end_as_in_the_single_env(env_id: str) -> None:
+    """The batch computes arrival, heading and arena only for the robots whose episodes end; each robot's
+    reward and terms still equal the single env's, and the reward is the sum of the terms."""
+    starts = np.array([[0.005, 0.0, 1.0], [4.99, 0.0, 0.0], [1.0, 1.0, 0.5], [0.0, 0.004, -2.0], [-4.98, 0.0, 0.0]])
+    # 0 and 3 are within goal_tolerance (arrive), 1 and 4 drive out of the arena, 2 drives on
+    actions = np.array([[0.0, 0.0], [1.0, 0.0], [0.3, 0.2], [0.0, 0.5], [-1.0, 0.3]], dtype=np.float32)
+    vec = gym.make_vec(env_id, num_envs=len(starts))
+    vec.reset(seed=0, options={"start": starts, "T_con": 20.0})
+    _, rewards, terminated, _, info = vec.step(actions)
+    np.testing.assert_array_equal(terminated, [True, True, False, True, True])
+    terms = info["reward_terms"]
+    assert np.all(terms["arrival"] == [10.0, 0.0, 0.0, 10.0, 0.0])
+    assert np.all(terms["arena"] == [0.0, -10.0, 0.0, 0.0, -10.0])
+    assert np.all(terms["heading"][[1, 2, 4]] == 0.0)
+    assert terms["heading"][0] == pytest.approx(5.0 * (np.cos(1.0) - 1.0))  # weight 5 x (cos(psi) - 1) on arrival
+    assert terms["heading"][3] == pytest.approx(5.0 * (np.cos(-2.0 + 0.5 * 2.0 * 0.05) - 1.0))
+    np.testing.assert_allclose(rewards, sum(terms[name] for name in core.REWARD_TERMS), rtol=0, atol=1e-12)
+    for i, start in enumerate(starts):
+        env = gym.make(env_id)
+        env.reset(seed=0, options={"start": tuple(start), "T_con": 20.0})
+        _, reward, done, _, ref = env.step(actions[i])
+        assert done == terminated[i]
+        assert reward == pytest.approx(rewards[i], abs=1e-12)
+        for name in core.REWARD_TERMS:
+            assert ref["reward_terms"][name] == pytest.approx(terms[name][i], abs=1e-12), name
 
 
 def test_seeding_is_reproducible_and_per_env() -> None:
