@@ -1,6 +1,6 @@
 """Instructions per step, counted by valgrind's callgrind, for our env and Gymnasium's CartPole.
 
-    python benchmarks/instructions.py           # single envs and vector envs at N = 4096 (about 5 minutes)
+    python benchmarks/instructions.py           # single envs and vector envs at N = 4096 (5-10 minutes)
     python benchmarks/instructions.py --single  # single envs only (about 1 minute)
 
 Time on a shared machine varies by tens of percent from one run to the next; the number of instructions a
@@ -9,7 +9,7 @@ compare two versions of the code with: it counts the work, not the memory stalls
 timings of ``throughput.py`` and does not replace them. Each count is the difference between two runs
 that differ only in the number of steps, so start-up and imports cancel. Needs valgrind (Debian:
 ``apt install valgrind``). Our vector env runs as it does by default (torch's float64 kernels when torch
-is installed).
+is installed), with one OpenMP thread (its operations at N = 4096 run on one thread anyway).
 """
 
 from __future__ import annotations
@@ -66,7 +66,8 @@ def collected(env_id: str, num_envs: int, steps: int) -> int:
     with tempfile.TemporaryDirectory() as tmp:
         command = ["valgrind", "--tool=callgrind", f"--callgrind-out-file={tmp}/out", sys.executable, __file__,
                    "--child", env_id, str(num_envs), str(steps)]  # fmt: skip
-        env = {**os.environ, "PYTHONHASHSEED": "0"}  # str hashes vary between runs, and with them dict work
+        # str hashes vary between runs, and with them dict work; idle OpenMP threads spin, and callgrind counts that
+        env = {**os.environ, "PYTHONHASHSEED": "0", "OMP_NUM_THREADS": "1"}
         result = subprocess.run(command, capture_output=True, text=True, check=True, env=env)
     match = re.search(r"Collected\s*:\s*(\d+)", result.stderr)
     if match is None:
