@@ -358,7 +358,7 @@ def transition(
     if params.energy_weight != 0.0:
         energy_term = -params.energy_weight * dt * power
     late = xp.where(xp.logical_not(is_success | in_time), -params.late_penalty * dt, 0.0)
-    reward = progress
+    reward = progress  # a new array once late is added: the writes below do not touch progress
     for term in (time_term, effort_term, energy_term, late):
         if term is not None:
             reward = reward + term

@@ -18,10 +18,10 @@ from dwr_gym.params import EnvParams
 from dwr_gym.validation import POSE_LIMIT, as_choice, as_int
 
 MAX_NUM_ENVS = 1_000_000
+"""More robots than this would take gigabytes for the state alone; larger values are refused."""
 #: The keys of the masks that Gymnasium's vector infos carry beside each entry.
 _INFO_MASKS = tuple(f"_{key}" for key in (*core.INFO_KEYS, "reward_terms"))
 _TERM_MASKS = tuple(f"_{name}" for name in core.REWARD_TERMS)
-"""More robots than this would take gigabytes for the state alone; larger values are refused."""
 
 Trail = list[tuple[float, float]]
 
