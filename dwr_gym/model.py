@@ -57,6 +57,7 @@ SCALAR_MATH: Any = _ScalarMath
 #: Below this many elements numpy's own float64 functions beat torch's (whose call costs a few microseconds).
 TORCH_MIN_SIZE = 512
 _torch: Any = None  # the torch module once imported; False if it cannot be
+_FLOAT64 = np.dtype(np.float64)
 
 
 def _torch_module() -> Any:
@@ -83,12 +84,14 @@ def _vectorised(name: str) -> Any:
     numpy_fn = getattr(np, name)
     torch_name = {"arctan2": "atan2", "arcsin": "asin"}.get(name, name)
 
-    def usable(a: Any, shape: tuple[int, ...]) -> bool:
-        return type(a) is np.ndarray and a.dtype == np.float64 and a.shape == shape and a.flags.c_contiguous and a.flags.writeable  # fmt: skip
-
     def fn(*args: Any) -> Any:
         first = args[0]
-        if type(first) is np.ndarray and first.size >= TORCH_MIN_SIZE and all(usable(a, first.shape) for a in args):
+        if type(first) is np.ndarray and first.size >= TORCH_MIN_SIZE:
+            shape = first.shape
+            for a in args:  # float64 dtypes are one object: compared by identity; flags: made once
+                if not (type(a) is np.ndarray and a.dtype is _FLOAT64 and a.shape == shape
+                        and (flags := a.flags).c_contiguous and flags.writeable):  # fmt: skip
+                    return numpy_fn(*args)
             torch = _torch_module()
             if torch:
                 return getattr(torch, torch_name)(*map(torch.from_numpy, args)).numpy()
@@ -172,7 +175,7 @@ def sinc(h: ArrayLike) -> FloatArray:
     series = 1.0 + h2 * (-1.0 / 6.0 + h2 * (1.0 / 120.0 + h2 * (-1.0 / 5040.0 + h2 * (1.0 / 362880.0))))
     if namespace(h) is SCALAR_MATH:
         return series if abs(h) <= SINC_SERIES_LIMIT else math.sin(h) / h  # type: ignore[arg-type, operator, return-value]
-    if np.max(h2, initial=0.0) > SINC_SERIES_LIMIT * SINC_SERIES_LIMIT:
+    if h2.size and h2.max() > SINC_SERIES_LIMIT * SINC_SERIES_LIMIT:  # (np.max's initial= doubles its cost)
         large = np.abs(h) > SINC_SERIES_LIMIT
         safe = np.where(large, h, 1.0)
         series = np.where(large, np.sin(safe) / safe, series)

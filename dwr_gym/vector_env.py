@@ -132,17 +132,18 @@ class DWRPointStabilizationVectorEnv(HorizonSpec, VectorEnv):
         start: tuple[NDArray[np.float64], ...] | None = None,
         goal: tuple[NDArray[np.float64], ...] | None = None,
         T_con: NDArray[np.float64] | None = None,
-    ) -> None:
+    ) -> tuple[core.TaskState, core.ErrorCoordinates]:
         """Reset the sub-envs in ``index``: given poses and T_con, else the default goal, and starts and
-        prescribed times drawn per env (in the order a single env draws them)."""
+        prescribed times drawn per env (in the order a single env draws them). Returns the new state of
+        these sub-envs and its error coordinates."""
         n = index.size
         goal = goal if goal is not None else (np.zeros(n), np.zeros(n), np.zeros(n))
         if start is None:
-            local = np.array([core.sample_start(self._rngs[i], self.params) for i in index]).reshape(n, 3)
+            local = np.array([core.sample_start(self._rngs[i], self.params) for i in index.tolist()]).reshape(n, 3)
             start = model.from_goal_frame(local[:, 0], local[:, 1], local[:, 2], *goal)
-        if T_con is None:
-            T_con = np.array([core.sample_T_con(self._rngs[i], self.params) for i in index], dtype=np.float64)
-        core.reset_robots(self._state, index, start, goal, self.params, T_con)  # type: ignore[arg-type]
+        if T_con is None and self.params.T_con_range is not None:  # (else T_con is params.T_con: nothing is drawn)
+            T_con = np.array([core.sample_T_con(self._rngs[i], self.params) for i in index.tolist()], dtype=np.float64)
+        return core.reset_robots(self._state, index, start, goal, self.params, T_con)  # type: ignore[arg-type]
 
     def _noise(self, size: int, sigma: float) -> NDArray[np.float64] | None:
         return self.np_random.standard_normal((self.num_envs, size)) if sigma > 0 else None
@@ -213,9 +214,10 @@ class DWRPointStabilizationVectorEnv(HorizonSpec, VectorEnv):
 
     def _restart(self, index: NDArray[np.intp], obs: NDArray[np.float32], infos: dict[str, Any]) -> None:
         """Autoreset the robots at ``index``: new episodes, whose first observation and info replace the step's."""
-        self._reset_envs(index)
-        fresh = self._state.subset(index)
-        coords = fresh.coordinates(self.params.k)
+        fresh, coords = self._reset_envs(index)
+        if fresh.x.dtype != self._state.x.dtype:  # float32: observe the poses as the state holds them
+            fresh = self._state.subset(index)
+            coords = fresh.coordinates(self.params.k)
         obs[index] = core.observe(fresh, coords, self.params, self.single_observation_space)
         if self.perturbation is not None:  # in SAME_STEP mode final_info keeps the step's disturbance info
             self.perturbation.reset(index, obs[index])

@@ -249,3 +249,28 @@ def test_float32_mode_tracks_float64_and_keeps_its_dtype() -> None:
     assert fast.unwrapped._state.x.dtype == np.float32 and info_f["distance"].dtype == np.float32
     with pytest.raises(ValueError, match="dtype"):
         DWRPointStabilizationVectorEnv(num_envs=2, dtype="float16")
+
+
+@pytest.mark.parametrize("dtype", ["float64", "float32"])
+def test_an_autoreset_episode_starts_as_a_reset_at_its_start_pose_does(dtype: str) -> None:
+    # T_con = 1 s and dt = 0.1 s: every episode ends within 15 steps, so most robots restart in 40 steps.
+    kwargs = {"num_envs": 16, "dtype": dtype, "T_con": 1.0, "dt": 0.1}
+    envs, fresh = gym.make_vec(ENV_ID, **kwargs), gym.make_vec(ENV_ID, **kwargs)
+    envs.reset(seed=3)
+    fresh.reset(seed=0)
+    actions = np.random.default_rng(0).uniform(-1, 1, (16, 2)).astype(np.float32)
+    restarted = 0
+    for _ in range(40):
+        ended = envs.unwrapped._needs_reset.copy()  # the robots whose new episodes this step starts
+        obs, rewards, _, _, info = envs.step(actions)
+        if not ended.any():
+            continue
+        restarted += int(ended.sum())
+        expected, expected_info = fresh.reset(options={"start": info["pose"], "reset_mask": ended})
+        # the features of the pose match exactly; the last two are computed from the unrounded start in float32
+        np.testing.assert_array_equal(obs[ended, :8], expected[ended, :8])
+        np.testing.assert_allclose(obs[ended, 8:], expected[ended, 8:], rtol=0, atol=0 if dtype == "float64" else 1e-6)
+        for key in ("distance", "orientation_error", "energy", "time", "T_con"):
+            np.testing.assert_array_equal(info[key][ended], expected_info[key][ended])
+        assert not rewards[ended].any()
+    assert restarted >= 16
