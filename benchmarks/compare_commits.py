@@ -1,0 +1,116 @@
+"""Time the vector env of two commits against each other, alternating, each against CartPoleVectorEnv.
+
+    python benchmarks/compare_commits.py 279a9bf HEAD            # 6 rounds (about 40 seconds)
+    python benchmarks/compare_commits.py 279a9bf HEAD --rounds 8 --num-envs 1024
+
+This machine has slow phases that last seconds to minutes, in which every step takes up to 1.5x as long:
+two timing runs made minutes apart can differ more than two versions of the code do. So the two commits
+run alternately, each in a fresh process (``git worktree`` checkouts, so the working tree is not touched),
+and each run times our float64 vector env and Gymnasium's CartPoleVectorEnv in interleaved repeats. What
+is compared is each run's median ratio to CartPole, and the median over the rounds. Instruction counts
+(``instructions.py``) compare two versions without noise but leave out memory stalls; this measures time.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def child(num_envs: int, repeats: int, steps: int) -> None:
+    """Print the median step time of ours and CartPole's, and their median ratio (CartPole's time / ours)."""
+    import warnings
+
+    import gymnasium as gym
+    import numpy as np
+
+    import dwr_gym
+
+    warnings.filterwarnings("ignore")
+    envs = {
+        "ours": gym.make_vec("DWRPointStabilization-v0", num_envs=num_envs),
+        "cart": gym.make_vec("CartPole-v1", num_envs=num_envs, vectorization_mode="vector_entry_point"),
+    }
+    rng = np.random.default_rng(0)
+    actions = {
+        "ours": rng.uniform(-1, 1, (num_envs, 2)).astype(np.float32),  # as throughput.py: fixed random actions
+        "cart": rng.integers(0, 2, num_envs),
+    }
+    for name, env in envs.items():
+        env.reset(seed=0)
+        env.step(actions[name])
+    times: dict[str, list[float]] = {"ours": [], "cart": []}
+    for _ in range(repeats):
+        for name, env in envs.items():
+            start = time.perf_counter()
+            for _ in range(steps):
+                env.step(actions[name])
+            times[name].append((time.perf_counter() - start) / steps)
+    ratio = statistics.median(c / o for o, c in zip(times["ours"], times["cart"], strict=True))
+    print(dwr_gym.__file__)
+    print(f"{statistics.median(times['ours']) * 1e6:.1f} {statistics.median(times['cart']) * 1e6:.1f} {ratio:.4f}")
+
+
+def checkout(commit: str, into: Path) -> Path:
+    """A detached worktree of ``commit`` in ``into``."""
+    subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", "-f", str(into), commit],
+                   check=True, capture_output=True)  # fmt: skip
+    return into
+
+
+def measure(tree: Path, num_envs: int) -> tuple[float, float, float]:
+    """(our step [us], CartPole's step [us], CartPole's time / ours) of one run of the code in ``tree``."""
+    result = subprocess.run(
+        [sys.executable, __file__, "--child", str(num_envs)], cwd=tree, capture_output=True, text=True, check=True,
+        env={**os.environ, "PYTHONPATH": str(tree)},
+    )  # fmt: skip
+    where, *numbers = result.stdout.split()
+    if not Path(where).resolve().is_relative_to(tree.resolve()):  # e.g. a non-editable install shadows PYTHONPATH
+        sys.exit(f"the run imported dwr_gym from {where}, not from the checkout {tree}: uninstall that copy")
+    ours, cart, ratio = map(float, numbers)
+    return ours, cart, ratio
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("old", nargs="?", help="the first commit (any git revision)")
+    parser.add_argument("new", nargs="?", help="the second commit")
+    parser.add_argument("--rounds", type=int, default=6, help="alternations of the two (default 6)")
+    parser.add_argument("--num-envs", type=int, default=4096, help="robots in the vector env (default 4096)")
+    parser.add_argument("--child", type=int, help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.child:
+        child(args.child, repeats=15, steps=50)
+        return
+    if not (args.old and args.new):
+        parser.error("give two commits, e.g. 279a9bf HEAD")
+    if args.rounds < 1 or args.num_envs < 1:
+        parser.error(f"--rounds={args.rounds} and --num-envs={args.num_envs} must be positive integers")
+    with tempfile.TemporaryDirectory() as tmp:
+        trees = {commit: checkout(commit, Path(tmp) / f"tree{i}") for i, commit in enumerate((args.old, args.new))}
+        try:
+            ratios: dict[str, list[float]] = {commit: [] for commit in trees}
+            for round_ in range(args.rounds):
+                for commit, tree in trees.items():
+                    ours, cart, ratio = measure(tree, args.num_envs)
+                    ratios[commit].append(ratio)
+                    print(f"round {round_ + 1}: {commit:>12}  ours {ours:7.1f} us  CartPoleVectorEnv {cart:6.1f} us  "
+                          f"ratio {ratio:.3f}", flush=True)  # fmt: skip
+        finally:
+            for tree in trees.values():
+                subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(tree)], check=False)
+    old, new = (statistics.median(ratios[c]) for c in (args.old, args.new))
+    print(f"median ratio to CartPoleVectorEnv at N = {args.num_envs}: {args.old} {old:.3f}, {args.new} {new:.3f} "
+          f"({new / old:.2f}x)")  # fmt: skip
+
+
+if __name__ == "__main__":
+    main()
