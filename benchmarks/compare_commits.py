@@ -61,8 +61,10 @@ def child(num_envs: int, repeats: int, steps: int) -> None:
 
 def checkout(commit: str, into: Path) -> Path:
     """A detached worktree of ``commit`` in ``into``."""
-    subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", "-f", str(into), commit],
-                   check=True, capture_output=True)  # fmt: skip
+    result = subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", "-f", str(into), commit],
+                            capture_output=True, text=True)  # fmt: skip
+    if result.returncode:
+        sys.exit(f"commit {commit!r} is invalid: expected a git revision of {ROOT} ({result.stderr.strip()})")
     return into
 
 
@@ -94,20 +96,23 @@ def main() -> None:
         parser.error("give two commits, e.g. 279a9bf HEAD")
     if args.rounds < 1 or args.num_envs < 1:
         parser.error(f"--rounds={args.rounds} and --num-envs={args.num_envs} must be positive integers")
+    commits = (args.old, args.new)
+    ratios: list[list[float]] = [[], []]
     with tempfile.TemporaryDirectory() as tmp:
-        trees = {commit: checkout(commit, Path(tmp) / f"tree{i}") for i, commit in enumerate((args.old, args.new))}
+        trees: list[Path] = []
         try:
-            ratios: dict[str, list[float]] = {commit: [] for commit in trees}
+            for i, commit in enumerate(commits):
+                trees.append(checkout(commit, Path(tmp) / f"tree{i}"))
             for round_ in range(args.rounds):
-                for commit, tree in trees.items():
+                for i, tree in enumerate(trees):
                     ours, cart, ratio = measure(tree, args.num_envs)
-                    ratios[commit].append(ratio)
-                    print(f"round {round_ + 1}: {commit:>12}  ours {ours:7.1f} us  CartPoleVectorEnv {cart:6.1f} us  "
-                          f"ratio {ratio:.3f}", flush=True)  # fmt: skip
+                    ratios[i].append(ratio)
+                    print(f"round {round_ + 1}: {commits[i]:>12}  ours {ours:7.1f} us  CartPoleVectorEnv {cart:6.1f} us"
+                          f"  ratio {ratio:.3f}", flush=True)  # fmt: skip
         finally:
-            for tree in trees.values():
+            for tree in trees:
                 subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(tree)], check=False)
-    old, new = (statistics.median(ratios[c]) for c in (args.old, args.new))
+    old, new = map(statistics.median, ratios)
     print(f"median ratio to CartPoleVectorEnv at N = {args.num_envs}: {args.old} {old:.3f}, {args.new} {new:.3f} "
           f"({new / old:.2f}x)")  # fmt: skip
 
