@@ -160,7 +160,7 @@ def observe(
             model.wrap_angle(state.psi + sigma * pose_noise[..., 2]), params.k,
         )  # fmt: skip
     dist = coords.distance
-    if model.namespace(dist) is model.SCALAR_MATH:
+    if not isinstance(dist, np.ndarray):  # one robot (as model.namespace decides, without its call)
         # one robot: cos(alpha) and sin(alpha) of eq. (3) as -x/d and -y/d, (1, 0) at the goal
         cos_alpha, sin_alpha = (-coords.x / dist, -coords.y / dist) if dist > 0.0 else (1.0, 0.0)
         features = np.array(
@@ -284,7 +284,9 @@ def commands_from_action(
             a_u, a_omega = float(a_u), float(a_omega)
         if not (math.isfinite(a_u) and math.isfinite(a_omega)):
             raise ValueError(f"action={action.tolist()!r} is invalid: expected finite numbers in [-1, 1]")
-        a_u, a_omega = min(max(a_u, -1.0), 1.0), min(max(a_omega, -1.0), 1.0)
+        # clipped to [-1, 1] with comparisons (no calls: the single env's step is bound by the interpreter)
+        a_u = -1.0 if a_u < -1.0 else 1.0 if a_u > 1.0 else a_u
+        a_omega = -1.0 if a_omega < -1.0 else 1.0 if a_omega > 1.0 else a_omega
         return a_u, a_omega, a_u * params.u_max, a_omega * params.omega_max
     if not np.isfinite(action).all():
         raise ValueError(f"action={np.asarray(action).tolist()!r} is invalid: expected finite numbers in [-1, 1]")
@@ -345,9 +347,9 @@ def transition(
     state.step_count += 1
     power = u * u + omega * omega
     state.energy += power * params.dt
-    coords = state.coordinates(params.k)
-    xp = model.namespace(coords.distance)
-    scalar = xp is model.SCALAR_MATH
+    coords = error_coordinates(state.x, state.y, state.psi, params.k)
+    scalar = not isinstance(coords.distance, np.ndarray)  # one robot (as model.namespace decides)
+    xp = model.SCALAR_MATH if scalar else model.ARRAY_MATH
 
     is_success = coords.distance <= params.goal_tolerance
     if params.heading_tolerance is not None:
@@ -360,23 +362,30 @@ def transition(
     next_potential = xp.where(terminated, 0.0, lyapunov) if params.zero_terminal_potential else lyapunov
 
     d, dt = coords.distance, params.dt
-    # A term whose weight is 0 is 0: it is not computed (None here), nor summed.
+    # A term whose weight is 0 is 0: it is not computed (its own zeros instead; np.zeros: zeros_like fills, 3x
+    # slower), nor summed. The sum runs in REWARD_TERMS' order.
     progress = params.progress_weight * (state.lyapunov - params.shaping_discount * next_potential)
-    time_term = effort_term = energy_term = None
+    reward = progress  # a new array once late is added: the writes below do not touch progress
     if params.time_weight != 0.0:
         time = state.step_count * dt if scalar else (state.step_count * dt).astype(state.x.dtype, copy=False)
         time_term = (
             -params.time_weight * dt * d * model.conventional_scaling(time, state.T_con, max_gain=params.time_gain_cap)
         )
+        reward = reward + time_term
+    else:
+        time_term = 0.0 if scalar else np.zeros(d.shape, d.dtype)
     if params.effort_weight != 0.0:
         effort_term = -params.effort_weight * dt * (a_u * a_u + a_omega * a_omega)
+        reward = reward + effort_term
+    else:
+        effort_term = 0.0 if scalar else np.zeros(d.shape, d.dtype)
     if params.energy_weight != 0.0:
         energy_term = -params.energy_weight * dt * power
+        reward = reward + energy_term
+    else:
+        energy_term = 0.0 if scalar else np.zeros(d.shape, d.dtype)
     late = xp.where(is_success | in_time, 0.0, -params.late_penalty * dt)
-    reward = progress  # a new array once late is added: the writes below do not touch progress
-    for term in (time_term, effort_term, energy_term, late):
-        if term is not None:
-            reward = reward + term
+    reward = reward + late
     # arrival, heading and arena are 0 but where an episode ends; they are added last, in REWARD_TERMS' order
     # (late, the term between them there, is 0 where arrival and heading are not).
     ended = terminated if scalar else np.flatnonzero(terminated)
@@ -387,9 +396,6 @@ def transition(
         reward[ended] = reward[ended] + arrival[ended] + heading[ended] + arena[ended]
     terms = {"progress": progress, "time": time_term, "effort": effort_term, "energy": energy_term,
              "arrival": arrival, "heading": heading, "late": late, "arena": arena}  # fmt: skip
-    for name in ("time", "effort", "energy"):
-        if terms[name] is None:
-            terms[name] = 0.0 if scalar else np.zeros(d.shape, d.dtype)  # (zeros_like fills: 3x slower)
     state.lyapunov = lyapunov
     truncated = state.step_count >= state.max_steps
     if scalar:
@@ -409,7 +415,7 @@ def terminal_terms(
     """The reward terms paid when an episode ends: (arrival (in time), heading (weight (cos(psi) - 1) on
     arrival), arena (on leaving it)). Floats for one robot (``ended`` is whether its episode ended); for a
     batch, arrays that are 0 but at the indices ``ended`` of the robots whose episodes ended."""
-    if model.namespace(psi) is model.SCALAR_MATH:
+    if not isinstance(psi, np.ndarray):  # one robot
         return (
             params.arrival_bonus if is_success and in_time else 0.0,
             params.heading_weight * (math.cos(psi) - 1.0) if is_success else 0.0,
@@ -429,19 +435,21 @@ def infos(
 ) -> dict[str, Any]:
     """Infos after a reset (``result`` None) or a step: arrays (N,) and "pose" (N, 3) for a batch, or
     Python scalars and "pose" (3,) for one robot. "pose" is the world pose."""
-    xp = model.namespace(coords.distance)
+    scalar = not isinstance(coords.distance, np.ndarray)  # one robot
     zeros = 0.0 * coords.distance if result is None else None  # the reset's velocities and reward terms
     x, y, psi = state.world_pose(copy=False)  # stacked below: copied there
     is_success = (coords.distance <= params.goal_tolerance) if result is None else result.is_success
-    scalar = xp is model.SCALAR_MATH
+    # copies of the state's own arrays, which later steps and resets overwrite (floats need none)
+    heading, T_con, energy = (coords.psi, state.T_con, state.energy) if scalar else (
+        coords.psi.copy(), state.T_con.copy(), state.energy.copy())  # fmt: skip
     return {
         "distance": coords.distance,
         "orientation_error": coords.orientation_error,
-        "heading_error": xp.copy(coords.psi),  # coords.psi is the state's own array, which resets overwrite
+        "heading_error": heading,
         "time": state.step_count * params.dt,
-        "T_con": xp.copy(state.T_con),
+        "T_con": T_con,
         "is_success": bool(is_success) if scalar else is_success,
-        "energy": xp.copy(state.energy),
+        "energy": energy,
         "linear_velocity": zeros if result is None else result.linear_velocity,
         "angular_velocity": zeros if result is None else result.angular_velocity,
         "pose": np.array([x, y, psi]) if scalar else np.array([x, y, psi]).T,  # (N, 3): 3x np.stack's speed
