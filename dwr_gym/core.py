@@ -252,6 +252,9 @@ def reset_robots(
     (as ``state.subset(index)``) and its error coordinates."""
     fresh, coords = _new_state(start, goal, params, T_con)
     state.assign(index, fresh)
+    if fresh.x.dtype != state.x.dtype:  # a float32 state: its robots as it holds them, not as computed in float64
+        fresh = state.subset(index)
+        coords = fresh.coordinates(params.k)
     return fresh, coords
 
 

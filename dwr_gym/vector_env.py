@@ -215,9 +215,6 @@ class DWRPointStabilizationVectorEnv(HorizonSpec, VectorEnv):
     def _restart(self, index: NDArray[np.intp], obs: NDArray[np.float32], infos: dict[str, Any]) -> None:
         """Autoreset the robots at ``index``: new episodes, whose first observation and info replace the step's."""
         fresh, coords = self._reset_envs(index)
-        if fresh.x.dtype != self._state.x.dtype:  # float32: observe the poses as the state holds them
-            fresh = self._state.subset(index)
-            coords = fresh.coordinates(self.params.k)
         obs[index] = core.observe(fresh, coords, self.params, self.single_observation_space)
         if self.perturbation is not None:  # in SAME_STEP mode final_info keeps the step's disturbance info
             self.perturbation.reset(index, obs[index])
