@@ -14,10 +14,11 @@ import numpy as np
 import pytest
 
 from baselines import ExpertPolicy, PTCController
-from train.agents import load_agent, pretrained_paths
-from train.config import ConfigError, TrainConfig, parse_policy_kwargs, resolve_hyperparams
-from train.residual import ResidualActionWrapper, ResidualVecEnv, residual_action
-from train.training import train
+from train.learning.agents import load_agent, pretrained_paths
+from train.learning.config import ConfigError, TrainConfig
+from train.learning.hyperparams import parse_policy_kwargs, resolve_hyperparams
+from train.learning.residual import ResidualActionWrapper, ResidualVecEnv, residual_action
+from train.learning.training import train
 
 
 def dwr_gym(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
@@ -92,13 +93,13 @@ def test_residual_vec_env_with_zero_residual_is_the_expert() -> None:
 
 
 def test_residual_training_starts_from_the_expert(tmp_path: Path) -> None:
-    from train.residual import ResidualPolicy, zero_init_last_layer
-    from train.training import make_training_env
+    from train.learning.residual import ResidualPolicy, zero_init_last_layer
+    from train.learning.training import make_training_env
 
     config = tiny("ppo", True, tmp_path / "r")
     from stable_baselines3 import PPO
 
-    from train.config import build_algo_kwargs
+    from train.learning.hyperparams import build_algo_kwargs
 
     model = PPO(env=make_training_env(config), seed=0, **build_algo_kwargs(config.algo_kwargs))
     zero_init_last_layer(model)

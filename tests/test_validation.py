@@ -14,8 +14,9 @@ from baselines.controllers import ConventionalPTCParams, PTCParams
 from dwr_gym.env import DWRPointStabilizationEnv
 from dwr_gym.params import EnvParams
 from dwr_gym.validation import as_float, as_int, as_interval, as_pose
-from train.cli import json_safe
-from train.config import ConfigError, TrainConfig, check_device, load_zoo_yaml, parse_overrides, resolve_hyperparams
+from train.learning.config import ConfigError, TrainConfig, check_device
+from train.learning.hyperparams import load_zoo_yaml, parse_overrides, resolve_hyperparams
+from train.reporting.results import json_safe
 
 ENV_ID = "DWRPointStabilization-v0"
 

@@ -9,7 +9,8 @@ from pathlib import Path
 import pytest
 import yaml
 
-from train.config import HYPERPARAMS_DIR, TrainConfig, default_hyperparams, resolve_hyperparams
+from train.learning.config import TrainConfig
+from train.learning.hyperparams import HYPERPARAMS_DIR, default_hyperparams, resolve_hyperparams
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -1,43 +1,16 @@
-"""``dwr-gym compare``: trained agents against the PTC expert and the other laws, on the same scenarios."""
+"""The figures of ``dwr-gym compare``: trajectories, time series and learning curves of every policy."""
 
 from __future__ import annotations
 
 import csv
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
-from train.evaluation import RolloutResult, evaluate, evaluate_sets, make_scenario
-from train.plotting import legend_outside, pyplot, save
+from train.evaluation.rollout import RolloutResult
+from train.reporting.plotting import legend_outside, pyplot, save
 
-TRAJECTORY_SCENARIO = "paper-fig5"
 TIME_SERIES_INDEX = 4  # psi0 = pi in paper-fig5, the hardest start
-
-
-def compare(
-    agents: dict[str, Any],
-    run_dirs: dict[str, Path],
-    controllers: list[str],
-    scenarios: list[str],
-    n: int,
-    seed: int,
-    out_dir: Path,
-    progress: bool = True,
-    optimum: str = "none",
-    T_cons: list[float] | None = None,
-) -> list[dict[str, Any]]:
-    """Evaluate agents and controllers on each scenario set (at each T_con); write the plots; return the rows."""
-    policies: dict[str, Any] = {**agents, **{name: name for name in controllers}}
-    rows = evaluate_sets(policies, scenarios, n, seed, {}, progress, optimum=optimum, T_cons=T_cons)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    trajectory_scenario = make_scenario(TRAJECTORY_SCENARIO)
-    recorded = evaluate(policies, trajectory_scenario, record=True)
-    plot_trajectories(recorded, trajectory_scenario.labels, out_dir / "trajectories.png")
-    plot_time_series(recorded, out_dir / "time_series.png")
-    if run_dirs:
-        plot_learning_curves(run_dirs, out_dir / "learning_curves.png")
-    return rows
 
 
 def plot_trajectories(results: dict[str, RolloutResult], labels: tuple[str, ...], path: Path) -> None:

@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 
 from dwr_gym import V1_DEFAULTS, core
 from dwr_gym.params import EnvParams
-from train.config import option
+from train.learning.config import option
 
 EVAL_FIELDS = ("epoch", "samples", "wall_time", "loss", "success_rate", "arrival_fraction_max",
                "final_heading_error_mean", "energy_mean")  # fmt: skip
@@ -59,8 +59,8 @@ def record_demonstrations(
     config: ImitationConfig, progress: bool = True
 ) -> tuple[NDArray[np.float32], NDArray[np.float32], dict[str, float]]:
     """(observations (M, 10), expert actions (M, 2), statistics) from noisy rollouts of the optimal expert."""
-    from baselines.controllers import make_controller
     from baselines.expert import ExpertPolicy
+    from baselines.registry import make_controller
 
     params = EnvParams.from_kwargs(**env_kwargs(config))
     rng = np.random.default_rng(config.seed)
@@ -111,8 +111,10 @@ def imitate(config: ImitationConfig, run_dir: Path, progress: bool = True) -> Pa
     from stable_baselines3 import PPO
 
     from dwr_gym.sb3 import make_sb3_vec_env
-    from train.config import TrainConfig
-    from train.evaluation import make_scenario, rollout
+    from train.evaluation.rollout import rollout
+    from train.evaluation.scenarios import make_scenario
+    from train.learning.config import TrainConfig
+    from train.reporting.learning_curves import plot_imitation_curve
 
     run_dir.mkdir(parents=True, exist_ok=True)
     began = time.perf_counter()
@@ -163,26 +165,5 @@ def imitate(config: ImitationConfig, run_dir: Path, progress: bool = True) -> Pa
     data = {"config": train_config.to_dict(), "imitation": imitation,
             "demonstrations": stats, "wall_time": round(time.perf_counter() - began, 1)}  # fmt: skip
     (run_dir / "config.yaml").write_text(yaml.safe_dump(data, sort_keys=False))
-    plot_learning_curve(csv_path, run_dir / "learning_curve.png")
+    plot_imitation_curve(csv_path, run_dir / "learning_curve.png")
     return run_dir
-
-
-def plot_learning_curve(csv_path: Path, path: Path) -> None:
-    """Success, final heading error and energy on the fixed scenario set against the epochs (if matplotlib is there)."""
-    try:
-        from train.plotting import pyplot, save
-
-        plt = pyplot()
-    except ImportError:
-        return
-    with csv_path.open() as handle:
-        rows = list(csv.DictReader(handle))
-    epochs = [int(r["epoch"]) for r in rows]
-    fig, axes = plt.subplots(1, 3, figsize=(13, 3.6))
-    for ax, key, label in zip(axes, ("success_rate", "final_heading_error_mean", "energy_mean"),
-                              ("success (arrival by T_con)", "final |psi - psi_d| [rad]", "energy [m^2/s + rad^2/s]"),
-                              strict=True):  # fmt: skip
-        ax.plot(epochs, [float(r[key]) for r in rows], marker="o")
-        ax.set(xlabel="epoch of behaviour cloning", ylabel=label)
-    fig.suptitle("Behaviour cloning of the optimal planner: the fixed evaluation set (T_con in [10, 60] s)")
-    save(fig, path, dpi=100)
