@@ -9,6 +9,7 @@ from typing import Any
 from train.commands.shared import (
     UsageError,
     add_scenario_arguments,
+    checked_env,
     checked_optimum,
     checked_selection,
     load_agents,
@@ -29,6 +30,7 @@ def run(args: argparse.Namespace) -> int:
     """Evaluate agents and controllers on the same scenarios; print the table, write CSV, JSON and plots."""
     from pathlib import Path
 
+    env_id, env_kwargs = checked_env(args)
     controllers = checked_selection(args)
     try:
         import matplotlib  # noqa: F401
@@ -44,15 +46,16 @@ def run(args: argparse.Namespace) -> int:
     paths = [Path(p) for p in args.agents] if args.agents else list(pretrained_paths().values())
     if not paths:
         raise UsageError("no agents given and no pretrained agent is installed: pass --agents PATH")
-    agents = load_agents([str(p) for p in paths])
+    agents = load_agents([str(p) for p in paths], env_id)
     run_dirs = {}
     for label, path in zip(agents, paths, strict=True):
         try:
             run_dirs[label] = find_run_dir(path if path.is_dir() else path.parent)
         except AgentLoadError:
             pass
-    rows, recorded, labels = compare(agents, controllers, args.scenarios, args.n, args.seed,
+    rows, recorded, labels = compare(agents, controllers, args.scenarios, args.n, args.seed, env_kwargs,
                                      progress=not args.no_progress, optimum=checked_optimum(args), T_cons=args.T_con)  # fmt: skip
+    rows = [{**row, "env_id": env_id} for row in rows]
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     figures = [out / "trajectories.png", out / "time_series.png"]
@@ -61,6 +64,7 @@ def run(args: argparse.Namespace) -> int:
     if run_dirs:
         figures.append(out / "learning_curves.png")
         plot_learning_curves(run_dirs, figures[2])
+    print(f"env: {env_id}")
     print_blocks(rows, EVAL_COLUMNS)
     if table_notes(rows):
         print(table_notes(rows))

@@ -7,11 +7,10 @@ from typing import Any
 
 from train.commands.shared import (
     add_scenario_arguments,
+    checked_env,
     checked_optimum,
     checked_selection,
     load_agents,
-    parse_env_kwargs,
-    validated_env_params,
 )
 
 
@@ -20,23 +19,23 @@ def add_parser(sub: Any) -> None:
     p = sub.add_parser("evaluate", help="evaluate controllers and agents on named scenario sets")
     add_scenario_arguments(p, "results/evaluate")
     p.add_argument("--agent", action="append", metavar="PATH", help="a saved agent (.zip) to evaluate too; repeatable")
-    p.add_argument("--env-kwargs", nargs="*", metavar="KEY=VALUE", help="env keywords, e.g. T_con=25 dt=0.02")
     p.set_defaults(func=run)  # fmt: skip
 
 
 def run(args: argparse.Namespace) -> int:
     """Evaluate controllers (and saved agents) on named scenario sets."""
-    env_kwargs = parse_env_kwargs(args.env_kwargs)
-    validated_env_params(env_kwargs)
+    env_id, env_kwargs = checked_env(args)
     names = checked_selection(args)
     policies: dict[str, Any] = {name: name for name in names}
-    policies.update(load_agents(args.agent))
+    policies.update(load_agents(args.agent, env_id))
     from train.evaluation.evaluate import evaluate_sets
     from train.reporting.results import write_results
     from train.reporting.tables import EVAL_COLUMNS, print_blocks, table_notes
 
     rows = evaluate_sets(policies, args.scenarios, args.n, args.seed, env_kwargs, progress=not args.no_progress,
                           optimum=checked_optimum(args), T_cons=args.T_con)  # fmt: skip
+    rows = [{**row, "env_id": env_id} for row in rows]
+    print(f"env: {env_id}")
     print_blocks(rows, EVAL_COLUMNS)
     if table_notes(rows):
         print(table_notes(rows))

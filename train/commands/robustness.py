@@ -9,7 +9,14 @@ import math
 from pathlib import Path
 from typing import Any
 
-from train.commands.shared import UsageError, checked_selection, load_agents, parse_env_kwargs, validated_env_params
+from train.commands.shared import (
+    UsageError,
+    add_env_arguments,
+    checked_env,
+    checked_selection,
+    load_agents,
+    validated_env_params,
+)
 
 
 def add_parser(sub: Any) -> None:
@@ -49,7 +56,10 @@ def add_parser(sub: Any) -> None:
         help="run nothing: table and figures of the rows in these robustness.json files",
     )
     p.add_argument("--seed", type=int, default=0, help="seed of the start poses and disturbances (default: 0)")
-    p.add_argument("--env-kwargs", nargs="*", metavar="KEY=VALUE", help="env keywords, e.g. T_con=25")
+    p.add_argument("--T-con", type=float, metavar="SECONDS",
+                   help="the prescribed time of every episode, replacing v1's T_con_range (default: 20, or T_con of "
+                   "--env-kwargs)")  # fmt: skip
+    add_env_arguments(p, "observation_noise=0.01")
     p.add_argument("--out", default="results/robustness", help="output directory (default: results/robustness)")
     p.add_argument("--no-plots", action="store_true", help="write no figures")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
@@ -70,24 +80,31 @@ def run(args: argparse.Namespace) -> int:
             except (OSError, ValueError) as error:
                 raise UsageError(f"--from-json {path!r} is invalid: {error}") from error
         return report(rows, out, args.no_plots)
-    env_kwargs = parse_env_kwargs(args.env_kwargs)
+    env_id, env_kwargs = checked_env(args)
+    T_con = args.T_con if args.T_con is not None else float(env_kwargs.get("T_con", 20.0))
+    if not 0.0 < T_con <= 1e6:
+        raise UsageError(f"--T-con {T_con} is invalid: expected a prescribed time in (0, 1e6] s")
+    # one prescribed time for every episode: a fault starts at T_con / 4, and the sweep's rows are per T_con
+    env_kwargs = {**env_kwargs, "T_con": T_con, "T_con_range": None}
     validated_env_params(env_kwargs)
     for name in args.disturbances:
         if name not in SWEEPS:
             raise UsageError(f"--disturbances {name!r} is invalid: expected any of {', '.join(SWEEPS)}")
     args.scenarios, args.T_con = [], None
     policies: dict[str, Any] = {name: name for name in checked_selection(args)}
+    paths = list(args.agent or [])
     if not args.no_shipped_agents:
-        from train.learning.agents import load_agent, pretrained_paths
+        from train.learning.agents import pretrained_paths
 
-        policies.update(dict(load_agent(path) for path in pretrained_paths().values()))
-    policies.update(load_agents(args.agent))
+        paths = [str(path) for path in pretrained_paths().values()] + paths
+    policies.update(load_agents(paths, env_id))
     if args.n_optimal < 1:
         raise UsageError(f"--n-optimal {args.n_optimal} is invalid: expected an integer >= 1")
     rows: list[dict[str, Any]] = []
     for name in args.disturbances:  # the rows so far are saved after each disturbance: a long sweep can be cut short
-        rows += sweep(policies, [name], n=args.n, seed=args.seed, env_kwargs=env_kwargs,
+        found = sweep(policies, [name], n=args.n, seed=args.seed, env_kwargs=env_kwargs,
                       progress=not args.no_progress, log=print, n_optimal=args.n_optimal)  # fmt: skip
+        rows += [{**row, "env_id": env_id} for row in found]
         write_results(rows, str(out), "robustness")
     return report(rows, out, args.no_plots)
 

@@ -16,7 +16,15 @@ class UsageError(Exception):
 
 
 class Parser(argparse.ArgumentParser):
-    """An ArgumentParser whose errors are one line (no usage block), exit code 2, like every other bad input."""
+    """An ArgumentParser whose errors are one line (no usage block), exit code 2, like every other bad input.
+
+    Options must be spelled out: with argparse's prefix matching, ``--env`` would be read as ``--env-kwargs``.
+    Subcommands' parsers are of this class too, so the same holds for every command.
+    """
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("allow_abbrev", False)
+        super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> NoReturn:
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
@@ -64,6 +72,28 @@ def parse_env_kwargs(items: Sequence[str] | None) -> dict[str, Any]:
                 value = raw
         kwargs[key] = tuple(value) if isinstance(value, list) else value
     return kwargs
+
+
+def add_env_arguments(p: argparse.ArgumentParser, kwargs_example: str = "T_con=25 dt=0.02") -> None:
+    """``--env ID`` and ``--env-kwargs KEY=VALUE ...``: the env every command that makes one runs on."""
+    from train.env_ids import ENV_HELP, TASK_ENV_ID
+
+    p.add_argument("--env", default=TASK_ENV_ID, metavar="ID", help=f"{ENV_HELP} (default: {TASK_ENV_ID})")
+    p.add_argument("--env-kwargs", nargs="*", metavar="KEY=VALUE",
+                   help=f"env keywords on top of the env id's, e.g. {kwargs_example}")  # fmt: skip
+
+
+def checked_env(args: argparse.Namespace) -> tuple[str, dict[str, Any]]:
+    """``--env`` without a ``dwr_gym:`` prefix, and the env's keywords: the id's registered ones, then ``--env-kwargs``."""
+    from train.env_ids import check_env_id, env_keywords
+
+    try:
+        env_id = check_env_id(args.env)
+    except ValueError as error:
+        raise UsageError(str(error)) from None
+    kwargs = env_keywords(env_id, parse_env_kwargs(args.env_kwargs))
+    validated_env_params(kwargs)
+    return env_id, kwargs
 
 
 def validated_env_params(env_kwargs: dict[str, Any]) -> Any:
@@ -122,7 +152,7 @@ def checked_selection(args: argparse.Namespace) -> list[str]:
 
 
 def add_scenario_arguments(p: argparse.ArgumentParser, out: str) -> None:
-    """The options shared by ``evaluate`` and ``compare``."""
+    """The options shared by ``evaluate`` and ``compare``: the env, the controllers and the scenario sets."""
     from baselines.registry import CONTROLLER_NAMES
     from train.evaluation.disturbance_sets import ROBUSTNESS_SETS
     from train.evaluation.optimum import OPTIMA
@@ -141,7 +171,8 @@ def add_scenario_arguments(p: argparse.ArgumentParser, out: str) -> None:
         type=float,
         nargs="+",
         metavar="SECONDS",
-        help="evaluate at each of these prescribed times, one block each (default: the scenario's own)",
+        help="evaluate at each of these prescribed times, one block each; replaces the env's T_con_range "
+        "(default: the scenario's own: drawn per episode by v1's random set, the paper's for paper-fig5/7)",
     )
     p.add_argument("--optimum", choices=OPTIMA, default="pose",
                    help="the optimum of the E/opt columns: minimum energy to the goal 'pose' (default), to the "
@@ -158,19 +189,28 @@ def add_scenario_arguments(p: argparse.ArgumentParser, out: str) -> None:
     p.add_argument("--seed", type=int, default=0, help="seed of the random scenario set (default: 0)")
     p.add_argument("--out", default=out, help=f"output directory (default: {out})")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")  # fmt: skip
+    add_env_arguments(p)
 
 
-def load_agents(paths: Sequence[str] | None) -> dict[str, Any]:
-    """Saved agents by label (the file's stem); a missing or unreadable file is a UsageError."""
+def load_agents(paths: Sequence[str] | None, env_id: str | None = None) -> dict[str, Any]:
+    """Saved agents by label (the file's stem); a missing or unreadable file is a UsageError.
+
+    With ``env_id``, a note on stderr names the agents trained on another env than the one they will run on.
+    """
     if not paths:
         return {}
-    from train.learning.agents import AgentLoadError, load_agent
+    from train.learning.agents import AgentLoadError, load_agent, trained_env_id
 
-    agents = {}
+    agents, elsewhere = {}, {}
     for path in paths:
         try:
             label, agent = load_agent(path)
+            trained = trained_env_id(path)
         except AgentLoadError as error:
             raise UsageError(str(error)) from error
         agents[label] = agent
+        if env_id is not None and trained != env_id:
+            elsewhere.setdefault(trained, []).append(label)
+    for trained, labels in elsewhere.items():
+        print(f"note: {', '.join(labels)} trained on {trained}, run here on {env_id}", file=sys.stderr)
     return agents

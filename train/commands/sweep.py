@@ -9,7 +9,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from train.commands.shared import UsageError, parse_env_kwargs
+from train.commands.shared import UsageError, add_env_arguments, parse_env_kwargs
 from train.learning.sweep import METRICS, SEARCHES
 
 
@@ -21,7 +21,7 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--residual", action="store_true", help="residual agents on the PTC expert")
     p.add_argument("--total-timesteps", type=int, default=200_000, help="env steps per run (default: 200000)")
     p.add_argument("--num-envs", type=int, default=16, help="robots per vector env (default: 16)")
-    p.add_argument("--env-kwargs", nargs="*", metavar="KEY=VALUE", default=[], help="env keywords, e.g. T_con=25")
+    add_env_arguments(p, "heading_weight=5")
     p.add_argument("--hyperparams", help="rl-zoo3 YAML the configurations start from (default: train/hyperparams/)")
     p.add_argument("--eval-freq", type=int, default=20_000, help="evaluate every this many env steps (default: 20000)")
     p.add_argument("--eval-episodes", type=int, default=100, help="scenarios per evaluation (default: 100)")
@@ -79,7 +79,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError('Ray Tune is not installed: pip install "dwr-gym[sweep]"') from error
     out = Path(args.out).resolve()
     base = {"algo": args.algo, "residual": args.residual, "total_timesteps": args.total_timesteps,
-            "num_envs": args.num_envs, "env_kwargs": parse_env_kwargs(args.env_kwargs),
+            "num_envs": args.num_envs, "env_id": args.env, "env_kwargs": parse_env_kwargs(args.env_kwargs),
             "eval_freq": args.eval_freq, "eval_episodes": args.eval_episodes}  # fmt: skip
     if args.hyperparams:
         base["hyperparams"] = str(Path(args.hyperparams).resolve())

@@ -22,9 +22,9 @@ def add_parser(sub: Any) -> None:
     for f in dataclasses.fields(TrainConfig):
         if f.metadata.get("cli") is False:
             continue
-        flag = "--" + f.name.replace("_", "-")
-        default = f.default if f.default is not dataclasses.MISSING else "{}"
-        text = f"{f.metadata['help']} (default: {default})"
+        flag = f.metadata.get("flag", "--" + f.name.replace("_", "-"))
+        default = f.metadata.get("shown_default", f.default if f.default is not dataclasses.MISSING else "{}")
+        text = f"{f.metadata['help']} (default: {default})" if default != "" else f.metadata["help"]
         if f.name == "progress":
             p.add_argument(
                 "--no-progress",
@@ -40,7 +40,7 @@ def add_parser(sub: Any) -> None:
         elif f.name == "hyperparams":
             p.add_argument(flag, nargs="+", metavar="FILE|KEY=VALUE", default=argparse.SUPPRESS, help=text)
         else:  # numbers are read as text and coerced by TrainConfig.validate, so 1e5 and 3e-4 work
-            p.add_argument(flag, default=argparse.SUPPRESS, help=text)
+            p.add_argument(flag, dest=f.name, default=argparse.SUPPRESS, help=text)
     p.set_defaults(func=run)
 
 

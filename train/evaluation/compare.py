@@ -18,6 +18,7 @@ def compare(
     scenarios: list[str],
     n: int,
     seed: int,
+    env_kwargs: dict[str, Any] | None = None,
     progress: bool = True,
     optimum: str = "none",
     T_cons: list[float] | None = None,
@@ -27,7 +28,7 @@ def compare(
     Returns the rows, every policy's recorded rollouts from Figure 5's starts, and those starts' labels.
     """
     policies: dict[str, Any] = {**agents, **{name: name for name in controllers}}
-    rows = evaluate_sets(policies, scenarios, n, seed, {}, progress, optimum=optimum, T_cons=T_cons)
-    trajectory_scenario = make_scenario(TRAJECTORY_SCENARIO)
+    rows = evaluate_sets(policies, scenarios, n, seed, env_kwargs or {}, progress, optimum=optimum, T_cons=T_cons)
+    trajectory_scenario = make_scenario(TRAJECTORY_SCENARIO, env_kwargs=env_kwargs)
     recorded = evaluate(policies, trajectory_scenario, record=True)
     return rows, recorded, trajectory_scenario.labels

@@ -69,7 +69,8 @@ def evaluate_sets(
     rows = []
     for name in scenarios:
         for T_con in T_cons or [None]:
-            kwargs = env_kwargs if T_con is None else {**env_kwargs, "T_con": T_con}
+            # a prescribed time asked for replaces the env's range of them (v1 draws T_con per episode)
+            kwargs = env_kwargs if T_con is None else {**env_kwargs, "T_con": T_con, "T_con_range": None}
             scenario = make_scenario(name, n=n, seed=seed, env_kwargs=kwargs)
             results = evaluate(policies, scenario, seed=seed, progress=progress, optimum=optimum)
             for label, result in results.items():

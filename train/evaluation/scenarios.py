@@ -45,8 +45,14 @@ class Scenario:
 
 
 def make_scenario(name: str, n: int = 100, seed: int = 0, env_kwargs: dict[str, Any] | None = None) -> Scenario:
-    """A named scenario set: 'paper-fig5', 'paper-fig7' or 'random' (``n`` seeded random starts)."""
+    """A named scenario set: 'paper-fig5', 'paper-fig7' or 'random' (``n`` seeded random starts).
+
+    The paper's sets keep the paper's T_con (20 s and 70 s; a ``T_con`` in ``env_kwargs`` replaces it) and
+    ignore a ``T_con_range``; the random sets draw each episode's T_con from ``T_con_range`` when there is one.
+    """
     env_kwargs = dict(env_kwargs or {})
+    if name in ("paper-fig5", "paper-fig7"):
+        env_kwargs.pop("T_con_range", None)
     if name == "paper-fig5":
         starts = np.array([(0.0, 0.0, h) for h in FIG5_HEADINGS])
         goals = np.tile([0.8, 0.0, 0.0], (len(FIG5_HEADINGS), 1))

@@ -38,17 +38,22 @@ def load_agent(path: str | Path) -> tuple[str, Any]:
     policy = as_policy(model, config)
     handover = load_extra(run_dir).get("handover")
     if handover:  # a network that hands over to an analytic law for the finish (train.learning.handover.HandoverPolicy)
-        from dwr_gym.params import EnvParams
         from train.learning.handover import make_handover_policy
 
         try:
             policy = make_handover_policy(
-                policy, handover["expert"], EnvParams.from_kwargs(**config.env_kwargs), handover["distance"],
+                policy, handover["expert"], config.env_params(), handover["distance"],
                 handover["time_fraction"], handover.get("speed_margin", 0.0),
             )  # fmt: skip
         except (KeyError, TypeError, ValueError) as error:
             raise AgentLoadError(f"agent {str(path)!r} has an invalid handover section: {error}") from error
     return label, policy
+
+
+def trained_env_id(path: str | Path) -> str:
+    """The env id an agent was trained on (its config.yaml's ``env_id``; v0 for runs that recorded none)."""
+    path = Path(path)
+    return load_config(find_run_dir(path if path.is_dir() else path.parent)).env_id
 
 
 def load_extra(run_dir: Path) -> dict[str, Any]:
@@ -72,4 +77,5 @@ __all__ = [
     "load_agent",
     "load_extra",
     "pretrained_paths",
+    "trained_env_id",
 ]

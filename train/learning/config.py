@@ -12,9 +12,9 @@ from pathlib import Path
 from typing import Any
 
 from dwr_gym.validation import as_bool, as_choice, as_float, as_int
+from train.env_ids import ENV_HELP, TASK_ENV_ID, UNRECORDED_ENV_ID, check_env_id, env_keywords
 
 ALGORITHMS: tuple[str, ...] = ("ppo", "sac", "td3")
-ENV_ID = "DWRPointStabilization-v0"
 MAX_TIMESTEPS = 10**10
 MAX_TRAIN_ENVS = 4096
 """More training envs than this give rollouts of little use and risk exhausting memory; larger values are refused."""
@@ -34,6 +34,7 @@ class TrainConfig:
     """Everything a training run needs; written beside the model as config.yaml so it can be re-run exactly."""
 
     algo: str = option("ppo", "algorithm: ppo, sac or td3")
+    env_id: str = option(TASK_ENV_ID, ENV_HELP, flag="--env")
     total_timesteps: int = option(200_000, "total environment steps over all envs")
     num_envs: int = option(16, "robots simulated in one native vector env")
     seed: int = option(0, "seed of the env, the network initialisation and the sampling")
@@ -53,9 +54,11 @@ class TrainConfig:
     eval_episodes: int = option(100, "size of the fixed random scenario set used for evaluation")
     eval_seed: int = option(12345, "seed of the evaluation scenario set (kept apart from the training seed)")
     checkpoint_freq: int = option(50_000, "save a checkpoint every this many env steps")
-    run_dir: str | None = option(None, "output directory (default: runs/<algo>[-residual]-seed<seed>)")
+    run_dir: str | None = option(None, "output directory", shown_default="runs/<algo>[-residual]-seed<seed>")
     device: str = option("cpu", "torch device: auto, cpu, cuda, cuda:N or mps; the config records the one used")
-    resume: str | None = option(None, "checkpoint (.zip) to continue from; its run's config is reused")
+    resume: str | None = option(
+        None, "a run directory (or a checkpoint .zip in one) to continue; its saved config is reused", shown_default=""
+    )
     overwrite: bool = option(False, "delete the outputs of an earlier run in --run-dir and start afresh")
     progress: bool = option(True, "show a progress bar")
     algo_kwargs: dict[str, Any] = field(
@@ -69,12 +72,11 @@ class TrainConfig:
         except ValueError as error:
             raise ConfigError(str(error)) from None
         from baselines.registry import CONTROLLER_NAMES
-        from dwr_gym.params import EnvParams
 
         if self.expert not in CONTROLLER_NAMES:
             raise ConfigError(f"--expert {self.expert!r} is invalid: expected one of {', '.join(CONTROLLER_NAMES)}")
         try:
-            EnvParams.from_kwargs(**self.env_kwargs)
+            self.env_params()
         except ValueError as error:
             raise ConfigError(f"invalid env keyword: {error}") from None
         if self.hyperparams is not None and not Path(self.hyperparams).is_file():
@@ -85,6 +87,7 @@ class TrainConfig:
 
     def _coerce(self) -> None:
         self.algo = as_choice("--algo", self.algo, ALGORITHMS)
+        self.env_id = check_env_id(self.env_id)
         self.total_timesteps = as_int("--total-timesteps", self.total_timesteps, 1, MAX_TIMESTEPS, text=True)
         self.num_envs = as_int("--num-envs", self.num_envs, 1, MAX_TRAIN_ENVS, text=True)
         self.seed = as_int("--seed", self.seed, 0, 2**32 - 1, text=True)
@@ -100,6 +103,17 @@ class TrainConfig:
         if not isinstance(self.env_kwargs, dict) or not isinstance(self.hyperparam_overrides, dict):
             raise ValueError("env_kwargs and hyperparam_overrides must be mappings")
 
+    def env_keywords(self) -> dict[str, Any]:
+        """The keywords of the env trained on: those ``env_id`` is registered with, then ``env_kwargs``."""
+        return env_keywords(self.env_id, self.env_kwargs)
+
+    def env_params(self) -> Any:
+        """The :class:`~dwr_gym.params.EnvParams` of the env trained on (``robot`` and ``disturbances`` left out)."""
+        from dwr_gym.disturbances import split_env_kwargs
+        from dwr_gym.params import EnvParams
+
+        return EnvParams.from_kwargs(**split_env_kwargs(self.env_keywords())[0])
+
     def default_run_dir(self) -> str:
         return f"runs/{self.algo}{'-residual' if self.residual else ''}-seed{self.seed}"
 
@@ -112,7 +126,7 @@ class TrainConfig:
         unknown = sorted(set(data) - names)
         if unknown:
             raise ConfigError(f"unknown config key(s) {unknown}; allowed: {', '.join(sorted(names))}")
-        return cls(**data)
+        return cls(**{"env_id": UNRECORDED_ENV_ID, **data})
 
 
 def check_device(device: Any) -> str:

@@ -38,8 +38,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from dwr_gym import V1_DEFAULTS, core, model
+from dwr_gym import core, model
 from dwr_gym.params import EnvParams
+from train.env_ids import TASK_ENV_ID, check_env_id, env_keywords
 from train.learning.config import TrainConfig
 
 #: Observations (M, 10) and normalised commands (M, 2) of demonstration samples.
@@ -79,8 +80,10 @@ class DaggerConfig:
     """Random starts of the evaluation after each fit (the learning curve)."""
     eval_T_con: tuple[float, ...] = (10.0, 20.0, 40.0, 60.0)
     """Prescribed times [s] of the evaluation after each fit."""
-    env_kwargs: dict[str, Any] = field(default_factory=lambda: dict(V1_DEFAULTS))
-    """The env the agent is for (DWRPointStabilization-v1's defaults)."""
+    env_id: str = TASK_ENV_ID
+    """The env the agent is for: DWRPointStabilization-v1 (T_con drawn per episode) or -v0 (T_con = 20 s)."""
+    env_kwargs: dict[str, Any] = field(default_factory=dict)
+    """Env keywords on top of those ``env_id`` is registered with."""
     handover_expert: str = ""
     """If set (e.g. "pt-astolfi"), the trained network hands over to this analytic law for the finish
     (train.learning.handover.HandoverPolicy), with the thresholds of HANDOVER_GRID that :func:`select_handover` chooses
@@ -219,7 +222,7 @@ def make_model(config: DaggerConfig) -> Any:
 
     from dwr_gym.sb3 import make_sb3_vec_env
 
-    env = make_sb3_vec_env(4, seed=config.seed, **config.env_kwargs)
+    env = make_sb3_vec_env(4, seed=config.seed, **env_keywords(config.env_id, config.env_kwargs))
     policy_kwargs = {"net_arch": {"pi": list(config.net_arch), "vf": [64, 64]}, "activation_fn": torch.nn.ReLU,
                      "log_std_init": -2.0}  # fmt: skip
     return PPO("MlpPolicy", env, seed=config.seed, device="cpu", gamma=0.999, policy_kwargs=policy_kwargs)
@@ -320,7 +323,7 @@ def run(config: DaggerConfig, run_dir: Path, command: list[str]) -> Path:
     run_dir.mkdir(parents=True, exist_ok=True)
     torch.manual_seed(config.seed)
     torch.set_num_threads(1)
-    params = EnvParams.from_kwargs(**config.env_kwargs)
+    params = EnvParams.from_kwargs(**env_keywords(config.env_id, config.env_kwargs))
     rng = np.random.default_rng(config.seed)
     began = time.time()
     model = make_model(config)
@@ -341,7 +344,7 @@ def run(config: DaggerConfig, run_dir: Path, command: list[str]) -> Path:
         extra["handover_tried"] = tried
         print(f"hand-over: {extra['handover']}", flush=True)
     train_config = TrainConfig(algo="ppo", total_timesteps=1, num_envs=4, seed=config.seed,
-                               env_kwargs=dict(config.env_kwargs), run_dir=str(run_dir), progress=False)  # fmt: skip
+                               env_id=config.env_id, env_kwargs=dict(config.env_kwargs), run_dir=str(run_dir), progress=False)  # fmt: skip
     save_config(train_config, run_dir, extra)
     with (run_dir / EVAL_FILE).open("w", newline="") as handle:
         writer = csv.DictWriter(handle, fieldnames=list(curve[0]))
@@ -353,17 +356,22 @@ def run(config: DaggerConfig, run_dir: Path, command: list[str]) -> Path:
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0], allow_abbrev=False)
     parser.add_argument("--run-dir", required=True)
     for f in dataclasses.fields(DaggerConfig):
         if f.type in ("int", "float", "str"):
             kind = {"int": int, "float": float, "str": str}[f.type]  # type: ignore[index]
-            parser.add_argument(f"--{f.name.replace('_', '-')}", type=kind, default=f.default)
+            flag = "--env" if f.name == "env_id" else f"--{f.name.replace('_', '-')}"
+            parser.add_argument(flag, dest=f.name, type=kind, default=f.default)
     parser.add_argument("--handover-only", action="store_true",
                         help="only choose the hand-over of an existing run (needs --handover-expert) and save it in "
                              "its config.yaml")  # fmt: skip
     args = parser.parse_args(argv)
     values = {k: v for k, v in vars(args).items() if k not in ("run_dir", "handover_only")}
+    try:
+        values["env_id"] = check_env_id(values["env_id"])
+    except ValueError as error:
+        parser.error(str(error))
     if args.handover_only:
         add_handover(Path(args.run_dir), args.handover_expert, args.eval_episodes)
         return
@@ -382,7 +390,7 @@ def add_handover(run_dir: Path, expert: str, eval_episodes: int) -> None:
         raise SystemExit(f"--run-dir {str(run_dir)!r} holds no {MODEL_FILE}: train it first")
     train_config, extra = load_config(run_dir), load_extra(run_dir)
     config = DaggerConfig(**{**extra.get("dagger", {}), "handover_expert": expert, "eval_episodes": eval_episodes})
-    params = EnvParams.from_kwargs(**train_config.env_kwargs)
+    params = train_config.env_params()
     model = PPO.load(run_dir / MODEL_FILE, device="cpu")
     extra["handover"], extra["handover_tried"] = select_handover(model, config, params)
     extra.pop("config", None)

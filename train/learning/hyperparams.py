@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from dwr_gym.validation import as_float, as_int
-from train.learning.config import ENV_ID, MAX_TIMESTEPS, MAX_TRAIN_ENVS, ConfigError, TrainConfig
+from train.learning.config import MAX_TIMESTEPS, MAX_TRAIN_ENVS, ConfigError, TrainConfig
 
 ENV_SECTION = re.compile(r"^(dwr_gym:)?DWRPointStabilization-v\d+$")
 ZOO_KEYS_UNSUPPORTED = ("normalize", "frame_stack", "env_wrapper", "callback", "vec_env_wrapper")
@@ -24,10 +24,11 @@ def hyperparams_file(algo: str, residual: bool) -> Path:
     return HYPERPARAMS_DIR / f"{'residual_' if residual else ''}{algo}.yml"
 
 
-def default_hyperparams(algo: str, residual: bool) -> dict[str, Any]:
-    """Defaults that train well on this env on 2 CPU cores, read from the shipped rl-zoo3 YAML (the residual
-    variants explore less); n_envs and n_timesteps there equal the defaults of TrainConfig."""
-    params = zoo_to_sb3(load_zoo_yaml(str(hyperparams_file(algo, residual))), str(hyperparams_file(algo, residual)))
+def default_hyperparams(algo: str, residual: bool, env_id: str) -> dict[str, Any]:
+    """Defaults that train well on ``env_id`` on 2 CPU cores, read from its section of the shipped rl-zoo3 YAML
+    (the residual variants explore less); n_envs and n_timesteps there equal the defaults of TrainConfig."""
+    path = str(hyperparams_file(algo, residual))
+    params = zoo_to_sb3(load_zoo_yaml(path, env_id), path)
     params.pop("n_timesteps", None)
     params.pop("n_envs", None)
     return params
@@ -83,8 +84,8 @@ def parse_policy_kwargs(text: str) -> dict[str, Any]:
     return result
 
 
-def load_zoo_yaml(path: str) -> dict[str, Any]:
-    """The hyperparameters for DWRPointStabilization-v0 from an rl-zoo3 YAML file."""
+def load_zoo_yaml(path: str, env_id: str) -> dict[str, Any]:
+    """The hyperparameters for ``env_id`` from an rl-zoo3 YAML file (its section ``env_id`` or ``dwr_gym:env_id``)."""
     import yaml
 
     try:
@@ -92,12 +93,14 @@ def load_zoo_yaml(path: str) -> dict[str, Any]:
     except (yaml.YAMLError, UnicodeDecodeError, OSError) as error:
         raise ConfigError(f"--hyperparams {path!r} is invalid: {str(error).splitlines()[0]}") from None
     if not isinstance(data, dict):
-        raise ConfigError(f"--hyperparams {path!r} is invalid: expected a mapping {{{ENV_ID}: {{...}}}}")
-    sections = [key for key in data if isinstance(key, str) and ENV_SECTION.match(key)]
-    if not sections:
+        raise ConfigError(f"--hyperparams {path!r} is invalid: expected a mapping {{{env_id}: {{...}}}}")
+    names = [name for name in (env_id, f"dwr_gym:{env_id}") if name in data]
+    if not names:
         found = ", ".join(map(repr, data))[:80]
-        raise ConfigError(f"--hyperparams {path!r} is for another env ({found}): expected a section {ENV_ID!r}")
-    section = data[ENV_ID] if ENV_ID in data else data[sections[0]]
+        ours = [key for key in data if isinstance(key, str) and ENV_SECTION.match(key)]
+        hint = f"; add one, or train on {ours[0].removeprefix('dwr_gym:')} with --env" if ours else ""
+        raise ConfigError(f"--hyperparams {path!r} has no section {env_id!r} (found: {found}){hint}")
+    section = data[names[0]]
     if not isinstance(section, dict):
         raise ConfigError(f"--hyperparams {path!r} is invalid: the section must be a mapping")
     unsupported = sorted(set(section) & set(ZOO_KEYS_UNSUPPORTED))
@@ -126,8 +129,8 @@ def parse_overrides(items: list[str]) -> dict[str, Any]:
 
 def resolve_hyperparams(config: TrainConfig, explicit: set[str]) -> TrainConfig:
     """Merge defaults, the YAML file and the command line (``explicit`` names the options the user gave)."""
-    params = default_hyperparams(config.algo, config.residual)
-    layers = [load_zoo_yaml(config.hyperparams)] if config.hyperparams is not None else []
+    params = default_hyperparams(config.algo, config.residual, config.env_id)
+    layers = [load_zoo_yaml(config.hyperparams, config.env_id)] if config.hyperparams is not None else []
     layers.append(dict(config.hyperparam_overrides))
     for layer, source in zip(layers, ("YAML", "--hyperparams")[-len(layers) :], strict=True):
         try:

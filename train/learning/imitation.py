@@ -22,8 +22,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from dwr_gym import V1_DEFAULTS, core
+from dwr_gym import core
 from dwr_gym.params import EnvParams
+from train.env_ids import ENV_HELP, TASK_ENV_ID, env_keywords
 from train.learning.config import option
 
 EVAL_FIELDS = ("epoch", "samples", "wall_time", "loss", "success_rate", "arrival_fraction_max",
@@ -34,6 +35,7 @@ EVAL_FIELDS = ("epoch", "samples", "wall_time", "loss", "success_rate", "arrival
 class ImitationConfig:
     """Everything ``dwr-gym imitate`` needs; written beside the model. Each field is an option of the command."""
 
+    env_id: str = option(TASK_ENV_ID, ENV_HELP, flag="--env")
     episodes: int = option(800, "expert episodes to record")
     T_con_range: tuple[float, float] = option((10.0, 60.0), "prescribed times of the episodes [s] (v1's range)")
     start_distance: tuple[float, float] = option((0.3, 3.0), "start distances of the episodes [m] (v1's range)")
@@ -51,8 +53,9 @@ class ImitationConfig:
 
 
 def env_kwargs(config: ImitationConfig) -> dict[str, Any]:
-    """The task the student learns: DWRPointStabilization-v1's defaults, with the config's ranges."""
-    return {**V1_DEFAULTS, "T_con_range": tuple(config.T_con_range), "start_distance": tuple(config.start_distance)}
+    """The task the student learns: the keywords of ``env_id`` (v1's by default) with the config's ranges."""
+    ranges = {"T_con_range": tuple(config.T_con_range), "start_distance": tuple(config.start_distance)}
+    return env_keywords(config.env_id, ranges)
 
 
 def record_demonstrations(
@@ -157,7 +160,8 @@ def imitate(config: ImitationConfig, run_dir: Path, progress: bool = True) -> Pa
             with csv_path.open("a", newline="") as handle:
                 csv.writer(handle).writerow([row[k] for k in EVAL_FIELDS])
     model.save(run_dir / "model.zip")
-    train_config = TrainConfig(algo="ppo", env_kwargs=kwargs, seed=config.seed, run_dir=str(run_dir), progress=False,
+    ranges = {key: kwargs[key] for key in ("T_con_range", "start_distance")}
+    train_config = TrainConfig(algo="ppo", env_id=config.env_id, env_kwargs=ranges, seed=config.seed, run_dir=str(run_dir), progress=False,
                                algo_kwargs={"policy": "MlpPolicy", "gamma": 0.999,
                                             "policy_kwargs": {"net_arch": list(config.net_arch)}})  # fmt: skip
     imitation = {**asdict(config), "net_arch": list(config.net_arch), "T_con_range": list(config.T_con_range),

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from train.learning.config import ENV_ID, ConfigError, TrainConfig
+from train.learning.config import ConfigError, TrainConfig
 from train.learning.hyperparams import check_algo_kwargs, resolve_hyperparams
 
 SEARCHES = ("grid", "random", "optuna")
@@ -110,6 +110,7 @@ def optuna_space(space: dict[str, dict[str, Any]]) -> dict[str, Any]:
 def trial_config(base: dict[str, Any], hp: dict[str, Any], seed: int, run_dir: Path) -> TrainConfig:
     """The TrainConfig of one run: the sweep's base options, this seed, the defaults/YAML, then ``hp``."""
     config = TrainConfig(**{**base, "seed": seed, "run_dir": str(run_dir), "progress": False})
+    config.validate()  # the options first (the env id chooses the hyperparameters' section)
     config = resolve_hyperparams(config, set(base))
     config.algo_kwargs.update(hp)
     check_algo_kwargs(config.algo, config.algo_kwargs)
@@ -217,7 +218,7 @@ def zoo_yaml(config: TrainConfig) -> str:
     )
     if config.env_kwargs:
         section["env_kwargs"] = dict(config.env_kwargs)
-    return header + yaml.safe_dump({ENV_ID: section}, sort_keys=False)
+    return header + yaml.safe_dump({config.env_id: section}, sort_keys=False)
 
 
 def parse_resources(text: str) -> dict[str, float]:

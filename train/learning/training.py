@@ -37,9 +37,8 @@ def make_expert(config: TrainConfig) -> Any:
     """The expert policy under a residual agent, scaled to the env's action limits."""
     from baselines.expert import ExpertPolicy
     from baselines.registry import make_controller
-    from dwr_gym.params import EnvParams
 
-    params = EnvParams.from_kwargs(**config.env_kwargs)
+    params = config.env_params()
     kwargs = {}
     if config.expert == "optimal":  # the planner must know the env's grid and limits
         kwargs = {"T_con": params.T_con, "dt": params.dt, "u_max": params.u_max, "omega_max": params.omega_max}
@@ -52,7 +51,7 @@ def make_training_env(config: TrainConfig) -> Any:
     from dwr_gym.sb3 import make_sb3_vec_env
     from train.learning.residual import ResidualVecEnv
 
-    venv: Any = make_sb3_vec_env(config.num_envs, seed=config.seed, **config.env_kwargs)
+    venv: Any = make_sb3_vec_env(config.num_envs, seed=config.seed, **config.env_keywords())
     if config.residual:
         venv = ResidualVecEnv(venv, make_expert(config), config.residual_scale)
     return venv
@@ -87,12 +86,11 @@ def make_run_callback(
     """
     from stable_baselines3.common.callbacks import BaseCallback
 
-    from dwr_gym.params import EnvParams
     from train.evaluation.rollout import rollout
     from train.evaluation.scenarios import make_scenario
 
-    params = EnvParams.from_kwargs(**config.env_kwargs)
-    scenario = make_scenario("random", n=config.eval_episodes, seed=config.eval_seed, env_kwargs=config.env_kwargs)
+    params = config.env_params()
+    scenario = make_scenario("random", n=config.eval_episodes, seed=config.eval_seed, env_kwargs=config.env_keywords())
 
     class RunCallback(BaseCallback):
         def __init__(self) -> None:
@@ -147,7 +145,8 @@ def make_run_callback(
                                   "last_eval": self.last_eval, "finished": finished})  # fmt: skip
 
         def _evaluate(self) -> None:
-            summary = rollout(as_policy(self.model, config), params, scenario.starts, scenario.goals).summary()
+            summary = rollout(as_policy(self.model, config), params, scenario.starts, scenario.goals,
+                              T_con=scenario.T_cons, env_kwargs=scenario.env_kwargs).summary()  # fmt: skip
             row = {"timesteps": self.num_timesteps, "wall_time": self.wall_time(),
                    **{k: summary[k] for k in EVAL_FIELDS[2:]}}  # fmt: skip
             with self.csv_path.open("a", newline="") as handle:
