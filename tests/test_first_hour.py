@@ -85,3 +85,25 @@ def test_every_command_that_makes_an_env_takes_env_and_refuses_an_abbreviation(c
     assert wrong.returncode == 2 and "--env 'CartPole-v1' is invalid: expected DWRPointStabilization-v1" in wrong.stderr
     abbreviated = dwr_gym(command, "--env-kw", "T_con=25")
     assert abbreviated.returncode == 2 and "unrecognized arguments: --env-kw" in abbreviated.stderr
+
+
+# 3. One spelling for one concept: --agents in every command, --agent (repeatable) meaning the same.
+
+
+def test_evaluate_takes_agents_and_agent_alike(tmp_path: Path) -> None:
+    ppo, dagger = str(ROOT / "train/pretrained/ppo"), str(ROOT / "train/pretrained/dagger")
+    for i, flags in enumerate((["--agents", ppo, dagger], ["--agent", ppo, "--agent", dagger])):
+        result = dwr_gym("evaluate", "--controllers", "ptc", "--scenarios", "paper-fig5", "--optimum", "none",
+                         "--no-progress", "--out", str(tmp_path / str(i)), *flags)  # fmt: skip
+        assert result.returncode == 0, result.stderr
+        rows = json.loads((tmp_path / str(i) / "evaluation.json").read_text())
+        assert [row["policy"] for row in rows] == ["ptc", "ppo", "dagger"]
+
+
+@pytest.mark.parametrize("command", ["evaluate", "compare", "robustness"])
+def test_every_command_with_agents_reads_both_spellings(command: str) -> None:
+    from train.cli import build_parser
+
+    parser = build_parser()
+    assert parser.parse_args([command, "--agents", "a", "b"]).agents == ["a", "b"]
+    assert parser.parse_args([command, "--agent", "a", "--agent", "b"]).agents == ["a", "b"]

@@ -8,6 +8,7 @@ from typing import Any
 
 from train.commands.shared import (
     UsageError,
+    add_agents_argument,
     add_scenario_arguments,
     checked_env,
     checked_optimum,
@@ -21,8 +22,7 @@ def add_parser(sub: Any) -> None:
 
     p = sub.add_parser("compare", help="compare trained agents with the PTC expert and the other controllers")
     add_scenario_arguments(p, "results/compare")
-    p.add_argument("--agents", nargs="+", metavar="PATH",
-                   help="run directories or model .zip files (default: the pretrained agents shipped with dwr-gym)")  # fmt: skip
+    add_agents_argument(p, "compared with the controllers (default: the agents shipped with dwr-gym)")
     p.set_defaults(func=run)  # fmt: skip
 
 

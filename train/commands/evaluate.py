@@ -6,6 +6,7 @@ import argparse
 from typing import Any
 
 from train.commands.shared import (
+    add_agents_argument,
     add_scenario_arguments,
     checked_env,
     checked_optimum,
@@ -18,7 +19,7 @@ def add_parser(sub: Any) -> None:
     """The ``evaluate`` subcommand."""
     p = sub.add_parser("evaluate", help="evaluate controllers and agents on named scenario sets")
     add_scenario_arguments(p, "results/evaluate")
-    p.add_argument("--agent", action="append", metavar="PATH", help="a saved agent (.zip) to evaluate too; repeatable")
+    add_agents_argument(p, "evaluated beside the controllers")
     p.set_defaults(func=run)  # fmt: skip
 
 
@@ -27,7 +28,7 @@ def run(args: argparse.Namespace) -> int:
     env_id, env_kwargs = checked_env(args)
     names = checked_selection(args)
     policies: dict[str, Any] = {name: name for name in names}
-    policies.update(load_agents(args.agent, env_id))
+    policies.update(load_agents(args.agents, env_id))
     from train.evaluation.evaluate import evaluate_sets
     from train.reporting.results import write_results
     from train.reporting.tables import EVAL_COLUMNS, print_blocks, table_notes

@@ -11,6 +11,7 @@ from typing import Any
 
 from train.commands.shared import (
     UsageError,
+    add_agents_argument,
     add_env_arguments,
     checked_env,
     checked_selection,
@@ -40,7 +41,7 @@ def add_parser(sub: Any) -> None:
         help=f"controllers: 'all' or any of {', '.join(CONTROLLER_NAMES)} (default: all; "
         "'optimal' needs the optimal extra and is slow: it re-plans from the measured pose)",
     )
-    p.add_argument("--agent", action="append", metavar="PATH", help="a saved agent (.zip) to sweep too; repeatable")
+    add_agents_argument(p, "swept too, beside the shipped ones")
     p.add_argument("--no-shipped-agents", action="store_true", help="leave out the pretrained agents")
     p.add_argument("--n", type=int, default=200, help="random start poses per magnitude (default: 200)")
     p.add_argument(
@@ -92,7 +93,7 @@ def run(args: argparse.Namespace) -> int:
             raise UsageError(f"--disturbances {name!r} is invalid: expected any of {', '.join(SWEEPS)}")
     args.scenarios, args.T_con = [], None
     policies: dict[str, Any] = {name: name for name in checked_selection(args)}
-    paths = list(args.agent or [])
+    paths = list(args.agents or [])
     if not args.no_shipped_agents:
         from train.learning.agents import pretrained_paths
 

@@ -83,6 +83,12 @@ def add_env_arguments(p: argparse.ArgumentParser, kwargs_example: str = "T_con=2
                    help=f"env keywords on top of the env id's, e.g. {kwargs_example}")  # fmt: skip
 
 
+def add_agents_argument(p: argparse.ArgumentParser, what: str) -> None:
+    """``--agents PATH ...``, the one spelling of every command (``--agent PATH``, repeatable, means the same)."""
+    p.add_argument("--agents", "--agent", dest="agents", nargs="+", action="extend", metavar="PATH",
+                   help=f"saved agents, each a run directory or its model .zip: {what}")  # fmt: skip
+
+
 def checked_env(args: argparse.Namespace) -> tuple[str, dict[str, Any]]:
     """``--env`` without a ``dwr_gym:`` prefix, and the env's keywords: the id's registered ones, then ``--env-kwargs``."""
     from train.env_ids import check_env_id, env_keywords
