@@ -107,3 +107,35 @@ def test_every_command_with_agents_reads_both_spellings(command: str) -> None:
     parser = build_parser()
     assert parser.parse_args([command, "--agents", "a", "b"]).agents == ["a", "b"]
     assert parser.parse_args([command, "--agent", "a", "--agent", "b"]).agents == ["a", "b"]
+
+
+# 4. The help says what the options take, each default once, and lists every command.
+
+
+def option_entries(help_text: str) -> dict[str, str]:
+    """Each option's entry in ``--help`` (flags and help text, wrapped lines joined), by its first flag."""
+    entries: dict[str, str] = {}
+    flag = None
+    for line in help_text.split("options:", 1)[1].splitlines():
+        if line.startswith("  -"):
+            flag = line.split()[0].rstrip(",")
+            entries[flag] = line.strip()
+        elif flag is not None and line.startswith("      "):
+            entries[flag] += " " + line.strip()
+    return entries
+
+
+def test_help_lists_every_command_and_each_option_says_its_default_once() -> None:
+    from train.cli import build_parser
+
+    top = dwr_gym("--help").stdout
+    description = " ".join(top.split("positional arguments:")[0].split())
+    commands = list(build_parser()._subparsers._group_actions[0].choices)  # type: ignore[union-attr]
+    assert len(commands) == 8 and "``" not in top
+    assert f"Commands: {', '.join(commands)};" in description
+    for command in commands:
+        entries = option_entries(dwr_gym(command, "--help").stdout)
+        assert all(text.count("(default:") <= 1 for text in entries.values()), command
+    train = option_entries(dwr_gym("train", "--help").stdout)
+    assert "a run directory (or a checkpoint .zip in one)" in train["--resume"]
+    assert train["--run-dir"].count("runs/<algo>[-residual]-seed<seed>") == 1

@@ -1,4 +1,4 @@
-"""The ``dwr-gym`` command line: ``info``, ``evaluate``, ``reproduce``, ``train``, ``compare``, ``imitate``.
+"""The ``dwr-gym`` command line; ``dwr-gym --help`` lists its commands.
 
 Every subcommand validates its input before doing any work; bad input ends with a one-line
 error on stderr and exit code 2. Each command lives in its own module of :mod:`train.commands`;
@@ -20,10 +20,14 @@ COMMANDS = (info, evaluate, reproduce, train_command, compare, imitate, sweep, r
 
 def build_parser() -> Parser:
     """The argument parser of ``dwr-gym``."""
-    parser = Parser(prog="dwr-gym", description=__doc__.splitlines()[0])
+    parser = Parser(prog="dwr-gym")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for command in COMMANDS:
         command.add_parser(sub)
+    parser.description = (
+        "Prescribed-time point stabilization of a differential wheeled robot: evaluate, train and compare "
+        f"controllers and agents. Commands: {', '.join(sub.choices)}; `dwr-gym COMMAND --help` for each."
+    )
     return parser
 
 

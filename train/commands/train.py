@@ -40,7 +40,7 @@ def add_parser(sub: Any) -> None:
         elif f.name == "hyperparams":
             p.add_argument(flag, nargs="+", metavar="FILE|KEY=VALUE", default=argparse.SUPPRESS, help=text)
         else:  # numbers are read as text and coerced by TrainConfig.validate, so 1e5 and 3e-4 work
-            p.add_argument(flag, dest=f.name, default=argparse.SUPPRESS, help=text)
+            p.add_argument(flag, dest=f.name, metavar=f.metadata.get("metavar"), default=argparse.SUPPRESS, help=text)
     p.set_defaults(func=run)
 
 

@@ -34,7 +34,7 @@ class TrainConfig:
     """Everything a training run needs; written beside the model as config.yaml so it can be re-run exactly."""
 
     algo: str = option("ppo", "algorithm: ppo, sac or td3")
-    env_id: str = option(TASK_ENV_ID, ENV_HELP, flag="--env")
+    env_id: str = option(TASK_ENV_ID, ENV_HELP, flag="--env", metavar="ID")
     total_timesteps: int = option(200_000, "total environment steps over all envs")
     num_envs: int = option(16, "robots simulated in one native vector env")
     seed: int = option(0, "seed of the env, the network initialisation and the sampling")
@@ -54,10 +54,15 @@ class TrainConfig:
     eval_episodes: int = option(100, "size of the fixed random scenario set used for evaluation")
     eval_seed: int = option(12345, "seed of the evaluation scenario set (kept apart from the training seed)")
     checkpoint_freq: int = option(50_000, "save a checkpoint every this many env steps")
-    run_dir: str | None = option(None, "output directory", shown_default="runs/<algo>[-residual]-seed<seed>")
+    run_dir: str | None = option(
+        None, "output directory", shown_default="runs/<algo>[-residual]-seed<seed>", metavar="DIR"
+    )
     device: str = option("cpu", "torch device: auto, cpu, cuda, cuda:N or mps; the config records the one used")
     resume: str | None = option(
-        None, "a run directory (or a checkpoint .zip in one) to continue; its saved config is reused", shown_default=""
+        None,
+        "a run directory (or a checkpoint .zip in one) to continue; its saved config is reused",
+        shown_default="",
+        metavar="RUN_DIR|CHECKPOINT",
     )
     overwrite: bool = option(False, "delete the outputs of an earlier run in --run-dir and start afresh")
     progress: bool = option(True, "show a progress bar")
