@@ -156,9 +156,9 @@ def rollout(
 
     steps = range(int(state.max_steps.max()))
     if progress:
-        from tqdm.auto import tqdm
+        from train.progress import Progress
 
-        steps = tqdm(steps, desc=description, unit="step", leave=False)
+        steps = Progress(steps, desc=description, unit="step", leave=False)
     episode_start = np.ones(n, dtype=bool)
     for _ in steps:
         actions, _ = policy.predict(obs, episode_start=episode_start, deterministic=True)

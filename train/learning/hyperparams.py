@@ -225,12 +225,31 @@ def check_algo_kwargs(algo: str, params: dict[str, Any]) -> dict[str, Any]:
     return checked
 
 
+def steps_per_collection(config: TrainConfig) -> int:
+    """Env steps between two checks of the budget: PPO collects n_steps * num_envs per update; SAC and TD3
+    step every env train_freq times (counted in steps) before they look at the budget again."""
+    if config.algo == "ppo":
+        return int(config.algo_kwargs.get("n_steps", 2048)) * config.num_envs
+    freq = config.algo_kwargs.get("train_freq", 1)
+    steps = (
+        freq if isinstance(freq, int) else freq[0] if isinstance(freq, (list, tuple)) and freq[1:] == ["step"] else 1
+    )
+    return int(steps) * config.num_envs
+
+
+def steps_to_run(config: TrainConfig, done: int = 0) -> int:
+    """The env steps a run at ``done`` steps will actually take to reach --total-timesteps (a whole number of
+    collections: the budget rounded up), so that progress bars show the work that will run."""
+    chunk = steps_per_collection(config)
+    return -(-(config.total_timesteps - done) // chunk) * chunk
+
+
 def rollout_rounding(config: TrainConfig) -> str | None:
     """A note when PPO's rollouts round the budget up (it collects n_steps * num_envs steps per update)."""
     if config.algo != "ppo":
         return None
-    chunk = int(config.algo_kwargs.get("n_steps", 2048)) * config.num_envs
-    rounded = -(-config.total_timesteps // chunk) * chunk
+    chunk = steps_per_collection(config)
+    rounded = steps_to_run(config)
     if rounded == config.total_timesteps:
         return None
     return (f"note: PPO collects n_steps * num_envs = {chunk} steps per update, so --total-timesteps "

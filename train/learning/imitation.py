@@ -83,9 +83,9 @@ def record_demonstrations(
     observations, actions = [], []
     steps: Any = range(int(state.max_steps.max()))
     if progress:
-        from tqdm.auto import tqdm
+        from train.progress import Progress
 
-        steps = tqdm(steps, desc="expert demonstrations", unit="step", leave=False)
+        steps = Progress(steps, desc="expert demonstrations", unit="step", leave=False)
     episode_start = np.ones(n, dtype=bool)
     began = time.perf_counter()
     for _ in steps:
@@ -140,9 +140,9 @@ def imitate(config: ImitationConfig, run_dir: Path, progress: bool = True) -> Pa
     generator = torch.Generator().manual_seed(config.seed)
     epochs: Any = range(1, config.epochs + 1)
     if progress:
-        from tqdm.auto import tqdm
+        from train.progress import Progress
 
-        epochs = tqdm(epochs, desc="behaviour cloning", unit="epoch", leave=False)
+        epochs = Progress(epochs, desc="behaviour cloning", unit="epoch", leave=False)
     for epoch in epochs:
         order = torch.randperm(len(inputs), generator=generator)
         total = 0.0

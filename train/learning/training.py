@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from train.learning.config import ConfigError, TrainConfig
-from train.learning.hyperparams import algorithm_class, build_algo_kwargs, rollout_rounding
+from train.learning.hyperparams import algorithm_class, build_algo_kwargs, rollout_rounding, steps_to_run
 from train.learning.runs import (
     EVAL_FILE,
     MODEL_FILE,
@@ -82,7 +82,8 @@ def make_run_callback(
 
     Checkpoints are taken at rollout boundaries, with the env and the random generators, so that a run
     resumed from one continues exactly as the uninterrupted run would have. Ctrl-C sets a flag; the next
-    boundary saves a checkpoint and raises :class:`InterruptRequestedError`.
+    boundary saves a checkpoint and raises :class:`InterruptRequestedError`. A second Ctrl-C sets
+    ``stop_now``: training stops after the current env step, mid-rollout.
     """
     from stable_baselines3.common.callbacks import BaseCallback
 
@@ -101,6 +102,7 @@ def make_run_callback(
             self.last_checkpoint = int(state.get("timesteps", 0))
             self.csv_path = run_dir / EVAL_FILE
             self.interrupt_requested = False
+            self.stop_now = False
 
         def _on_training_start(self) -> None:
             if not self.csv_path.exists():
@@ -110,6 +112,8 @@ def make_run_callback(
                 self._evaluate()
 
         def _on_step(self) -> bool:
+            if self.stop_now:  # a second Ctrl-C: stop after this env step, between steps where the state is whole
+                return False
             if self.num_timesteps // config.eval_freq > max(self.last_eval, 0) // config.eval_freq:
                 self._evaluate()
             return True
@@ -164,6 +168,32 @@ def make_run_callback(
     return RunCallback()
 
 
+def make_progress_callback(total: int) -> Any:
+    """A progress bar over the ``total`` env steps that will run (the budget rounded up to whole collections)."""
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    from train.progress import Progress
+
+    class ProgressCallback(BaseCallback):
+        def __init__(self) -> None:
+            super().__init__()
+            self.bar: Any = None
+
+        def _on_training_start(self) -> None:
+            self.bar = Progress(total=total, desc="training", unit="step")
+
+        def _on_step(self) -> bool:
+            self.bar.update(self.training_env.num_envs)
+            return True
+
+        def close(self) -> None:
+            if self.bar is not None:
+                self.bar.close()
+                self.bar = None
+
+    return ProgressCallback()
+
+
 def _layers(env: Any) -> list[Any]:
     """The wrappers of a VecEnv stack, outermost first, down to the native vector env."""
     layers = [env]
@@ -202,8 +232,9 @@ def train(
     """Train as configured; returns the run directory. ``on_evaluation`` receives each periodic
     evaluation as a dict of EVAL_FIELDS (e.g. to report it to a tuner).
 
-    Ctrl-C saves a checkpoint at the next rollout boundary (a second Ctrl-C saves at once), prints the
-    command that resumes, and raises KeyboardInterrupt.
+    Ctrl-C saves a checkpoint at the next rollout boundary; a second Ctrl-C stops after the current env
+    step and saves what there is (a third stops at once, saving nothing more). Then it prints the command
+    that resumes and raises KeyboardInterrupt.
     """
     import pickle
     import random
@@ -249,20 +280,30 @@ def train(
         save_config(config, run_dir, {"command": command or sys.argv})
         callback = make_run_callback(config, run_dir, env, state, on_evaluation)
         remaining = config.total_timesteps - model.num_timesteps
+        bar = make_progress_callback(steps_to_run(config, model.num_timesteps)) if config.progress else None
 
         def on_sigint(signum: int, frame: Any) -> None:
-            if callback.interrupt_requested:
+            if callback.stop_now:
                 raise KeyboardInterrupt
+            if callback.interrupt_requested:
+                callback.stop_now = True
+                print("\ninterrupt: saving now and stopping (Ctrl-C again to stop without saving)", file=sys.stderr)
+                return
             callback.interrupt_requested = True
-            print("\ninterrupt: saving at the end of this rollout (Ctrl-C again to stop at once)", file=sys.stderr)
+            print("\ninterrupt: saving at the end of this rollout (Ctrl-C again to save now and stop)",
+                  file=sys.stderr)  # fmt: skip
 
         main_thread = threading.current_thread() is threading.main_thread()
         previous = signal.signal(signal.SIGINT, on_sigint) if main_thread else None
         start = time.time()
         try:
-            model.learn(remaining, callback=callback, progress_bar=config.progress,
+            model.learn(remaining, callback=[callback] + ([bar] if bar else []), progress_bar=False,
                         reset_num_timesteps=config.resume is None, tb_log_name=config.algo)  # fmt: skip
+            if callback.stop_now:  # stopped by the second Ctrl-C, mid-rollout
+                raise InterruptRequestedError
         except (InterruptRequestedError, KeyboardInterrupt):
+            if bar is not None:
+                bar.close()  # before the last lines, so that they are the last on the terminal
             if model.num_timesteps > callback.last_checkpoint or not (run_dir / MODEL_FILE).exists():
                 callback.checkpoint()
             print(f"interrupted at {model.num_timesteps} steps: saved {run_dir / MODEL_FILE}\n"
@@ -272,6 +313,8 @@ def train(
             if main_thread:
                 signal.signal(signal.SIGINT, previous)
             env.close()
+        if bar is not None:
+            bar.close()
         callback.checkpoint(finished=True)
     finally:
         lock.release()
