@@ -166,7 +166,9 @@ def test_the_training_bar_counts_to_the_steps_that_run_also_on_resume(tmp_path: 
 
 
 def test_a_second_ctrl_c_stops_mid_rollout_saves_and_ends_with_the_resume_line(tmp_path: Path) -> None:
+    import re
     import signal
+    import threading
     import time
 
     env = {**os.environ, "OMP_NUM_THREADS": "1"}
@@ -177,15 +179,20 @@ def test_a_second_ctrl_c_stops_mid_rollout_saves_and_ends_with_the_resume_line(t
          "--hyperparams", f"n_steps={rollout // 4}", "batch_size=64"],
         cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )  # fmt: skip
-    deadline = time.time() + 120
-    while not (tmp_path / "run" / "evaluations.csv").exists() and time.time() < deadline:
-        time.sleep(0.2)
-    time.sleep(1.0)
+    assert process.stderr is not None
+    printed: list[str] = []
+    reader = threading.Thread(target=lambda: printed.extend(iter(lambda: process.stderr.read(1), "")))  # type: ignore[union-attr]
+    reader.start()
+    deadline = time.time() + 300
+    while not re.search(r"\| [1-9]\d*/100000000", "".join(printed)) and time.time() < deadline:
+        time.sleep(0.2)  # until the bar shows steps: the first rollout is under way
     process.send_signal(signal.SIGINT)
     time.sleep(1.0)
     assert process.poll() is None  # the first Ctrl-C waits for the end of the rollout
     process.send_signal(signal.SIGINT)
-    _, stderr = process.communicate(timeout=120)
+    process.wait(timeout=120)
+    reader.join(timeout=10)
+    stderr = "".join(printed)
     assert process.returncode == 130, stderr
     assert "(Ctrl-C again to save now and stop)" in stderr and "interrupt: saving now and stopping" in stderr
     lines = [line for line in stderr.replace("\r", "\n").splitlines() if line.strip()]
@@ -240,3 +247,107 @@ def test_evaluate_and_the_optimum_show_such_bars(monkeypatch: pytest.MonkeyPatch
             progress=True, description="random: ptc")  # fmt: skip
     optimal_energies(params, scenario.starts[:1], np.zeros((1, 3)), progress=True, description="random: optimum")
     assert made == ["random: ptc", "random: optimum"]
+
+
+# 7 and 17. Figures: the same bytes for the same inputs, at their stated size; a distinct colour and marker per
+# policy, labelled reference lines, axis labels with quantity and unit, legends outside the data.
+
+
+def check_figure(fig: object, path: Path) -> None:
+    """What every figure owes its reader, as the issue lists it."""
+    import re
+
+    from PIL import Image
+
+    image = Image.open(path)
+    dpi = round(image.info["dpi"][0])
+    assert image.size == tuple(round(inches * dpi) for inches in fig.get_size_inches()), path.name  # type: ignore[attr-defined]
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    canvas = FigureCanvasAgg(fig)  # a saved figure is closed: draw it again, laid out as it was saved
+    canvas.draw()
+    renderer = canvas.get_renderer()
+    axes = [ax for ax in fig.axes if ax.get_visible() and ax.lines]  # type: ignore[attr-defined]
+    legends = [*fig.legends, *(ax.get_legend() for ax in axes if ax.get_legend())]  # type: ignore[attr-defined]
+    legend_texts = {text.get_text() for legend in legends for text in legend.get_texts()}
+    for ax in axes:
+        for label in (ax.get_xlabel(), ax.get_ylabel()):
+            assert re.fullmatch(r"\S.*\[.+\]", label), f"{path.name}: axis label {label!r} has no [unit]"
+        for line in ax.lines:
+            x, y = line.get_xdata(), line.get_ydata()
+            reference = len(x) == 2 and ((x[0] == x[1] and list(y) == [0, 1]) or (y[0] == y[1] and list(x) == [0, 1]))
+            if reference:
+                assert not line.get_label().startswith("_") and line.get_label() in legend_texts, path.name
+        box = ax.get_window_extent(renderer)
+        for legend in legends:
+            outer = legend.get_window_extent(renderer)
+            overlap = min(box.x1, outer.x1) - max(box.x0, outer.x0), min(box.y1, outer.y1) - max(box.y0, outer.y0)
+            assert min(overlap) <= 1.0, f"{path.name}: a legend lies over the data"
+    for legend in legends:
+        looks = [(h.get_color(), h.get_marker(), h.get_linestyle()) for h in legend.legend_handles]
+        assert len(set(looks)) == len(looks), f"{path.name}: two legend entries look the same"
+
+
+@pytest.fixture(scope="module")
+def recorded() -> dict[str, object]:
+    from train.evaluation.evaluate import evaluate
+    from train.evaluation.scenarios import make_scenario
+    from train.learning.agents import load_agent, pretrained_paths
+
+    policies: dict[str, object] = dict(load_agent(path) for path in pretrained_paths().values())
+    policies.update({name: name for name in ("ptc", "conventional-ptc", "fabregas", "fixed-time", "astolfi",
+                                             "pt-astolfi", "optimal")})  # fmt: skip
+    assert len(policies) == 11  # as in the issue: 11 policies in one figure
+    return evaluate(policies, make_scenario("paper-fig5"), record=True)  # type: ignore[arg-type]
+
+
+def test_compare_figures_are_readable_and_byte_stable(recorded: dict[str, object], tmp_path: Path) -> None:
+    from train.evaluation.scenarios import make_scenario
+    from train.learning.agents import PRETRAINED
+    from train.reporting.compare_figures import plot_learning_curves, plot_time_series, plot_trajectories
+
+    labels = make_scenario("paper-fig5").labels
+    for name, draw in (("time_series.png", lambda p: plot_time_series(recorded, p)),  # type: ignore[arg-type]
+                       ("trajectories.png", lambda p: plot_trajectories(recorded, labels, p)),  # type: ignore[arg-type]
+                       ("learning_curves.png", lambda p: plot_learning_curves(PRETRAINED, p))):  # fmt: skip
+        check_figure(draw(tmp_path / name), tmp_path / name)
+        draw(tmp_path / f"again_{name}")
+        assert (tmp_path / name).read_bytes() == (tmp_path / f"again_{name}").read_bytes(), name
+    text = (tmp_path / "learning_curves.png").read_bytes()
+    assert b"Matplotlib" not in text  # no version in the metadata
+
+
+def test_the_paper_robustness_and_learning_figures_are_readable(tmp_path: Path) -> None:
+    from train.evaluation.reproduce import measure
+    from train.reporting import learning_curves, paper
+    from train.reporting.robustness_figures import plot_disturbance
+
+    runs = measure(dt=0.05)
+    for draw in (paper.figure5, paper.figure6, paper.figure7, paper.figure8, paper.figure9, paper.optimal_vs_ptc):
+        path = tmp_path / f"{draw.__name__}.png"
+        check_figure(draw(runs, path), path)  # type: ignore[arg-type]
+    rows = json.loads((ROOT / "docs/robustness/robustness.json").read_text())
+    path = tmp_path / "delay.png"
+    check_figure(plot_disturbance([r for r in rows if r["disturbance"] == "delay"], "delay", path), path)
+    curve = [{"round": r, **{f"{k}_T{T}": 0.5 + r / 10 for k in ("success", "heading", "energy") for T in (10, 20)}}
+             for r in range(3)]  # fmt: skip
+    check_figure(
+        learning_curves.plot_dagger_curve(curve, (10.0, 20.0), tmp_path / "dagger.png"), tmp_path / "dagger.png"
+    )
+    runs_of = {seed: [{"timesteps": t, "return_mean": t / 1e3 + seed, "success_rate": 0.5} for t in (0, 1e3)]
+               for seed in (0, 1)}  # fmt: skip
+    groups = {f"c00{i}": {"hyperparams": {}, "runs": runs_of} for i in range(3)}
+    path = tmp_path / "sweep.png"
+    check_figure(learning_curves.plot_sweep_curves(groups, path, ("return_mean", "success_rate")), path)
+
+
+def test_reproduce_tells_what_it_runs_as_it_goes(tmp_path: Path) -> None:
+    process = subprocess.Popen([sys.executable, "-m", "train.cli", "reproduce", "--dt", "0.05", "--no-gif", "--out",
+                                str(tmp_path)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               env={**os.environ, "MPLBACKEND": "Agg"})  # fmt: skip
+    assert process.stdout is not None
+    first = process.stdout.readline()
+    running = process.poll() is None
+    process.communicate(timeout=300)
+    assert first.startswith("running Figure 5") and running  # printed while the work goes on, not at the end
+    assert process.returncode == 0

@@ -32,10 +32,12 @@ def run(args: argparse.Namespace) -> int:
     from train.reporting.paper import plot_paper_figures, write_report
 
     out = Path(args.out)
-    runs = measure(args.dt)
+    runs = measure(args.dt, log=lambda stage: print(f"running {stage} ...", flush=True))
     found = claims(runs)
+    print("drawing the figures" + (" and the animation" if not args.no_gif else "") + " ...", flush=True)
     plot_paper_figures(runs, out, gif=not args.no_gif)
     write_report(found, out / "report.md", args.dt, optimum_lines(runs))
+    print()
     width = max(len(c.verdict) for c in found)
     for claim in found:
         print(f"[{claim.verdict:<{width}}] {claim.claim}\n    {claim.measured}")

@@ -118,7 +118,7 @@ def report(rows: list[dict[str, Any]], out: Path, no_plots: bool) -> int:
     from train.reporting.tables import tolerance_markdown
 
     keys = list(dict.fromkeys(key for row in rows for key in row))  # rows of several runs may differ in columns
-    rows = [{key: row.get(key, math.nan) for key in keys} for row in rows]
+    rows = [{key: math.nan if row.get(key) is None else row[key] for key in keys} for row in rows]  # JSON's null: NaN
     markdown = tolerance_markdown(rows)
     print(f"\nlargest magnitude with success >= {SUCCESS_LEVEL:.0%} by T_con (n: episodes per point):\n{markdown}")
     for path in write_results(rows, str(out), "robustness"):
