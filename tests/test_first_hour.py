@@ -351,3 +351,41 @@ def test_reproduce_tells_what_it_runs_as_it_goes(tmp_path: Path) -> None:
     process.communicate(timeout=300)
     assert first.startswith("running Figure 5") and running  # printed while the work goes on, not at the end
     assert process.returncode == 0
+
+
+# 8-11. What the table and the errors say.
+
+
+def test_the_T_con_column_shows_the_prescribed_time_asked_for(tmp_path: Path) -> None:
+    result = dwr_gym("evaluate", "--controllers", "ptc", "--scenarios", "random", "--n", "3", "--T-con", "0.5",
+                     "--optimum", "none", "--no-progress", "--out", str(tmp_path))  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    block = result.stdout.split("random, T_con = 0.5 s", 1)[1].splitlines()
+    header, row = block[1].split(), block[3].split()
+    assert row[header.index("T_con")] == "0.5"
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["evaluate", "--n", "-5"], "--n -5 is invalid: expected an integer in [1, 1e7]"),
+        (["evaluate", "--n", "0"], "--n 0 is invalid: expected an integer in [1, 1e7]"),
+        (["robustness", "--n", "-5"], "--n -5 is invalid: expected an integer in [1, 1e7]"),
+        (["evaluate", "--env-kwargs", "T_con=nan"], "T_con=nan is invalid (not finite): expected a finite number"),
+        (["evaluate", "--env-kwargs", "T_con=inf"], "T_con=inf is invalid (not finite)"),
+        (["evaluate", "--agents", "README.md"], "agent 'README.md' is invalid: it is not a model .zip"),
+        (["compare", "--agents", "README.md"], "agent 'README.md' is invalid: it is not a model .zip"),
+    ],
+)
+def test_bad_input_names_what_the_user_typed(args: list[str], message: str) -> None:
+    result = dwr_gym(*args, cwd=ROOT)
+    assert result.returncode == 2 and message in result.stderr and len(result.stderr.strip().splitlines()) == 1
+
+
+def test_a_model_zip_outside_a_run_is_named_itself(tmp_path: Path) -> None:
+    import shutil
+
+    shutil.copy(ROOT / "train/pretrained/ppo/model.zip", tmp_path / "model.zip")
+    result = dwr_gym("evaluate", "--agents", str(tmp_path / "model.zip"), cwd=tmp_path)
+    assert result.returncode == 2
+    assert f"agent {str(tmp_path / 'model.zip')!r} is invalid: no config.yaml beside it or above it" in result.stderr

@@ -15,6 +15,7 @@ from train.commands.shared import (
     add_env_arguments,
     checked_env,
     checked_selection,
+    count,
     load_agents,
     validated_env_params,
 )
@@ -43,10 +44,10 @@ def add_parser(sub: Any) -> None:
     )
     add_agents_argument(p, "swept too, beside the shipped ones")
     p.add_argument("--no-shipped-agents", action="store_true", help="leave out the pretrained agents")
-    p.add_argument("--n", type=int, default=200, help="random start poses per magnitude (default: 200)")
+    p.add_argument("--n", type=count, default=200, help="random start poses per magnitude (default: 200)")
     p.add_argument(
         "--n-optimal",
-        type=int,
+        type=count,
         default=20,
         help="start poses for the (slow) optimal controller, the first of the n (default: 20)",
     )
@@ -56,7 +57,7 @@ def add_parser(sub: Any) -> None:
         metavar="FILE",
         help="run nothing: table and figures of the rows in these robustness.json files",
     )
-    p.add_argument("--seed", type=int, default=0, help="seed of the start poses and disturbances (default: 0)")
+    p.add_argument("--seed", type=count, default=0, help="seed of the start poses and disturbances (default: 0)")
     p.add_argument("--T-con", type=float, metavar="SECONDS",
                    help="the prescribed time of every episode, replacing v1's T_con_range (default: 20, or T_con of "
                    "--env-kwargs)")  # fmt: skip

@@ -31,13 +31,14 @@ class Parser(argparse.ArgumentParser):
 
 
 def count(text: str) -> int:
-    """An argparse type for counts and seeds: accepts 1000, 1e3 and 1_000."""
+    """An argparse type for counts and seeds: accepts 1000, 1e3 and 1_000; the option's own check says what range
+    it allows, so that --n -5 and --n 0 get the same message."""
     from dwr_gym.validation import as_int
 
     try:
-        return as_int("value", text.replace("_", ""), 0, 10**12, text=True)
+        return as_int("value", text.replace("_", ""), -(10**12), 10**12, text=True)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"invalid value {text!r}: expected a non-negative integer") from None
+        raise argparse.ArgumentTypeError(f"invalid value {text!r}: expected an integer, e.g. 1000 or 1e3") from None
 
 
 def check_writable_dir(flag: str, path: str) -> None:
@@ -69,9 +70,17 @@ def parse_env_kwargs(items: Sequence[str] | None) -> dict[str, Any]:
             try:  # Python literals such as (1.5, 3.0) or None
                 value = ast.literal_eval(raw)
             except (ValueError, SyntaxError, MemoryError, RecursionError):
-                value = raw
+                value = _float_or_text(raw)
         kwargs[key] = tuple(value) if isinstance(value, list) else value
     return kwargs
+
+
+def _float_or_text(raw: str) -> float | str:
+    """``raw`` as a float where Python reads one (nan, inf, -inf, 1e3), so that the check names the number."""
+    try:
+        return float(raw)
+    except ValueError:
+        return raw
 
 
 def add_env_arguments(p: argparse.ArgumentParser, kwargs_example: str = "T_con=25 dt=0.02") -> None:
@@ -192,7 +201,7 @@ def add_scenario_arguments(p: argparse.ArgumentParser, out: str) -> None:
         f"{', '.join(ROBUSTNESS_SETS)} (see 'Robustness' in the README)",
     )
     p.add_argument("--n", type=count, default=1000, help="number of random start poses for 'random' (default: 1000)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the random scenario set (default: 0)")
+    p.add_argument("--seed", type=count, default=0, help="seed of the random scenario set (default: 0)")
     p.add_argument("--out", default=out, help=f"output directory (default: {out})")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")  # fmt: skip
     add_env_arguments(p)

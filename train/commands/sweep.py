@@ -9,7 +9,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from train.commands.shared import UsageError, add_env_arguments, parse_env_kwargs
+from train.commands.shared import UsageError, add_env_arguments, count, parse_env_kwargs
 from train.learning.sweep import METRICS, SEARCHES
 
 
@@ -19,13 +19,15 @@ def add_parser(sub: Any) -> None:
                        description="Each trial runs the training of `dwr-gym train`; needs the extra [sweep].")  # fmt: skip
     p.add_argument("--algo", default="ppo", help="algorithm: ppo, sac or td3 (default: ppo)")
     p.add_argument("--residual", action="store_true", help="residual agents on the PTC expert")
-    p.add_argument("--total-timesteps", type=int, default=200_000, help="env steps per run (default: 200000)")
-    p.add_argument("--num-envs", type=int, default=16, help="robots per vector env (default: 16)")
+    p.add_argument("--total-timesteps", type=count, default=200_000, help="env steps per run (default: 200000)")
+    p.add_argument("--num-envs", type=count, default=16, help="robots per vector env (default: 16)")
     add_env_arguments(p, "heading_weight=5")
     p.add_argument("--hyperparams", help="rl-zoo3 YAML the configurations start from (default: train/hyperparams/)")
-    p.add_argument("--eval-freq", type=int, default=20_000, help="evaluate every this many env steps (default: 20000)")
-    p.add_argument("--eval-episodes", type=int, default=100, help="scenarios per evaluation (default: 100)")
-    p.add_argument("--seeds", type=int, default=3, help="seeds per configuration: 0 .. N-1 (default: 3)")
+    p.add_argument(
+        "--eval-freq", type=count, default=20_000, help="evaluate every this many env steps (default: 20000)"
+    )
+    p.add_argument("--eval-episodes", type=count, default=100, help="scenarios per evaluation (default: 100)")
+    p.add_argument("--seeds", type=count, default=3, help="seeds per configuration: 0 .. N-1 (default: 3)")
     p.add_argument(
         "--param",
         action="append",
@@ -40,8 +42,8 @@ def add_parser(sub: Any) -> None:
         help="grid: every combination of choices; random: --num-samples draws; optuna: Optuna's TPE "
         "through Ray Tune, each trial training all its seeds (default: grid)",
     )
-    p.add_argument("--num-samples", type=int, default=8, help="configurations drawn by random/optuna (default: 8)")
-    p.add_argument("--search-seed", type=int, default=0, help="seed of the random/optuna search (default: 0)")
+    p.add_argument("--num-samples", type=count, default=8, help="configurations drawn by random/optuna (default: 8)")
+    p.add_argument("--search-seed", type=count, default=0, help="seed of the random/optuna search (default: 0)")
     p.add_argument(
         "--metric",
         choices=METRICS,

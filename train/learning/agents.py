@@ -28,7 +28,13 @@ def load_agent(path: str | Path) -> tuple[str, Any]:
     model_path = path / MODEL_FILE if path.is_dir() else path
     if not model_path.is_file():
         raise AgentLoadError(f"agent {str(path)!r} is invalid: no {MODEL_FILE} in it")
-    run_dir = find_run_dir(path if path.is_dir() else path.parent)
+    if model_path.suffix != ".zip":
+        raise AgentLoadError(f"agent {str(path)!r} is invalid: it is not a model .zip; expected a run directory "
+                             f"or a model .zip in one")  # fmt: skip
+    try:
+        run_dir = find_run_dir(path if path.is_dir() else path.parent)
+    except AgentLoadError:
+        raise AgentLoadError(f"agent {str(path)!r} is invalid: no config.yaml beside it or above it") from None
     try:
         config = load_config(run_dir)
         model = algorithm_class(config.algo).load(model_path, device="cpu")

@@ -27,7 +27,7 @@ def format_table(rows: list[dict[str, Any]], columns: list[tuple[str, str, str]]
 
 EVAL_COLUMNS = [
     ("scenario", "scenario", ""),
-    ("T_con", "T_con", ".0f"),
+    ("T_con", "T_con", "g"),
     ("policy", "policy", ""),
     ("n", "n", ".0f"),
     ("success_rate", "success", ".3f"),
