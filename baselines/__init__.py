@@ -1,25 +1,24 @@
 """Analytic controllers for DWR point stabilization, and their expert-policy wrapper."""
 
+from baselines.base import Controller, ControllerInput
 from baselines.controllers import (
-    CONTROLLER_NAMES,
-    CONTROLLERS,
-    AstolfiController,
-    AstolfiParams,
-    Controller,
-    ControllerInput,
     ConventionalPTCController,
     ConventionalPTCParams,
     FabregasController,
     FabregasParams,
     FixedTimeController,
     FixedTimeParams,
-    PrescribedTimeAstolfiController,
-    PrescribedTimeAstolfiParams,
     PTCController,
     PTCParams,
-    make_controller,
 )
 from baselines.expert import ExpertPolicy, controller_input_from_observation
+from baselines.polar import (
+    AstolfiController,
+    AstolfiParams,
+    PrescribedTimeAstolfiController,
+    PrescribedTimeAstolfiParams,
+)
+from baselines.registry import CONTROLLER_NAMES, CONTROLLERS, make_controller
 
 __all__ = [
     "CONTROLLERS",

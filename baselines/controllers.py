@@ -14,12 +14,6 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from baselines.base import K_MAX, Controller, ControllerInput, ControllerParams, prescribed_time, signed_power
-from baselines.polar import (
-    AstolfiController,
-    AstolfiParams,
-    PrescribedTimeAstolfiController,
-    PrescribedTimeAstolfiParams,
-)
 from dwr_gym import model
 from dwr_gym.model import FloatArray
 from dwr_gym.validation import as_float, as_int
@@ -300,52 +294,7 @@ class FixedTimeController(Controller):
         return np.where(moving, u, 0.0), np.where(moving, omega, 0.0)
 
 
-CONTROLLERS: dict[str, type[Controller]] = {
-    cls.name: cls
-    for cls in (
-        PTCController,
-        ConventionalPTCController,
-        FabregasController,
-        FixedTimeController,
-        AstolfiController,
-        PrescribedTimeAstolfiController,
-    )
-}
-PARAMS: dict[str, type[ControllerParams]] = {
-    "ptc": PTCParams,
-    "conventional-ptc": ConventionalPTCParams,
-    "fabregas": FabregasParams,
-    "fixed-time": FixedTimeParams,
-    "astolfi": AstolfiParams,
-    "pt-astolfi": PrescribedTimeAstolfiParams,
-}
-
-
-#: Every name :func:`make_controller` knows: the analytic laws above, and the minimum-energy NMPC
-#: ``optimal`` of :mod:`baselines.nmpc` (which needs the ``optimal`` extra, CasADi).
-CONTROLLER_NAMES: tuple[str, ...] = (*CONTROLLERS, "optimal", "robust-pt")
-
-
-def make_controller(name: str, **kwargs: Any) -> Controller:
-    """A controller by its name (one of :data:`CONTROLLER_NAMES`)."""
-    if name == "optimal":
-        from baselines.nmpc import OptimalController, OptimalParams
-
-        return OptimalController(OptimalParams.from_kwargs(**kwargs))
-    if name == "robust-pt":
-        from baselines.robust import RobustPTController, RobustPTParams
-
-        return RobustPTController(RobustPTParams.from_kwargs(**kwargs))
-    if name not in CONTROLLERS:
-        raise ValueError(f"controller={name!r} is invalid: expected one of {', '.join(CONTROLLER_NAMES)}")
-    return CONTROLLERS[name](PARAMS[name].from_kwargs(**kwargs))  # type: ignore[call-arg]
-
-
 __all__ = [
-    "CONTROLLERS",
-    "CONTROLLER_NAMES",
-    "AstolfiController",
-    "AstolfiParams",
     "Controller",
     "ControllerInput",
     "ConventionalPTCController",
@@ -356,7 +305,4 @@ __all__ = [
     "FixedTimeParams",
     "PTCController",
     "PTCParams",
-    "PrescribedTimeAstolfiController",
-    "PrescribedTimeAstolfiParams",
-    "make_controller",
 ]

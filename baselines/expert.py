@@ -8,7 +8,7 @@ import gymnasium as gym
 import numpy as np
 from numpy.typing import NDArray
 
-from baselines.controllers import Controller, ControllerInput
+from baselines.base import Controller, ControllerInput
 from dwr_gym.params import EnvParams, check_range
 
 

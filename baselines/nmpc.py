@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from baselines.controllers import Controller, ControllerInput, ControllerParams, prescribed_time
+from baselines.base import Controller, ControllerInput, ControllerParams, prescribed_time
 from baselines.optimal import (
     InfeasibleArrivalTimeError,
     OptimalControlError,

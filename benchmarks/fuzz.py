@@ -18,7 +18,8 @@ import gymnasium as gym
 import numpy as np
 
 import dwr_gym  # noqa: F401  (registers the env)
-from baselines.controllers import CONTROLLERS, ControllerInput, make_controller
+from baselines.base import ControllerInput
+from baselines.registry import CONTROLLERS, make_controller
 
 EDGE_DISTANCES = np.array([0.0, 1e-12, 1e-6, 0.01, 1.0, 1e3, 9.99e5])
 EDGE_ANGLES = np.array([-math.pi, math.pi, 0.0, math.pi / 2, -math.pi / 2, math.nextafter(math.pi, 0.0)])

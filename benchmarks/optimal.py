@@ -22,8 +22,9 @@ import numpy as np
 
 from baselines.expert import ExpertPolicy
 from dwr_gym.params import EnvParams
-from train.evaluation import controller_for, make_scenario, rollout
-from train.optimum import optimal_energies
+from train.evaluation.optimum import optimal_energies
+from train.evaluation.rollout import rollout
+from train.evaluation.scenarios import controller_for, make_scenario
 
 
 def main() -> None:

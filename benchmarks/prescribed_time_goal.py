@@ -18,8 +18,8 @@ from collections import defaultdict
 
 import numpy as np
 
-from train.agents import load_agent
-from train.evaluation import evaluate_sets
+from train.evaluation.evaluate import evaluate_sets
+from train.learning.agents import load_agent
 
 T_CONS = [10.0, 20.0, 40.0, 60.0]
 ENV_KWARGS = {"start_distance": (0.3, 3.0)}

@@ -148,8 +148,10 @@ def evaluations(path: Path) -> list[dict[str, str]]:
 
 
 def check_interrupt_and_resume() -> None:
-    from train.config import TrainConfig, resolve_hyperparams
-    from train.training import resume_config, train
+    from train.learning.config import TrainConfig
+    from train.learning.hyperparams import resolve_hyperparams
+    from train.learning.runs import resume_config
+    from train.learning.training import train
 
     with tempfile.TemporaryDirectory() as tmp_name:
         tmp = Path(tmp_name)

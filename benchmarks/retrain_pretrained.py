@@ -22,15 +22,15 @@ METRICS = (("success_rate", "arrival before T_con", "{:.1%}"), ("arrival_time_me
 
 def evaluate_agent(path: Path, n: int) -> dict[str, float]:
     """The summary of a saved agent on the random scenario set of the README (seed 0)."""
-    from dwr_gym.params import EnvParams
-    from train.agents import load_agent
-    from train.evaluation import make_scenario, rollout
-    from train.training import load_config
+    from train.evaluation.rollout import rollout
+    from train.evaluation.scenarios import make_scenario
+    from train.learning.agents import load_agent
+    from train.learning.runs import load_config
 
     config = load_config(path.parent if path.is_file() else path)
     _, policy = load_agent(path)
-    scenario = make_scenario("random", n=n, seed=0, env_kwargs=config.env_kwargs)
-    return rollout(policy, EnvParams.from_kwargs(**config.env_kwargs), scenario.starts, scenario.goals).summary()
+    scenario = make_scenario("random", n=n, seed=0, env_kwargs=config.env_keywords())
+    return rollout(policy, config.env_params(), scenario.starts, scenario.goals, T_con=scenario.T_cons).summary()
 
 
 def mean_sd(values: list[float], fmt: str) -> str:
@@ -41,7 +41,8 @@ def mean_sd(values: list[float], fmt: str) -> str:
 def main() -> int:
     import torch
 
-    from train.training import load_config, train
+    from train.learning.runs import load_config
+    from train.learning.training import train
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])

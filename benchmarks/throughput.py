@@ -178,7 +178,8 @@ def run(quick: bool) -> list[str]:
                      f"ratio {next_step / same_step:.2f}")  # fmt: skip
 
     lines += ["", "== PTC law on the `random` scenario set (10,000 start poses, default T_con and dt) =="]
-    from train.evaluation import evaluate, make_scenario
+    from train.evaluation.evaluate import evaluate
+    from train.evaluation.scenarios import make_scenario
 
     scenario = make_scenario("random", n=10_000, seed=0)
     times = []

@@ -25,10 +25,10 @@ import torch
 from stable_baselines3 import PPO
 from stable_baselines3.common.vec_env import VecEnvWrapper
 
-from baselines.controllers import make_controller
 from baselines.expert import ExpertPolicy
+from baselines.registry import make_controller
 from dwr_gym.sb3 import make_sb3_vec_env
-from train.residual import ResidualVecEnv
+from train.learning.residual import ResidualVecEnv
 
 TIMES: dict[str, float] = defaultdict(float)
 

@@ -84,7 +84,8 @@ def as_float(
     below = result < low or (result == low and not low_inclusive)
     above = result > high or (result == high and not high_inclusive)
     if not math.isfinite(result) or below or above:
-        raise ValueError(f"{_show(name, repr(result))} is invalid: expected {allowed}")
+        hint = "" if math.isfinite(result) else " (not finite)"
+        raise ValueError(f"{_show(name, repr(result))} is invalid{hint}: expected {allowed}")
     return result
 
 

@@ -24,7 +24,9 @@ from baselines import (
 )
 from dwr_gym import model
 from dwr_gym.params import EnvParams
-from train.evaluation import FIG5_HEADINGS, Scenario, evaluate, make_scenario, rollout
+from train.evaluation.evaluate import evaluate
+from train.evaluation.rollout import rollout
+from train.evaluation.scenarios import FIG5_HEADINGS, Scenario, make_scenario
 
 FIG5 = make_scenario("paper-fig5")
 FIG7 = make_scenario("paper-fig7")

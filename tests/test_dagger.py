@@ -1,4 +1,4 @@
-"""Behaviour cloning from minimum-energy plans (train/imitation.py)."""
+"""DAgger on minimum-energy plans and the hand-over agents (train/learning/dagger.py, train/learning/handover.py)."""
 
 from __future__ import annotations
 
@@ -13,8 +13,8 @@ pytest.importorskip("casadi")
 
 from dwr_gym import V1_DEFAULTS
 from dwr_gym.params import EnvParams
-from train.agents import load_agent
-from train.dagger import DaggerConfig, _solve, labelled_samples, run
+from train.learning.agents import load_agent
+from train.learning.dagger import DaggerConfig, _solve, labelled_samples, run
 
 
 def test_demonstration_samples_are_what_the_env_observes_when_the_plan_is_replayed() -> None:
@@ -62,7 +62,7 @@ class ConstantModel:
 
 def test_handover_policy_is_the_network_far_and_early_and_the_law_near_or_late() -> None:
     from baselines import ExpertPolicy, make_controller
-    from train.residual import HandoverPolicy
+    from train.learning.handover import HandoverPolicy
 
     law = ExpertPolicy(make_controller("pt-astolfi"), 0.5, 2.0)
     policy = HandoverPolicy(ConstantModel(), law, distance=0.05, time_fraction=0.9)
@@ -88,8 +88,8 @@ def test_a_run_with_a_handover_section_loads_as_a_handover_policy_and_a_bad_one_
 
     import yaml
 
-    from train.agents import AgentLoadError
-    from train.residual import HandoverPolicy
+    from train.learning.agents import AgentLoadError
+    from train.learning.handover import HandoverPolicy
 
     run_dir = tmp_path / "agent"
     shutil.copytree(Path(__file__).resolve().parents[1] / "train" / "pretrained" / "dagger", run_dir)
@@ -106,9 +106,10 @@ def test_a_run_with_a_handover_section_loads_as_a_handover_policy_and_a_bad_one_
 
 def test_the_shipped_handover_agent_arrives_with_the_heading_for_less_energy_than_ptc() -> None:
     """The claim of the README's issue-10 table, on a smaller set than the benchmark's (60 starts, T_con 10 and 40)."""
-    from train.agents import PRETRAINED
-    from train.evaluation import evaluate, make_scenario
-    from train.residual import HandoverPolicy
+    from train.evaluation.evaluate import evaluate
+    from train.evaluation.scenarios import make_scenario
+    from train.learning.agents import PRETRAINED
+    from train.learning.handover import HandoverPolicy
 
     _, agent = load_agent(PRETRAINED["dagger-handover"])
     assert isinstance(agent, HandoverPolicy)

@@ -10,7 +10,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import dwr_gym  # noqa: F401  (registers the env)
-from baselines.controllers import CONTROLLERS, ControllerInput, make_controller
+from baselines.base import ControllerInput
+from baselines.registry import CONTROLLERS, make_controller
 
 ENV_ID = "DWRPointStabilization-v0"
 EDGE_DISTANCES = [0.0, 1e-12, 1e-6, 0.01, 1.0, 1e3, 9.99e5]

@@ -322,8 +322,9 @@ def test_dwr_gym_train_env_logs_episode_statistics_without_vec_monitor(tmp_path:
     from stable_baselines3.common.vec_env import VecMonitor
     from stable_baselines3.common.vec_env.base_vec_env import VecEnvWrapper
 
-    from train.config import TrainConfig, resolve_hyperparams
-    from train.training import make_training_env
+    from train.learning.config import TrainConfig
+    from train.learning.hyperparams import resolve_hyperparams
+    from train.learning.training import make_training_env
 
     config = TrainConfig(residual=True, num_envs=4, run_dir=str(tmp_path), env_kwargs=dict(SHORT))
     resolve_hyperparams(config, set())

@@ -19,8 +19,9 @@ from baselines.optimal import (
     solve_minimum_energy,
 )
 from dwr_gym import model
-from train import optimum as optimum_module
-from train.evaluation import Scenario, evaluate, make_scenario
+from train.evaluation import optimum as optimum_module
+from train.evaluation.evaluate import evaluate
+from train.evaluation.scenarios import Scenario, make_scenario
 
 ca = pytest.importorskip("casadi")
 LIMITS = {"dt": 0.05, "u_max": 0.5, "omega_max": 2.0}

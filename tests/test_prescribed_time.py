@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 import dwr_gym
-from train.evaluation import evaluate, make_scenario
+from train.evaluation.evaluate import evaluate
+from train.evaluation.scenarios import make_scenario
 
 V0, V1 = "DWRPointStabilization-v0", "DWRPointStabilization-v1"
 
@@ -153,7 +154,7 @@ def test_imitate_clones_the_optimal_planner_into_a_loadable_agent(tmp_path: obje
     import sys
     from pathlib import Path
 
-    from train.agents import load_agent
+    from train.learning.agents import load_agent
 
     run_dir = Path(str(tmp_path)) / "bc"
     command = [sys.executable, "-m", "train.cli", "imitate", "--episodes", "4", "--T-con-range", "2", "3",

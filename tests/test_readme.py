@@ -28,7 +28,7 @@ SNIPPETS = python_snippets(SECTION)
 def test_the_section_has_a_snippet_for_gymnasium_sb3_and_cleanrl() -> None:
     assert len(SNIPPETS) == 3
     assert "gym.wrappers.vector" in SNIPPETS[0] and "stable_baselines3" in SNIPPETS[1]
-    assert "dwr_gym:DWRPointStabilization-v0" in SNIPPETS[2] and "\nimport dwr_gym" not in SNIPPETS[2]
+    assert "dwr_gym:DWRPointStabilization-v1" in SNIPPETS[2] and "\nimport dwr_gym" not in SNIPPETS[2]
 
 
 @pytest.mark.parametrize("index", range(len(SNIPPETS)), ids=["gymnasium", "sb3", "cleanrl"])

@@ -240,7 +240,8 @@ def test_evaluate_robustness_sets_and_robustness_sweep_end_to_end(tmp_path: Path
 
 
 def test_tolerance_table_reads_the_largest_magnitude_held_without_a_dip() -> None:
-    from train.robustness import tolerance_markdown, tolerated
+    from train.evaluation.robustness import tolerated
+    from train.reporting.tables import tolerance_markdown
 
     def row(policy: str, magnitude: float, rate: float) -> dict[str, Any]:
         return {"disturbance": "delay", "magnitude": magnitude, "policy": policy, "success_rate": rate, "n": 100}

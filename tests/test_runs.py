@@ -14,8 +14,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from train.config import TrainConfig, resolve_hyperparams
-from train.training import RunDirError, RunLock, resume_config, train
+from train.learning.config import TrainConfig
+from train.learning.hyperparams import resolve_hyperparams
+from train.learning.runs import RunDirError, RunLock, resume_config
+from train.learning.training import train
 
 
 def tiny(run_dir: Path, total: int = 512, **overrides: object) -> TrainConfig:

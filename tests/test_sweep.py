@@ -7,8 +7,9 @@ from pathlib import Path
 
 import pytest
 
-from train.config import ConfigError, TrainConfig, resolve_hyperparams
-from train.sweep import parse_param, sample_configurations, summarize, zoo_yaml
+from train.learning.config import ConfigError, TrainConfig
+from train.learning.hyperparams import resolve_hyperparams
+from train.learning.sweep import parse_param, sample_configurations, summarize, zoo_yaml
 
 
 def test_parse_param_choices_and_ranges() -> None:

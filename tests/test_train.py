@@ -14,10 +14,11 @@ import numpy as np
 import pytest
 
 from baselines import ExpertPolicy, PTCController
-from train.agents import load_agent, pretrained_paths
-from train.config import ConfigError, TrainConfig, parse_policy_kwargs, resolve_hyperparams
-from train.residual import ResidualActionWrapper, ResidualVecEnv, residual_action
-from train.training import train
+from train.learning.agents import load_agent, pretrained_paths
+from train.learning.config import ConfigError, TrainConfig
+from train.learning.hyperparams import parse_policy_kwargs, resolve_hyperparams
+from train.learning.residual import ResidualActionWrapper, ResidualVecEnv, residual_action
+from train.learning.training import train
 
 
 def dwr_gym(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
@@ -92,13 +93,13 @@ def test_residual_vec_env_with_zero_residual_is_the_expert() -> None:
 
 
 def test_residual_training_starts_from_the_expert(tmp_path: Path) -> None:
-    from train.residual import ResidualPolicy, zero_init_last_layer
-    from train.training import make_training_env
+    from train.learning.residual import ResidualPolicy, zero_init_last_layer
+    from train.learning.training import make_training_env
 
     config = tiny("ppo", True, tmp_path / "r")
     from stable_baselines3 import PPO
 
-    from train.config import build_algo_kwargs
+    from train.learning.hyperparams import build_algo_kwargs
 
     model = PPO(env=make_training_env(config), seed=0, **build_algo_kwargs(config.algo_kwargs))
     zero_init_last_layer(model)
@@ -127,7 +128,7 @@ def test_save_load_and_resume_round_trip(tmp_path: Path) -> None:
 def test_zoo_yaml_hyperparameters(tmp_path: Path) -> None:
     yaml_path = tmp_path / "ppo.yml"
     yaml_path.write_text(
-        "DWRPointStabilization-v0:\n  n_timesteps: !!float 1e3\n  n_envs: 2\n  policy: 'MlpPolicy'\n"
+        "DWRPointStabilization-v1:\n  n_timesteps: !!float 1e3\n  n_envs: 2\n  policy: 'MlpPolicy'\n"
         '  n_steps: 64\n  learning_rate: lin_1e-3\n  policy_kwargs: "dict(net_arch=[32, 32], activation_fn=nn.Tanh)"\n'
     )
     config = resolve_hyperparams(TrainConfig(hyperparams=str(yaml_path)), set())
@@ -135,7 +136,7 @@ def test_zoo_yaml_hyperparameters(tmp_path: Path) -> None:
     assert config.algo_kwargs["policy_kwargs"] == {"net_arch": [32, 32], "activation_fn": "nn.Tanh"}
     explicit = resolve_hyperparams(TrainConfig(hyperparams=str(yaml_path), total_timesteps=77), {"total_timesteps"})
     assert explicit.total_timesteps == 77
-    yaml_path.write_text("DWRPointStabilization-v0:\n  n_stepz: 64\n")
+    yaml_path.write_text("DWRPointStabilization-v1:\n  n_stepz: 64\n")
     with pytest.raises(ConfigError, match="n_stepz"):
         resolve_hyperparams(TrainConfig(hyperparams=str(yaml_path)), set())
     with pytest.raises(ConfigError, match="policy_kwargs"):
@@ -167,7 +168,7 @@ def test_train_bad_input_exits_2_before_training(args: list[str], message: str, 
 
 def test_train_cli_end_to_end_and_refuses_to_overwrite(tmp_path: Path) -> None:
     yaml_path = tmp_path / "hp.yml"
-    yaml_path.write_text("DWRPointStabilization-v0:\n  n_steps: 32\n  batch_size: 64\n")
+    yaml_path.write_text("DWRPointStabilization-v1:\n  n_steps: 32\n  batch_size: 64\n")
     args = ["train", "--residual", "--total-timesteps", "256", "--num-envs", "4", "--eval-freq", "128",
             "--eval-episodes", "8", "--hyperparams", str(yaml_path), "--run-dir", "run", "--no-progress"]  # fmt: skip
     result = dwr_gym(*args, cwd=tmp_path)

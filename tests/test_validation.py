@@ -14,8 +14,9 @@ from baselines.controllers import ConventionalPTCParams, PTCParams
 from dwr_gym.env import DWRPointStabilizationEnv
 from dwr_gym.params import EnvParams
 from dwr_gym.validation import as_float, as_int, as_interval, as_pose
-from train.cli import json_safe
-from train.config import ConfigError, TrainConfig, check_device, load_zoo_yaml, parse_overrides, resolve_hyperparams
+from train.learning.config import ConfigError, TrainConfig, check_device
+from train.learning.hyperparams import load_zoo_yaml, parse_overrides, resolve_hyperparams
+from train.reporting.results import json_safe
 
 ENV_ID = "DWRPointStabilization-v0"
 
@@ -115,7 +116,7 @@ def test_yaml_values_are_coerced_or_rejected(tmp_path) -> None:
 
     def resolve(body: str) -> TrainConfig:
         path.write_text(f"{ENV_ID}:\n{body}")
-        return resolve_hyperparams(TrainConfig(hyperparams=str(path)), set())
+        return resolve_hyperparams(TrainConfig(env_id=ENV_ID, hyperparams=str(path)), set())
 
     config = resolve("  learning_rate: 3e-4\n  n_timesteps: 1e5\n  batch_size: 64.0\n")
     assert config.algo_kwargs["learning_rate"] == 3e-4 and config.total_timesteps == 100_000
@@ -130,18 +131,25 @@ def test_yaml_values_are_coerced_or_rejected(tmp_path) -> None:
         with pytest.raises(ConfigError, match=message.replace("(", r"\(").replace(")", r"\)")):
             resolve(body)
     path.write_text("CartPole-v1:\n  n_timesteps: 1000\n")
-    with pytest.raises(ConfigError, match="is for another env"):
-        load_zoo_yaml(str(path))
+    with pytest.raises(ConfigError, match=r"has no section 'DWRPointStabilization-v0' \(found: 'CartPole-v1'\)$"):
+        load_zoo_yaml(str(path), ENV_ID)
+    path.write_text(f"{ENV_ID}:\n  n_timesteps: 1000\n")  # a file for v0 does not configure v1
+    with pytest.raises(
+        ConfigError, match=r"has no section 'DWRPointStabilization-v1'.*train on DWRPointStabilization-v0"
+    ):
+        load_zoo_yaml(str(path), "DWRPointStabilization-v1")
     path.write_bytes(bytes(range(256)))
     with pytest.raises(ConfigError, match="is invalid"):
-        load_zoo_yaml(str(path))
+        load_zoo_yaml(str(path), ENV_ID)
 
 
 def test_command_line_hyperparameters_override_the_yaml_file(tmp_path) -> None:
     path = tmp_path / "hp.yml"
     path.write_text(f"{ENV_ID}:\n  learning_rate: 1e-3\n  n_steps: 64\n")
     overrides = parse_overrides(["learning_rate=1e-4", "policy_kwargs:dict(net_arch=[32, 32])"])
-    config = resolve_hyperparams(TrainConfig(hyperparams=str(path), hyperparam_overrides=overrides), set())
+    config = resolve_hyperparams(
+        TrainConfig(env_id=ENV_ID, hyperparams=str(path), hyperparam_overrides=overrides), set()
+    )
     assert config.algo_kwargs["learning_rate"] == 1e-4 and config.algo_kwargs["n_steps"] == 64
     assert config.algo_kwargs["policy_kwargs"] == {"net_arch": [32, 32]}
     with pytest.raises(ConfigError, match="expected KEY=VALUE"):

@@ -1,127 +1,22 @@
-"""The training configuration: a dataclass whose fields are the options of ``dwr-gym train``.
-
-Hyperparameters come from three layers, each overriding the one before: the defaults here, a YAML
-file in rl-zoo3's format (``{env_id: {n_timesteps: ..., policy: ..., policy_kwargs: "dict(...)", ...}}``),
-then the command line.
+"""Hyperparameters of ``dwr-gym train``, in three layers, each overriding the one before: the shipped defaults
+(train/hyperparams/), a YAML file in rl-zoo3's format (``{env_id: {n_timesteps: ..., policy: ...,
+policy_kwargs: "dict(...)", ...}}``), then the command line; checked before any training starts.
 """
 
 from __future__ import annotations
 
 import ast
-import dataclasses
 import inspect
 import re
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from dwr_gym.validation import as_bool, as_choice, as_float, as_int
+from dwr_gym.validation import as_float, as_int
+from train.learning.config import MAX_TIMESTEPS, MAX_TRAIN_ENVS, ConfigError, TrainConfig
 
-ALGORITHMS: tuple[str, ...] = ("ppo", "sac", "td3")
-ENV_ID = "DWRPointStabilization-v0"
 ENV_SECTION = re.compile(r"^(dwr_gym:)?DWRPointStabilization-v\d+$")
-MAX_TIMESTEPS = 10**10
-MAX_TRAIN_ENVS = 4096
-"""More training envs than this give rollouts of little use and risk exhausting memory; larger values are refused."""
 ZOO_KEYS_UNSUPPORTED = ("normalize", "frame_stack", "env_wrapper", "callback", "vec_env_wrapper")
-
-
-class ConfigError(ValueError):
-    """A configuration the user must fix; the CLI prints it as one line with exit code 2."""
-
-
-def option(default: Any, help: str, **kwargs: Any) -> Any:
-    """A dataclass field with the one-line help that the CLI shows."""
-    return field(default=default, metadata={"help": help, **kwargs})
-
-
-@dataclass
-class TrainConfig:
-    """Everything a training run needs; written beside the model as config.yaml so it can be re-run exactly."""
-
-    algo: str = option("ppo", "algorithm: ppo, sac or td3")
-    total_timesteps: int = option(200_000, "total environment steps over all envs")
-    num_envs: int = option(16, "robots simulated in one native vector env")
-    seed: int = option(0, "seed of the env, the network initialisation and the sampling")
-    residual: bool = option(False, "learn a residual on the expert: action = clip(expert + scale * residual)")
-    residual_scale: float = option(0.5, "scale of the residual action, in (0, 2]")
-    expert: str = option("ptc", "controller under the residual: any of evaluate --controllers")
-    env_kwargs: dict[str, Any] = field(
-        default_factory=dict, metadata={"help": "env keywords KEY=VALUE, e.g. T_con=25 heading_weight=5"}
-    )
-    hyperparams: str | None = option(
-        None, "YAML file of hyperparameters in rl-zoo3's format, and/or KEY=VALUE overrides (e.g. learning_rate=1e-4)"
-    )
-    hyperparam_overrides: dict[str, Any] = field(
-        default_factory=dict, metadata={"help": "hyperparameters given as KEY=VALUE on the command line", "cli": False}
-    )
-    eval_freq: int = option(20_000, "evaluate every this many env steps on a fixed seeded scenario set")
-    eval_episodes: int = option(100, "size of the fixed random scenario set used for evaluation")
-    eval_seed: int = option(12345, "seed of the evaluation scenario set (kept apart from the training seed)")
-    checkpoint_freq: int = option(50_000, "save a checkpoint every this many env steps")
-    run_dir: str | None = option(None, "output directory (default: runs/<algo>[-residual]-seed<seed>)")
-    device: str = option("cpu", "torch device: auto, cpu, cuda, cuda:N or mps; the config records the one used")
-    resume: str | None = option(None, "checkpoint (.zip) to continue from; its run's config is reused")
-    overwrite: bool = option(False, "delete the outputs of an earlier run in --run-dir and start afresh")
-    progress: bool = option(True, "show a progress bar")
-    algo_kwargs: dict[str, Any] = field(
-        default_factory=dict, metadata={"help": "resolved hyperparameters (defaults, then the YAML file)", "cli": False}
-    )
-
-    def validate(self) -> None:
-        """Coerce the options to their types, or raise ConfigError naming the option, the value and what is allowed."""
-        try:
-            self._coerce()
-        except ValueError as error:
-            raise ConfigError(str(error)) from None
-        from baselines.controllers import CONTROLLER_NAMES
-        from dwr_gym.params import EnvParams
-
-        if self.expert not in CONTROLLER_NAMES:
-            raise ConfigError(f"--expert {self.expert!r} is invalid: expected one of {', '.join(CONTROLLER_NAMES)}")
-        try:
-            EnvParams.from_kwargs(**self.env_kwargs)
-        except ValueError as error:
-            raise ConfigError(f"invalid env keyword: {error}") from None
-        if self.hyperparams is not None and not Path(self.hyperparams).is_file():
-            raise ConfigError(f"--hyperparams {self.hyperparams!r} is invalid: no such file")
-        if self.resume is not None and not Path(self.resume).exists():
-            raise ConfigError(f"--resume {self.resume!r} is invalid: no such run directory or checkpoint file")
-        self.device = check_device(self.device)
-
-    def _coerce(self) -> None:
-        self.algo = as_choice("--algo", self.algo, ALGORITHMS)
-        self.total_timesteps = as_int("--total-timesteps", self.total_timesteps, 1, MAX_TIMESTEPS, text=True)
-        self.num_envs = as_int("--num-envs", self.num_envs, 1, MAX_TRAIN_ENVS, text=True)
-        self.seed = as_int("--seed", self.seed, 0, 2**32 - 1, text=True)
-        self.eval_seed = as_int("--eval-seed", self.eval_seed, 0, 2**32 - 1, text=True)
-        self.eval_freq = as_int("--eval-freq", self.eval_freq, 1, MAX_TIMESTEPS, text=True)
-        self.eval_episodes = as_int("--eval-episodes", self.eval_episodes, 1, 100_000, text=True)
-        self.checkpoint_freq = as_int("--checkpoint-freq", self.checkpoint_freq, 1, MAX_TIMESTEPS, text=True)
-        self.residual_scale = as_float(
-            "--residual-scale", self.residual_scale, 0.0, 2.0, low_inclusive=False, text=True
-        )
-        for name in ("residual", "overwrite", "progress"):
-            setattr(self, name, as_bool(f"--{name}", getattr(self, name)))
-        if not isinstance(self.env_kwargs, dict) or not isinstance(self.hyperparam_overrides, dict):
-            raise ValueError("env_kwargs and hyperparam_overrides must be mappings")
-
-    def default_run_dir(self) -> str:
-        return f"runs/{self.algo}{'-residual' if self.residual else ''}-seed{self.seed}"
-
-    def to_dict(self) -> dict[str, Any]:
-        return dataclasses.asdict(self)
-
-    @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> TrainConfig:
-        names = {f.name for f in dataclasses.fields(cls)}
-        unknown = sorted(set(data) - names)
-        if unknown:
-            raise ConfigError(f"unknown config key(s) {unknown}; allowed: {', '.join(sorted(names))}")
-        return cls(**data)
-
-
-HYPERPARAMS_DIR = Path(__file__).parent / "hyperparams"
+HYPERPARAMS_DIR = Path(__file__).resolve().parent.parent / "hyperparams"
 
 
 def hyperparams_file(algo: str, residual: bool) -> Path:
@@ -129,10 +24,11 @@ def hyperparams_file(algo: str, residual: bool) -> Path:
     return HYPERPARAMS_DIR / f"{'residual_' if residual else ''}{algo}.yml"
 
 
-def default_hyperparams(algo: str, residual: bool) -> dict[str, Any]:
-    """Defaults that train well on this env on 2 CPU cores, read from the shipped rl-zoo3 YAML (the residual
-    variants explore less); n_envs and n_timesteps there equal the defaults of TrainConfig."""
-    params = zoo_to_sb3(load_zoo_yaml(str(hyperparams_file(algo, residual))), str(hyperparams_file(algo, residual)))
+def default_hyperparams(algo: str, residual: bool, env_id: str) -> dict[str, Any]:
+    """Defaults that train well on ``env_id`` on 2 CPU cores, read from its section of the shipped rl-zoo3 YAML
+    (the residual variants explore less); n_envs and n_timesteps there equal the defaults of TrainConfig."""
+    path = str(hyperparams_file(algo, residual))
+    params = zoo_to_sb3(load_zoo_yaml(path, env_id), path)
     params.pop("n_timesteps", None)
     params.pop("n_envs", None)
     return params
@@ -188,8 +84,8 @@ def parse_policy_kwargs(text: str) -> dict[str, Any]:
     return result
 
 
-def load_zoo_yaml(path: str) -> dict[str, Any]:
-    """The hyperparameters for DWRPointStabilization-v0 from an rl-zoo3 YAML file."""
+def load_zoo_yaml(path: str, env_id: str) -> dict[str, Any]:
+    """The hyperparameters for ``env_id`` from an rl-zoo3 YAML file (its section ``env_id`` or ``dwr_gym:env_id``)."""
     import yaml
 
     try:
@@ -197,12 +93,14 @@ def load_zoo_yaml(path: str) -> dict[str, Any]:
     except (yaml.YAMLError, UnicodeDecodeError, OSError) as error:
         raise ConfigError(f"--hyperparams {path!r} is invalid: {str(error).splitlines()[0]}") from None
     if not isinstance(data, dict):
-        raise ConfigError(f"--hyperparams {path!r} is invalid: expected a mapping {{{ENV_ID}: {{...}}}}")
-    sections = [key for key in data if isinstance(key, str) and ENV_SECTION.match(key)]
-    if not sections:
+        raise ConfigError(f"--hyperparams {path!r} is invalid: expected a mapping {{{env_id}: {{...}}}}")
+    names = [name for name in (env_id, f"dwr_gym:{env_id}") if name in data]
+    if not names:
         found = ", ".join(map(repr, data))[:80]
-        raise ConfigError(f"--hyperparams {path!r} is for another env ({found}): expected a section {ENV_ID!r}")
-    section = data[ENV_ID] if ENV_ID in data else data[sections[0]]
+        ours = [key for key in data if isinstance(key, str) and ENV_SECTION.match(key)]
+        hint = f"; add one, or train on {ours[0].removeprefix('dwr_gym:')} with --env" if ours else ""
+        raise ConfigError(f"--hyperparams {path!r} has no section {env_id!r} (found: {found}){hint}")
+    section = data[names[0]]
     if not isinstance(section, dict):
         raise ConfigError(f"--hyperparams {path!r} is invalid: the section must be a mapping")
     unsupported = sorted(set(section) & set(ZOO_KEYS_UNSUPPORTED))
@@ -231,8 +129,8 @@ def parse_overrides(items: list[str]) -> dict[str, Any]:
 
 def resolve_hyperparams(config: TrainConfig, explicit: set[str]) -> TrainConfig:
     """Merge defaults, the YAML file and the command line (``explicit`` names the options the user gave)."""
-    params = default_hyperparams(config.algo, config.residual)
-    layers = [load_zoo_yaml(config.hyperparams)] if config.hyperparams is not None else []
+    params = default_hyperparams(config.algo, config.residual, config.env_id)
+    layers = [load_zoo_yaml(config.hyperparams, config.env_id)] if config.hyperparams is not None else []
     layers.append(dict(config.hyperparam_overrides))
     for layer, source in zip(layers, ("YAML", "--hyperparams")[-len(layers) :], strict=True):
         try:
@@ -327,38 +225,31 @@ def check_algo_kwargs(algo: str, params: dict[str, Any]) -> dict[str, Any]:
     return checked
 
 
-def check_device(device: Any) -> str:
-    """The torch device to use: 'auto' picks cuda, then mps, then cpu; an absent device is a ConfigError."""
-    text = str(device).strip().lower()
-    if not re.fullmatch(r"auto|cpu|mps|cuda(:\d+)?", text):
-        raise ConfigError(f"--device {device!r} is invalid: expected auto, cpu, cuda, cuda:N or mps")
-    if text == "cpu":
-        return text
-    import torch
-
-    cuda, mps = (
-        torch.cuda.is_available(),
-        bool(getattr(torch.backends, "mps", None)) and torch.backends.mps.is_available(),
+def steps_per_collection(config: TrainConfig) -> int:
+    """Env steps between two checks of the budget: PPO collects n_steps * num_envs per update; SAC and TD3
+    step every env train_freq times (counted in steps) before they look at the budget again."""
+    if config.algo == "ppo":
+        return int(config.algo_kwargs.get("n_steps", 2048)) * config.num_envs
+    freq = config.algo_kwargs.get("train_freq", 1)
+    steps = (
+        freq if isinstance(freq, int) else freq[0] if isinstance(freq, (list, tuple)) and freq[1:] == ["step"] else 1
     )
-    if text == "auto":
-        return "cuda" if cuda else "mps" if mps else "cpu"
-    if text == "mps" and not mps:
-        raise ConfigError("--device 'mps' is invalid: this machine has no MPS (Apple GPU) device; use cpu or auto")
-    if text.startswith("cuda"):
-        if not cuda:
-            raise ConfigError(f"--device {text!r} is invalid: torch sees no CUDA device here; use cpu or auto")
-        index = int(text.partition(":")[2] or 0)
-        if index >= torch.cuda.device_count():
-            raise ConfigError(f"--device {text!r} is invalid: only {torch.cuda.device_count()} CUDA device(s)")
-    return text
+    return int(steps) * config.num_envs
+
+
+def steps_to_run(config: TrainConfig, done: int = 0) -> int:
+    """The env steps a run at ``done`` steps will actually take to reach --total-timesteps (a whole number of
+    collections: the budget rounded up), so that progress bars show the work that will run."""
+    chunk = steps_per_collection(config)
+    return -(-(config.total_timesteps - done) // chunk) * chunk
 
 
 def rollout_rounding(config: TrainConfig) -> str | None:
     """A note when PPO's rollouts round the budget up (it collects n_steps * num_envs steps per update)."""
     if config.algo != "ppo":
         return None
-    chunk = int(config.algo_kwargs.get("n_steps", 2048)) * config.num_envs
-    rounded = -(-config.total_timesteps // chunk) * chunk
+    chunk = steps_per_collection(config)
+    rounded = steps_to_run(config)
     if rounded == config.total_timesteps:
         return None
     return (f"note: PPO collects n_steps * num_envs = {chunk} steps per update, so --total-timesteps "

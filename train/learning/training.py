@@ -1,10 +1,12 @@
-"""``dwr-gym train``: stable-baselines3 on the native vector env, plain or residual on an expert."""
+"""``dwr-gym train``: stable-baselines3 on the native vector env, plain or residual on an expert.
+
+:func:`train` runs one configuration in its run directory (:mod:`train.learning.runs`): periodic
+evaluation on a fixed seeded scenario set, checkpoints that resume bit for bit, and Ctrl-C handling.
+"""
 
 from __future__ import annotations
 
 import csv
-import json
-import os
 import sys
 import time
 from collections.abc import Callable
@@ -13,47 +15,30 @@ from typing import Any
 
 import numpy as np
 
-from train.config import ConfigError, TrainConfig, algorithm_class, build_algo_kwargs, rollout_rounding
+from train.learning.config import ConfigError, TrainConfig
+from train.learning.hyperparams import algorithm_class, build_algo_kwargs, rollout_rounding, steps_to_run
+from train.learning.runs import (
+    EVAL_FILE,
+    MODEL_FILE,
+    RESUME_FILE,
+    prepare_run_dir,
+    read_state,
+    resume_command,
+    save_config,
+    truncate_log,
+    write_state,
+)
 
-CONFIG_FILE = "config.yaml"
-MODEL_FILE = "model.zip"
-EVAL_FILE = "evaluations.csv"
 EVAL_FIELDS = ("timesteps", "wall_time", "success_rate", "arrival_time_mean", "final_heading_error_mean",
                "energy_mean", "return_mean", "final_distance_mean")  # fmt: skip
 
 
-def save_config(config: TrainConfig, run_dir: Path, extra: dict[str, Any] | None = None) -> None:
-    """Write the full configuration beside the model (YAML), so any run can be repeated exactly."""
-    import yaml
-
-    import dwr_gym
-
-    data = {"config": config.to_dict(), "dwr_gym_version": dwr_gym.__version__, **(extra or {})}
-    (run_dir / CONFIG_FILE).write_text(yaml.safe_dump(json.loads(json.dumps(data, default=str)), sort_keys=False))
-
-
-def load_config(run_dir: Path) -> TrainConfig:
-    """The TrainConfig saved in a run directory."""
-    import yaml
-
-    path = run_dir / CONFIG_FILE
-    if not path.is_file():
-        raise ConfigError(f"{str(path)!r} not found: a trained agent needs the config.yaml written beside it")
-    data = yaml.safe_load(path.read_text())
-    config = data.get("config", data) if isinstance(data, dict) else None
-    if not isinstance(config, dict):
-        raise ConfigError(f"{str(path)!r} is not a dwr-gym training config")
-    config["env_kwargs"] = {k: tuple(v) if isinstance(v, list) else v for k, v in config.get("env_kwargs", {}).items()}
-    return TrainConfig.from_dict(config)
-
-
 def make_expert(config: TrainConfig) -> Any:
     """The expert policy under a residual agent, scaled to the env's action limits."""
-    from baselines.controllers import make_controller
     from baselines.expert import ExpertPolicy
-    from dwr_gym.params import EnvParams
+    from baselines.registry import make_controller
 
-    params = EnvParams.from_kwargs(**config.env_kwargs)
+    params = config.env_params()
     kwargs = {}
     if config.expert == "optimal":  # the planner must know the env's grid and limits
         kwargs = {"T_con": params.T_con, "dt": params.dt, "u_max": params.u_max, "omega_max": params.omega_max}
@@ -64,9 +49,9 @@ def make_training_env(config: TrainConfig) -> Any:
     """The native vector env behind SB3's VecEnv API (residual-wrapped if asked); the adapter reports the
     episode statistics (``ep_rew_mean``, ``ep_len_mean``, ``success_rate``) itself, as a Monitor would."""
     from dwr_gym.sb3 import make_sb3_vec_env
-    from train.residual import ResidualVecEnv
+    from train.learning.residual import ResidualVecEnv
 
-    venv: Any = make_sb3_vec_env(config.num_envs, seed=config.seed, **config.env_kwargs)
+    venv: Any = make_sb3_vec_env(config.num_envs, seed=config.seed, **config.env_keywords())
     if config.residual:
         venv = ResidualVecEnv(venv, make_expert(config), config.residual_scale)
     return venv
@@ -76,34 +61,13 @@ def as_policy(model: Any, config: TrainConfig) -> Any:
     """The policy that acts in the env: the model itself, or the model's residual on the expert."""
     if not config.residual:
         return model
-    from train.residual import ResidualPolicy
+    from train.learning.residual import ResidualPolicy
 
     return ResidualPolicy(model, make_expert(config), config.residual_scale)
 
 
-STATE_FILE = "run_state.json"
-RESUME_FILE = "resume_state.pkl"
-LOCK_FILE = ".lock"
-RUN_OUTPUTS = (MODEL_FILE, "best_model.zip", EVAL_FILE, CONFIG_FILE, STATE_FILE, RESUME_FILE, "replay_buffer.pkl",
-               "checkpoints", "tb")  # fmt: skip
-
-
-class RunDirError(ConfigError):
-    """A run directory that cannot be used as asked (in use, or holding another run)."""
-
-
 class InterruptRequestedError(Exception):
     """Raised by the run callback at a rollout boundary after Ctrl-C, once everything is saved."""
-
-
-def read_state(run_dir: Path) -> dict[str, Any]:
-    """The run's progress: timesteps and wall time of the last save, best score, whether it finished."""
-    path = run_dir / STATE_FILE
-    return json.loads(path.read_text()) if path.is_file() else {}
-
-
-def resume_command(run_dir: Path) -> str:
-    return f"dwr-gym train --resume {run_dir}"
 
 
 def make_run_callback(
@@ -118,15 +82,16 @@ def make_run_callback(
 
     Checkpoints are taken at rollout boundaries, with the env and the random generators, so that a run
     resumed from one continues exactly as the uninterrupted run would have. Ctrl-C sets a flag; the next
-    boundary saves a checkpoint and raises :class:`InterruptRequestedError`.
+    boundary saves a checkpoint and raises :class:`InterruptRequestedError`. A second Ctrl-C sets
+    ``stop_now``: training stops after the current env step, mid-rollout.
     """
     from stable_baselines3.common.callbacks import BaseCallback
 
-    from dwr_gym.params import EnvParams
-    from train.evaluation import make_scenario, rollout
+    from train.evaluation.rollout import rollout
+    from train.evaluation.scenarios import make_scenario
 
-    params = EnvParams.from_kwargs(**config.env_kwargs)
-    scenario = make_scenario("random", n=config.eval_episodes, seed=config.eval_seed, env_kwargs=config.env_kwargs)
+    params = config.env_params()
+    scenario = make_scenario("random", n=config.eval_episodes, seed=config.eval_seed, env_kwargs=config.env_keywords())
 
     class RunCallback(BaseCallback):
         def __init__(self) -> None:
@@ -137,6 +102,7 @@ def make_run_callback(
             self.last_checkpoint = int(state.get("timesteps", 0))
             self.csv_path = run_dir / EVAL_FILE
             self.interrupt_requested = False
+            self.stop_now = False
 
         def _on_training_start(self) -> None:
             if not self.csv_path.exists():
@@ -146,6 +112,8 @@ def make_run_callback(
                 self._evaluate()
 
         def _on_step(self) -> bool:
+            if self.stop_now:  # a second Ctrl-C: stop after this env step, between steps where the state is whole
+                return False
             if self.num_timesteps // config.eval_freq > max(self.last_eval, 0) // config.eval_freq:
                 self._evaluate()
             return True
@@ -181,7 +149,8 @@ def make_run_callback(
                                   "last_eval": self.last_eval, "finished": finished})  # fmt: skip
 
         def _evaluate(self) -> None:
-            summary = rollout(as_policy(self.model, config), params, scenario.starts, scenario.goals).summary()
+            summary = rollout(as_policy(self.model, config), params, scenario.starts, scenario.goals,
+                              T_con=scenario.T_cons, env_kwargs=scenario.env_kwargs).summary()  # fmt: skip
             row = {"timesteps": self.num_timesteps, "wall_time": self.wall_time(),
                    **{k: summary[k] for k in EVAL_FIELDS[2:]}}  # fmt: skip
             with self.csv_path.open("a", newline="") as handle:
@@ -197,6 +166,32 @@ def make_run_callback(
                 on_evaluation(row)
 
     return RunCallback()
+
+
+def make_progress_callback(total: int) -> Any:
+    """A progress bar over the ``total`` env steps that will run (the budget rounded up to whole collections)."""
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    from train.progress import Progress
+
+    class ProgressCallback(BaseCallback):
+        def __init__(self) -> None:
+            super().__init__()
+            self.bar: Any = None
+
+        def _on_training_start(self) -> None:
+            self.bar = Progress(total=total, desc="training", unit="step")
+
+        def _on_step(self) -> bool:
+            self.bar.update(self.training_env.num_envs)
+            return True
+
+        def close(self) -> None:
+            if self.bar is not None:
+                self.bar.close()
+                self.bar = None
+
+    return ProgressCallback()
 
 
 def _layers(env: Any) -> list[Any]:
@@ -229,124 +224,6 @@ def restore_env(env: Any, snapshot: list[dict[str, Any]]) -> None:
             setattr(layer, key, value)
 
 
-def write_state(run_dir: Path, state: dict[str, Any]) -> None:
-    """Write run_state.json atomically (a kill leaves the old or the new file, never half of one)."""
-    tmp = run_dir / (STATE_FILE + ".tmp")
-    tmp.write_text(json.dumps(state, indent=2) + "\n")
-    tmp.replace(run_dir / STATE_FILE)
-
-
-def checkpoint_steps(path: Path, state: dict[str, Any]) -> int | None:
-    """The step count of a checkpoint: from its name (algo_<steps>_steps.zip), or the run state for model.zip."""
-    import re
-
-    match = re.search(r"_(\d+)_steps\.zip$", path.name)
-    if match:
-        return int(match.group(1))
-    return int(state["timesteps"]) if path.name == MODEL_FILE and "timesteps" in state else None
-
-
-def resume_config(given: dict[str, Any]) -> TrainConfig:
-    """The saved config of the run to resume (``given['resume']``: its directory or its newest checkpoint)."""
-    from train.agents import AgentLoadError, find_run_dir
-
-    target = Path(given["resume"])
-    if not target.exists():
-        raise ConfigError(f"--resume {str(target)!r} is invalid: no such run directory or checkpoint")
-    allowed = {"resume", "total_timesteps", "progress", "device"}
-    extra = sorted(set(given) - allowed)
-    if extra:
-        flags = ", ".join("--" + name.replace("_", "-") for name in extra)
-        raise ConfigError(f"--resume reuses the run's saved config; {flags} cannot be changed (only "
-                          f"--total-timesteps, --device, --no-progress)")  # fmt: skip
-    try:
-        run_dir = find_run_dir(target if target.is_dir() else target.parent)
-    except AgentLoadError as error:
-        raise ConfigError(str(error)) from None
-    state = read_state(run_dir)
-    if "timesteps" not in state or not (run_dir / MODEL_FILE).is_file():
-        raise ConfigError(f"--resume {str(target)!r} is invalid: {str(run_dir)!r} has no checkpoint to resume from")
-    checkpoint = target if target.is_file() else run_dir / MODEL_FILE
-    steps = checkpoint_steps(checkpoint, state)
-    if steps != state["timesteps"]:
-        raise ConfigError(
-            f"--resume {str(target)!r} is invalid: the run is at {state['timesteps']} steps and this checkpoint "
-            f"at {steps}; resuming from it would replace newer results. Resume with: {resume_command(run_dir)}"
-        )
-    config = load_config(run_dir)
-    for key in ("total_timesteps", "progress", "device"):
-        if key in given:
-            setattr(config, key, given[key])
-    config.resume, config.run_dir = str(checkpoint), str(run_dir)
-    config.validate()
-    if config.total_timesteps <= state["timesteps"]:
-        raise ConfigError(
-            f"--total-timesteps {config.total_timesteps} is invalid: the run has done {state['timesteps']} steps "
-            "already; give a larger budget to continue it"
-        )
-    return config
-
-
-class RunLock:
-    """An exclusive lock on a run directory, held for the whole run and released by the OS if the process dies."""
-
-    def __init__(self, run_dir: Path) -> None:
-        self.path = run_dir / LOCK_FILE
-        self.handle: Any = None
-
-    def acquire(self) -> None:
-        self.handle = self.path.open("a+")
-        try:
-            import fcntl
-
-            fcntl.flock(self.handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except ImportError:  # no fcntl (Windows): no lock
-            return
-        except OSError:
-            self.handle.seek(0)
-            owner = self.handle.read().strip() or "another process"
-            self.handle.close()
-            raise RunDirError(
-                f"--run-dir {str(self.path.parent)!r} is in use by a running training ({owner})"
-            ) from None
-        self.handle.seek(0)
-        self.handle.truncate()
-        self.handle.write(f"pid {os.getpid()}")
-        self.handle.flush()
-
-    def release(self) -> None:
-        if self.handle is not None:
-            self.handle.close()
-            self.handle = None
-
-
-def prepare_run_dir(config: TrainConfig) -> tuple[Path, RunLock]:
-    """The run directory, locked; refuses one holding another run unless resuming it or --overwrite."""
-    import shutil
-
-    run_dir = Path(config.run_dir or config.default_run_dir())
-    if run_dir.exists() and not run_dir.is_dir():
-        raise RunDirError(f"--run-dir {str(run_dir)!r} is invalid: it is a file, expected a directory")
-    try:
-        run_dir.mkdir(parents=True, exist_ok=True)
-        lock = RunLock(run_dir)
-        lock.acquire()
-    except OSError as error:
-        raise RunDirError(f"--run-dir {str(run_dir)!r} is not writable: {error.strerror or error}") from None
-    leftovers = sorted(name for name in RUN_OUTPUTS if (run_dir / name).exists())
-    if leftovers and config.resume is None:
-        if not config.overwrite:
-            lock.release()
-            raise RunDirError(
-                f"--run-dir {str(run_dir)!r} already holds a run ({', '.join(leftovers)}): continue it with "
-                f"{resume_command(run_dir)}, choose another --run-dir, or add --overwrite to delete it"
-            )
-        for name in leftovers:
-            path = run_dir / name
-            shutil.rmtree(path) if path.is_dir() else path.unlink()
-    return run_dir, lock
-
-
 def train(
     config: TrainConfig,
     command: list[str] | None = None,
@@ -355,8 +232,9 @@ def train(
     """Train as configured; returns the run directory. ``on_evaluation`` receives each periodic
     evaluation as a dict of EVAL_FIELDS (e.g. to report it to a tuner).
 
-    Ctrl-C saves a checkpoint at the next rollout boundary (a second Ctrl-C saves at once), prints the
-    command that resumes, and raises KeyboardInterrupt.
+    Ctrl-C saves a checkpoint at the next rollout boundary; a second Ctrl-C stops after the current env
+    step and saves what there is (a third stops at once, saving nothing more). Then it prints the command
+    that resumes and raises KeyboardInterrupt.
     """
     import pickle
     import random
@@ -396,26 +274,36 @@ def train(
             except (TypeError, ValueError, AssertionError) as error:
                 raise ConfigError(f"hyperparameters rejected by {config.algo.upper()}: {error}") from None
             if config.residual:
-                from train.residual import zero_init_last_layer
+                from train.learning.residual import zero_init_last_layer
 
                 zero_init_last_layer(model)
         save_config(config, run_dir, {"command": command or sys.argv})
         callback = make_run_callback(config, run_dir, env, state, on_evaluation)
         remaining = config.total_timesteps - model.num_timesteps
+        bar = make_progress_callback(steps_to_run(config, model.num_timesteps)) if config.progress else None
 
         def on_sigint(signum: int, frame: Any) -> None:
-            if callback.interrupt_requested:
+            if callback.stop_now:
                 raise KeyboardInterrupt
+            if callback.interrupt_requested:
+                callback.stop_now = True
+                print("\ninterrupt: saving now and stopping (Ctrl-C again to stop without saving)", file=sys.stderr)
+                return
             callback.interrupt_requested = True
-            print("\ninterrupt: saving at the end of this rollout (Ctrl-C again to stop at once)", file=sys.stderr)
+            print("\ninterrupt: saving at the end of this rollout (Ctrl-C again to save now and stop)",
+                  file=sys.stderr)  # fmt: skip
 
         main_thread = threading.current_thread() is threading.main_thread()
         previous = signal.signal(signal.SIGINT, on_sigint) if main_thread else None
         start = time.time()
         try:
-            model.learn(remaining, callback=callback, progress_bar=config.progress,
+            model.learn(remaining, callback=[callback] + ([bar] if bar else []), progress_bar=False,
                         reset_num_timesteps=config.resume is None, tb_log_name=config.algo)  # fmt: skip
+            if callback.stop_now:  # stopped by the second Ctrl-C, mid-rollout
+                raise InterruptRequestedError
         except (InterruptRequestedError, KeyboardInterrupt):
+            if bar is not None:
+                bar.close()  # before the last lines, so that they are the last on the terminal
             if model.num_timesteps > callback.last_checkpoint or not (run_dir / MODEL_FILE).exists():
                 callback.checkpoint()
             print(f"interrupted at {model.num_timesteps} steps: saved {run_dir / MODEL_FILE}\n"
@@ -425,6 +313,8 @@ def train(
             if main_thread:
                 signal.signal(signal.SIGINT, previous)
             env.close()
+        if bar is not None:
+            bar.close()
         callback.checkpoint(finished=True)
     finally:
         lock.release()
@@ -433,15 +323,3 @@ def train(
     print(f"trained {model.num_timesteps} steps ({done} in {elapsed:.0f} s, {done / max(elapsed, 1e-9):.0f} "
           f"steps/s); saved {run_dir / MODEL_FILE}")  # fmt: skip
     return run_dir
-
-
-def truncate_log(path: Path, steps: int) -> None:
-    """Drop evaluation rows logged after the checkpoint a run resumes from, so the log stays monotonic."""
-    if not path.is_file():
-        return
-    with path.open(newline="") as handle:
-        rows = list(csv.reader(handle))
-    kept = [rows[0], *(row for row in rows[1:] if row and int(float(row[0])) <= steps)]
-    if len(kept) != len(rows):
-        with path.open("w", newline="") as handle:
-            csv.writer(handle).writerows(kept)

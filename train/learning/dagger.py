@@ -10,7 +10,7 @@ observation (pose relative to the goal, t / T_con, T_con). This module learns th
 2. **DAgger rounds**: the network drives; from states it visits, plans are solved again over the time
    left and added to the data, so it learns to recover from its own errors.
 
-Unlike ``dwr-gym imitate`` (:mod:`train.imitation`, which records the re-planning ``optimal``
+Unlike ``dwr-gym imitate`` (:mod:`train.learning.imitation`, which records the re-planning ``optimal``
 controller under action noise), the labels here are whole plans solved from the states the *network*
 reaches, so the data follows the student's own mistakes (Ross, Gordon, Bagnell 2011).
 
@@ -19,7 +19,7 @@ The network is the actor of a stable-baselines3 PPO policy, saved with a ``confi
 the network alone (the optimiser is only used to make the training data). Needs the ``optimal`` and
 ``train`` extras.
 
-    python -m train.dagger --run-dir runs/dagger_s0 --seed 0
+    python -m train.learning.dagger --run-dir runs/dagger_s0 --seed 0
 """
 
 from __future__ import annotations
@@ -38,9 +38,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from dwr_gym import V1_DEFAULTS, core, model
+from dwr_gym import core, model
 from dwr_gym.params import EnvParams
-from train.config import TrainConfig
+from train.env_ids import TASK_ENV_ID, check_env_id, env_keywords
+from train.learning.config import TrainConfig
 
 #: Observations (M, 10) and normalised commands (M, 2) of demonstration samples.
 Dataset = tuple[NDArray[np.float32], NDArray[np.float32]]
@@ -79,11 +80,13 @@ class DaggerConfig:
     """Random starts of the evaluation after each fit (the learning curve)."""
     eval_T_con: tuple[float, ...] = (10.0, 20.0, 40.0, 60.0)
     """Prescribed times [s] of the evaluation after each fit."""
-    env_kwargs: dict[str, Any] = field(default_factory=lambda: dict(V1_DEFAULTS))
-    """The env the agent is for (DWRPointStabilization-v1's defaults)."""
+    env_id: str = TASK_ENV_ID
+    """The env the agent is for: DWRPointStabilization-v1 (T_con drawn per episode) or -v0 (T_con = 20 s)."""
+    env_kwargs: dict[str, Any] = field(default_factory=dict)
+    """Env keywords on top of those ``env_id`` is registered with."""
     handover_expert: str = ""
     """If set (e.g. "pt-astolfi"), the trained network hands over to this analytic law for the finish
-    (train.residual.HandoverPolicy), with the thresholds of HANDOVER_GRID that :func:`select_handover` chooses
+    (train.learning.handover.HandoverPolicy), with the thresholds of HANDOVER_GRID that :func:`select_handover` chooses
     on the evaluation starts (not a benchmark's)."""
 
 
@@ -176,7 +179,7 @@ def concatenate(data: list[Dataset]) -> Dataset:
 
 def dagger_samples(policy: Any, config: DaggerConfig, params: EnvParams, rng: np.random.Generator) -> Dataset:
     """Let the network drive from random starts, then re-plan from states it visits over the time left."""
-    from train.evaluation import rollout
+    from train.evaluation.rollout import rollout
 
     n = config.dagger_episodes
     starts = np.array([core.sample_start(rng, params) for _ in range(n)])
@@ -219,7 +222,7 @@ def make_model(config: DaggerConfig) -> Any:
 
     from dwr_gym.sb3 import make_sb3_vec_env
 
-    env = make_sb3_vec_env(4, seed=config.seed, **config.env_kwargs)
+    env = make_sb3_vec_env(4, seed=config.seed, **env_keywords(config.env_id, config.env_kwargs))
     policy_kwargs = {"net_arch": {"pi": list(config.net_arch), "vf": [64, 64]}, "activation_fn": torch.nn.ReLU,
                      "log_std_init": -2.0}  # fmt: skip
     return PPO("MlpPolicy", env, seed=config.seed, device="cpu", gamma=0.999, policy_kwargs=policy_kwargs)
@@ -259,7 +262,7 @@ def fit(model: Any, data: Dataset, config: DaggerConfig, rng: np.random.Generato
 
 def evaluate_by_T_con(policy: Any, params: EnvParams, T_cons: tuple[float, ...], n: int, seed: int) -> list[dict]:
     """Success, final heading error and energy of ``policy`` at each T_con on the same random starts."""
-    from train.evaluation import rollout
+    from train.evaluation.rollout import rollout
 
     rng = np.random.default_rng(seed)
     starts = np.array([core.sample_start(rng, params) for _ in range(n)])
@@ -277,7 +280,7 @@ HANDOVER_GRID = [(0.0, f, m) for f in (0.8, 0.85, 0.9, 1.0) for m in (0.0, 1.5, 
 
 def check_handover_expert(name: str) -> None:
     """Exit with a one-line message unless ``name`` is an analytic controller."""
-    from baselines.controllers import CONTROLLERS
+    from baselines.registry import CONTROLLERS
 
     if name not in CONTROLLERS:
         raise SystemExit(f"--handover-expert {name!r} is invalid: expected one of {', '.join(CONTROLLERS)}")
@@ -287,7 +290,7 @@ def select_handover(model: Any, config: DaggerConfig, params: EnvParams) -> tupl
     """The hand-over of HANDOVER_GRID that, on the evaluation starts (seed 12345, not a benchmark's), arrives in
     time in >= 99 % of episodes with a mean final heading error <= 0.1 rad at every T_con and spends the least
     energy; failing that, the one that arrives in time most often. Returns it with every row tried."""
-    from train.residual import make_handover_policy
+    from train.learning.handover import make_handover_policy
 
     tried = []
     for distance, fraction, margin in HANDOVER_GRID:
@@ -310,7 +313,8 @@ def run(config: DaggerConfig, run_dir: Path, command: list[str]) -> Path:
 
     import torch
 
-    from train.training import EVAL_FILE, MODEL_FILE, save_config
+    from train.learning.runs import EVAL_FILE, MODEL_FILE, save_config
+    from train.reporting.learning_curves import plot_dagger_curve
 
     if config.handover_expert:
         check_handover_expert(config.handover_expert)
@@ -319,7 +323,7 @@ def run(config: DaggerConfig, run_dir: Path, command: list[str]) -> Path:
     run_dir.mkdir(parents=True, exist_ok=True)
     torch.manual_seed(config.seed)
     torch.set_num_threads(1)
-    params = EnvParams.from_kwargs(**config.env_kwargs)
+    params = EnvParams.from_kwargs(**env_keywords(config.env_id, config.env_kwargs))
     rng = np.random.default_rng(config.seed)
     began = time.time()
     model = make_model(config)
@@ -340,68 +344,53 @@ def run(config: DaggerConfig, run_dir: Path, command: list[str]) -> Path:
         extra["handover_tried"] = tried
         print(f"hand-over: {extra['handover']}", flush=True)
     train_config = TrainConfig(algo="ppo", total_timesteps=1, num_envs=4, seed=config.seed,
-                               env_kwargs=dict(config.env_kwargs), run_dir=str(run_dir), progress=False)  # fmt: skip
+                               env_id=config.env_id, env_kwargs=dict(config.env_kwargs), run_dir=str(run_dir), progress=False)  # fmt: skip
     save_config(train_config, run_dir, extra)
     with (run_dir / EVAL_FILE).open("w", newline="") as handle:
         writer = csv.DictWriter(handle, fieldnames=list(curve[0]))
         writer.writeheader()
         writer.writerows(curve)
-    plot_learning_curve(curve, config.eval_T_con, run_dir / "learning_curve.png")
+    plot_dagger_curve(curve, config.eval_T_con, run_dir / "learning_curve.png")
     print(f"cloned in {time.time() - began:.0f} s from {len(data[0])} samples; saved {run_dir / MODEL_FILE}")
     return run_dir
 
 
-def plot_learning_curve(curve: list[dict[str, Any]], T_cons: tuple[float, ...], path: Path) -> None:
-    """Success, final heading error and energy at each evaluation T_con against the DAgger round."""
-    try:
-        from train.plotting import pyplot, save
-
-        plt = pyplot()
-    except ImportError:  # the plots extra is optional
-        return
-    rounds = [row["round"] for row in curve]
-    fig, axes = plt.subplots(1, 3, figsize=(13, 3.6))
-    labels = ("success (arrival by T_con)", "final |psi - psi_d| [rad]", "energy [m^2/s + rad^2/s]")
-    for ax, key, label in zip(axes, ("success", "heading", "energy"), labels, strict=True):
-        for T in T_cons:
-            ax.plot(rounds, [row[f"{key}_T{int(T)}"] for row in curve], marker="o", label=f"T_con = {T:g} s")
-        ax.set(xlabel="DAgger round (0: demonstrations only)", ylabel=label)
-    axes[0].legend(fontsize=8)
-    fig.suptitle("DAgger on minimum-energy plans: fixed evaluation starts 0.3-3 m away")
-    save(fig, path, dpi=100)
-
-
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0], allow_abbrev=False)
     parser.add_argument("--run-dir", required=True)
     for f in dataclasses.fields(DaggerConfig):
         if f.type in ("int", "float", "str"):
             kind = {"int": int, "float": float, "str": str}[f.type]  # type: ignore[index]
-            parser.add_argument(f"--{f.name.replace('_', '-')}", type=kind, default=f.default)
+            flag = "--env" if f.name == "env_id" else f"--{f.name.replace('_', '-')}"
+            parser.add_argument(flag, dest=f.name, type=kind, default=f.default)
     parser.add_argument("--handover-only", action="store_true",
                         help="only choose the hand-over of an existing run (needs --handover-expert) and save it in "
                              "its config.yaml")  # fmt: skip
     args = parser.parse_args(argv)
     values = {k: v for k, v in vars(args).items() if k not in ("run_dir", "handover_only")}
+    try:
+        values["env_id"] = check_env_id(values["env_id"])
+    except ValueError as error:
+        parser.error(str(error))
     if args.handover_only:
         add_handover(Path(args.run_dir), args.handover_expert, args.eval_episodes)
         return
-    run(DaggerConfig(**values), Path(args.run_dir), ["python", "-m", "train.dagger", *(argv or sys.argv[1:])])
+    run(DaggerConfig(**values), Path(args.run_dir), ["python", "-m", "train.learning.dagger", *(argv or sys.argv[1:])])
 
 
 def add_handover(run_dir: Path, expert: str, eval_episodes: int) -> None:
     """Choose the hand-over of a trained run (:func:`select_handover`) and write it into its config.yaml."""
     from stable_baselines3 import PPO
 
-    from train.agents import load_extra
-    from train.training import MODEL_FILE, load_config, save_config
+    from train.learning.agents import load_extra
+    from train.learning.runs import MODEL_FILE, load_config, save_config
 
     check_handover_expert(expert)
     if not (run_dir / MODEL_FILE).is_file():
         raise SystemExit(f"--run-dir {str(run_dir)!r} holds no {MODEL_FILE}: train it first")
     train_config, extra = load_config(run_dir), load_extra(run_dir)
     config = DaggerConfig(**{**extra.get("dagger", {}), "handover_expert": expert, "eval_episodes": eval_episodes})
-    params = EnvParams.from_kwargs(**train_config.env_kwargs)
+    params = train_config.env_params()
     model = PPO.load(run_dir / MODEL_FILE, device="cpu")
     extra["handover"], extra["handover_tried"] = select_handover(model, config, params)
     extra.pop("config", None)

@@ -1,4 +1,4 @@
-"""Scenario sets, batched rollouts and metrics: the honest comparison of controllers and agents.
+"""Batched rollouts and their metrics: the honest comparison of controllers and agents.
 
 A rollout steps all N scenarios of a set as one batch through :func:`dwr_gym.core.transition`,
 the same function the environments use, with the policy acting on the env's observations.
@@ -6,7 +6,6 @@ the same function the environments use, with the policy acting on the env's obse
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Protocol
@@ -14,16 +13,9 @@ from typing import Any, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-from baselines.controllers import Controller, make_controller
-from baselines.expert import ExpertPolicy
 from dwr_gym import core
 from dwr_gym.disturbances import make_perturbation, split_env_kwargs
 from dwr_gym.params import EnvParams
-from train.disturbance_sets import ROBUSTNESS_SETS, robustness_env_kwargs
-from train.optimum import OPTIMA, optimal_energies
-
-SCENARIO_SETS: tuple[str, ...] = ("paper-fig5", "paper-fig7", "random")
-FIG5_HEADINGS = (0.0, -math.pi / 4, -math.pi / 2, -3 * math.pi / 4, math.pi, 3 * math.pi / 4, math.pi / 2, math.pi / 4)
 
 
 class Policy(Protocol):
@@ -32,65 +24,6 @@ class Policy(Protocol):
     def predict(
         self, observation: Any, state: Any = None, episode_start: Any = None, deterministic: bool = True
     ) -> tuple[Any, Any]: ...
-
-
-@dataclass(frozen=True)
-class Scenario:
-    """A named set of N start and goal poses (world frame) with the env keywords they are run with."""
-
-    name: str
-    starts: NDArray[np.float64]  # (N, 3)
-    goals: NDArray[np.float64]  # (N, 3)
-    env_kwargs: dict[str, Any] = field(default_factory=dict)
-    controller_kwargs: dict[str, dict[str, Any]] = field(default_factory=dict)
-    """Per-controller keyword overrides, e.g. the paper's gains for its figure."""
-    labels: tuple[str, ...] = ()
-    T_cons: NDArray[np.float64] | None = None
-    """Each episode's prescribed time (N,) when the env draws T_con per episode (``T_con_range``)."""
-
-    @property
-    def size(self) -> int:
-        return int(self.starts.shape[0])
-
-
-def make_scenario(name: str, n: int = 100, seed: int = 0, env_kwargs: dict[str, Any] | None = None) -> Scenario:
-    """A named scenario set: 'paper-fig5', 'paper-fig7' or 'random' (``n`` seeded random starts)."""
-    env_kwargs = dict(env_kwargs or {})
-    if name == "paper-fig5":
-        starts = np.array([(0.0, 0.0, h) for h in FIG5_HEADINGS])
-        goals = np.tile([0.8, 0.0, 0.0], (len(FIG5_HEADINGS), 1))
-        labels = tuple(f"psi0={math.degrees(h):+.0f}deg" for h in FIG5_HEADINGS)
-        return Scenario(name, starts, goals, {"T_con": 20.0, **env_kwargs}, {}, labels)
-    if name == "paper-fig7":
-        starts = np.array([[-0.4, 0.0, math.radians(-178.0)]])
-        goals = np.array([[0.8, 0.0, 0.0]])
-        gains = {"ptc": {"K1": 2.5, "K2": 40.0, "K": 1.2}, "conventional-ptc": {"K1": 2.5, "K2": 40.0}}
-        return Scenario(name, starts, goals, {"T_con": 70.0, **env_kwargs}, gains, ("psi0=-178deg",))
-    if name == "random" or name in ROBUSTNESS_SETS:
-        if isinstance(n, bool) or not isinstance(n, int) or n < 1:
-            raise ValueError(f"n={n!r} is invalid: expected an integer >= 1")
-        params = EnvParams.from_kwargs(**split_env_kwargs(env_kwargs)[0])
-        if name in ROBUSTNESS_SETS:  # the random starts, on the imperfect robot
-            env_kwargs = {**robustness_env_kwargs(name, params.T_con), **env_kwargs}
-        rng = np.random.default_rng(seed)
-        local = np.array([core.sample_start(rng, params) for _ in range(n)])
-        T_cons = None if params.T_con_range is None else rng.uniform(*params.T_con_range, size=n)
-        return Scenario(name, local, np.zeros((n, 3)), env_kwargs, {}, (), T_cons)
-    raise ValueError(f"scenario={name!r} is invalid: expected one of {', '.join((*SCENARIO_SETS, *ROBUSTNESS_SETS))}")
-
-
-def controller_for(name: str, scenario: Scenario, params: EnvParams, **overrides: Any) -> Controller:
-    """Controller ``name`` configured for a scenario: its T_con (and dt for the integral law), its presets."""
-    kwargs: dict[str, Any] = {}
-    if name in ("ptc", "conventional-ptc"):
-        kwargs["T_con"] = params.T_con  # the expert reads T_con from the observation; this keeps repr honest
-    if name == "fabregas":
-        kwargs["dt"] = params.dt
-    if name in ("optimal", "robust-pt"):
-        kwargs.update(T_con=params.T_con, dt=params.dt, u_max=params.u_max, omega_max=params.omega_max)
-    kwargs.update(scenario.controller_kwargs.get(name, {}))
-    kwargs.update(overrides)
-    return make_controller(name, **kwargs)
 
 
 @dataclass
@@ -223,9 +156,9 @@ def rollout(
 
     steps = range(int(state.max_steps.max()))
     if progress:
-        from tqdm.auto import tqdm
+        from train.progress import Progress
 
-        steps = tqdm(steps, desc=description, unit="step", leave=False)
+        steps = Progress(steps, desc=description, unit="step", leave=False)
     episode_start = np.ones(n, dtype=bool)
     for _ in steps:
         actions, _ = policy.predict(obs, episode_start=episode_start, deterministic=True)
@@ -283,71 +216,3 @@ def rollout(
         left_arena=left_arena,
         trajectory={k: np.array(v) for k, v in trajectory.items()} if record else None,
     )
-
-
-def evaluate(
-    policies: dict[str, Policy | str],
-    scenario: Scenario,
-    *,
-    record: bool = False,
-    seed: int = 0,
-    progress: bool = False,
-    optimum: str = "none",
-) -> dict[str, RolloutResult]:
-    """Run each policy on the scenario; a string value names a controller of :mod:`baselines`.
-
-    ``optimum`` "pose" (or "position") also solves, or reads from the cache, the minimum energy of
-    each episode to the goal pose (or position) by T_con, for the energy / optimal ratios.
-    """
-    if optimum not in OPTIMA:
-        raise ValueError(f"optimum={optimum!r} is invalid: expected one of {', '.join(OPTIMA)}")
-    params = EnvParams.from_kwargs(**split_env_kwargs(scenario.env_kwargs)[0])
-    optimal_energy, optimum_failures = None, []
-    if optimum != "none":
-        optimal_energy, optimum_failures = optimal_energies(params, scenario.starts, scenario.goals, scenario.T_cons,
-                                                             heading=optimum == "pose",
-                                             progress=progress, description=f"{scenario.name}: optimum")  # fmt: skip
-    results = {}
-    for label, policy in policies.items():
-        if isinstance(policy, str):
-            policy = ExpertPolicy(controller_for(policy, scenario, params), params.u_max, params.omega_max)
-        result = rollout(
-            policy, params, scenario.starts, scenario.goals, record=record, seed=seed, progress=progress,
-            description=f"{scenario.name}: {label}", T_con=scenario.T_cons, env_kwargs=scenario.env_kwargs,
-        )  # fmt: skip
-        result.optimal_energy, result.optimum_failures = optimal_energy, optimum_failures
-        controller = getattr(policy, "controller", None)
-        result.planner_failures = len(getattr(controller, "failures", ()))
-        if hasattr(controller, "close"):
-            controller.close()
-        results[label] = result
-    return results
-
-
-def evaluate_sets(
-    policies: dict[str, Policy | str],
-    scenarios: list[str] | tuple[str, ...],
-    n: int,
-    seed: int,
-    env_kwargs: dict[str, Any],
-    progress: bool = False,
-    optimum: str = "none",
-    T_cons: list[float] | None = None,
-) -> list[dict[str, Any]]:
-    """Evaluate policies on named scenario sets, at each prescribed time of ``T_cons`` (default: the set's own).
-
-    Returns one row per (scenario, T_con, policy): the keys ``scenario``, ``T_con``, ``policy``, those
-    of :meth:`RolloutResult.summary`, and ``optimum_note``, why the first episode without an optimum has none.
-    """
-    rows = []
-    for name in scenarios:
-        for T_con in T_cons or [None]:
-            kwargs = env_kwargs if T_con is None else {**env_kwargs, "T_con": T_con}
-            scenario = make_scenario(name, n=n, seed=seed, env_kwargs=kwargs)
-            results = evaluate(policies, scenario, seed=seed, progress=progress, optimum=optimum)
-            for label, result in results.items():
-                note = result.optimum_failures[0] if result.optimum_failures else ""
-                T_row = float("nan") if scenario.T_cons is not None else result.params.T_con  # nan: per episode
-                rows.append({"scenario": name, "T_con": T_row, "policy": label, **result.summary(),
-                             "optimum_note": note})  # fmt: skip
-    return rows

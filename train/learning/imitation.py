@@ -22,9 +22,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from dwr_gym import V1_DEFAULTS, core
+from dwr_gym import core
 from dwr_gym.params import EnvParams
-from train.config import option
+from train.env_ids import ENV_HELP, TASK_ENV_ID, env_keywords
+from train.learning.config import option
 
 EVAL_FIELDS = ("epoch", "samples", "wall_time", "loss", "success_rate", "arrival_fraction_max",
                "final_heading_error_mean", "energy_mean")  # fmt: skip
@@ -34,6 +35,7 @@ EVAL_FIELDS = ("epoch", "samples", "wall_time", "loss", "success_rate", "arrival
 class ImitationConfig:
     """Everything ``dwr-gym imitate`` needs; written beside the model. Each field is an option of the command."""
 
+    env_id: str = option(TASK_ENV_ID, ENV_HELP, flag="--env")
     episodes: int = option(800, "expert episodes to record")
     T_con_range: tuple[float, float] = option((10.0, 60.0), "prescribed times of the episodes [s] (v1's range)")
     start_distance: tuple[float, float] = option((0.3, 3.0), "start distances of the episodes [m] (v1's range)")
@@ -51,16 +53,17 @@ class ImitationConfig:
 
 
 def env_kwargs(config: ImitationConfig) -> dict[str, Any]:
-    """The task the student learns: DWRPointStabilization-v1's defaults, with the config's ranges."""
-    return {**V1_DEFAULTS, "T_con_range": tuple(config.T_con_range), "start_distance": tuple(config.start_distance)}
+    """The task the student learns: the keywords of ``env_id`` (v1's by default) with the config's ranges."""
+    ranges = {"T_con_range": tuple(config.T_con_range), "start_distance": tuple(config.start_distance)}
+    return env_keywords(config.env_id, ranges)
 
 
 def record_demonstrations(
     config: ImitationConfig, progress: bool = True
 ) -> tuple[NDArray[np.float32], NDArray[np.float32], dict[str, float]]:
     """(observations (M, 10), expert actions (M, 2), statistics) from noisy rollouts of the optimal expert."""
-    from baselines.controllers import make_controller
     from baselines.expert import ExpertPolicy
+    from baselines.registry import make_controller
 
     params = EnvParams.from_kwargs(**env_kwargs(config))
     rng = np.random.default_rng(config.seed)
@@ -80,9 +83,9 @@ def record_demonstrations(
     observations, actions = [], []
     steps: Any = range(int(state.max_steps.max()))
     if progress:
-        from tqdm.auto import tqdm
+        from train.progress import Progress
 
-        steps = tqdm(steps, desc="expert demonstrations", unit="step", leave=False)
+        steps = Progress(steps, desc="expert demonstrations", unit="step", leave=False)
     episode_start = np.ones(n, dtype=bool)
     began = time.perf_counter()
     for _ in steps:
@@ -111,8 +114,10 @@ def imitate(config: ImitationConfig, run_dir: Path, progress: bool = True) -> Pa
     from stable_baselines3 import PPO
 
     from dwr_gym.sb3 import make_sb3_vec_env
-    from train.config import TrainConfig
-    from train.evaluation import make_scenario, rollout
+    from train.evaluation.rollout import rollout
+    from train.evaluation.scenarios import make_scenario
+    from train.learning.config import TrainConfig
+    from train.reporting.learning_curves import plot_imitation_curve
 
     run_dir.mkdir(parents=True, exist_ok=True)
     began = time.perf_counter()
@@ -135,9 +140,9 @@ def imitate(config: ImitationConfig, run_dir: Path, progress: bool = True) -> Pa
     generator = torch.Generator().manual_seed(config.seed)
     epochs: Any = range(1, config.epochs + 1)
     if progress:
-        from tqdm.auto import tqdm
+        from train.progress import Progress
 
-        epochs = tqdm(epochs, desc="behaviour cloning", unit="epoch", leave=False)
+        epochs = Progress(epochs, desc="behaviour cloning", unit="epoch", leave=False)
     for epoch in epochs:
         order = torch.randperm(len(inputs), generator=generator)
         total = 0.0
@@ -155,7 +160,8 @@ def imitate(config: ImitationConfig, run_dir: Path, progress: bool = True) -> Pa
             with csv_path.open("a", newline="") as handle:
                 csv.writer(handle).writerow([row[k] for k in EVAL_FIELDS])
     model.save(run_dir / "model.zip")
-    train_config = TrainConfig(algo="ppo", env_kwargs=kwargs, seed=config.seed, run_dir=str(run_dir), progress=False,
+    ranges = {key: kwargs[key] for key in ("T_con_range", "start_distance")}
+    train_config = TrainConfig(algo="ppo", env_id=config.env_id, env_kwargs=ranges, seed=config.seed, run_dir=str(run_dir), progress=False,
                                algo_kwargs={"policy": "MlpPolicy", "gamma": 0.999,
                                             "policy_kwargs": {"net_arch": list(config.net_arch)}})  # fmt: skip
     imitation = {**asdict(config), "net_arch": list(config.net_arch), "T_con_range": list(config.T_con_range),
@@ -163,26 +169,5 @@ def imitate(config: ImitationConfig, run_dir: Path, progress: bool = True) -> Pa
     data = {"config": train_config.to_dict(), "imitation": imitation,
             "demonstrations": stats, "wall_time": round(time.perf_counter() - began, 1)}  # fmt: skip
     (run_dir / "config.yaml").write_text(yaml.safe_dump(data, sort_keys=False))
-    plot_learning_curve(csv_path, run_dir / "learning_curve.png")
+    plot_imitation_curve(csv_path, run_dir / "learning_curve.png")
     return run_dir
-
-
-def plot_learning_curve(csv_path: Path, path: Path) -> None:
-    """Success, final heading error and energy on the fixed scenario set against the epochs (if matplotlib is there)."""
-    try:
-        from train.plotting import pyplot, save
-
-        plt = pyplot()
-    except ImportError:
-        return
-    with csv_path.open() as handle:
-        rows = list(csv.DictReader(handle))
-    epochs = [int(r["epoch"]) for r in rows]
-    fig, axes = plt.subplots(1, 3, figsize=(13, 3.6))
-    for ax, key, label in zip(axes, ("success_rate", "final_heading_error_mean", "energy_mean"),
-                              ("success (arrival by T_con)", "final |psi - psi_d| [rad]", "energy [m^2/s + rad^2/s]"),
-                              strict=True):  # fmt: skip
-        ax.plot(epochs, [float(r[key]) for r in rows], marker="o")
-        ax.set(xlabel="epoch of behaviour cloning", ylabel=label)
-    fig.suptitle("Behaviour cloning of the optimal planner: the fixed evaluation set (T_con in [10, 60] s)")
-    save(fig, path, dpi=100)

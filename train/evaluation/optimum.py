@@ -120,9 +120,9 @@ def _map(jobs: list[Any], workers: int, progress: bool, description: str) -> lis
     workers = workers or min(os.cpu_count() or 1, 8)
     bar: Any = None
     if progress:
-        from tqdm.auto import tqdm
+        from train.progress import Progress
 
-        bar = tqdm(total=len(jobs), desc=description, unit="plan", leave=False)
+        bar = Progress(total=len(jobs), desc=description, unit="plan", leave=False)
     results: list[float | str] = []
     if workers <= 1 or len(jobs) < 4:
         for job in jobs:

@@ -1,6 +1,6 @@
-"""``dwr-gym sweep``: seeds and hyperparameter searches on Ray Tune, each trial the training of ``dwr-gym train``.
+"""Seeds and hyperparameter searches on Ray Tune (``dwr-gym sweep``), each trial the training of ``dwr-gym train``.
 
-A trial calls :func:`train.training.train` (the function behind ``dwr-gym train``) and reports each of
+A trial calls :func:`train.learning.training.train` (the function behind ``dwr-gym train``) and reports each of
 its evaluations to Tune through ``train``'s ``on_evaluation`` hook; ``train`` knows nothing of Tune.
 Every run writes its own run directory under ``<out>/runs/``, from which the table of trials (mean +- sd
 over seeds), the best configuration as an rl-zoo3 YAML and the learning curves are built.
@@ -8,7 +8,6 @@ over seeds), the best configuration as an rl-zoo3 YAML and the learning curves a
 
 from __future__ import annotations
 
-import argparse
 import csv
 import itertools
 import json
@@ -19,7 +18,8 @@ from typing import Any
 
 import numpy as np
 
-from train.config import ENV_ID, ConfigError, TrainConfig, check_algo_kwargs, resolve_hyperparams
+from train.learning.config import ConfigError, TrainConfig
+from train.learning.hyperparams import check_algo_kwargs, resolve_hyperparams
 
 SEARCHES = ("grid", "random", "optuna")
 DISTRIBUTIONS = ("uniform", "loguniform", "int")
@@ -110,6 +110,7 @@ def optuna_space(space: dict[str, dict[str, Any]]) -> dict[str, Any]:
 def trial_config(base: dict[str, Any], hp: dict[str, Any], seed: int, run_dir: Path) -> TrainConfig:
     """The TrainConfig of one run: the sweep's base options, this seed, the defaults/YAML, then ``hp``."""
     config = TrainConfig(**{**base, "seed": seed, "run_dir": str(run_dir), "progress": False})
+    config.validate()  # the options first (the env id chooses the hyperparameters' section)
     config = resolve_hyperparams(config, set(base))
     config.algo_kwargs.update(hp)
     check_algo_kwargs(config.algo, config.algo_kwargs)
@@ -133,7 +134,8 @@ def read_evaluations(run_dir: Path) -> list[dict[str, float]]:
 
 def run_one(base: dict[str, Any], hp: dict[str, Any], seed: int, run_dir: Path, config_id: str, report: Any) -> dict:
     """Train one seed of one configuration (or reuse a finished run: an interrupted sweep resumes)."""
-    from train.training import MODEL_FILE, train
+    from train.learning.runs import MODEL_FILE
+    from train.learning.training import train
 
     finished = (run_dir / MODEL_FILE).is_file() and last_evaluation(run_dir) is not None
     if not finished:
@@ -197,14 +199,6 @@ def summarize(groups: dict[str, dict[str, Any]], metric: str) -> list[dict[str, 
     return sorted(table, key=lambda r: sign * r[f"{metric}_mean"] if math.isfinite(r[f"{metric}_mean"]) else math.inf)
 
 
-def format_table(table: list[dict[str, Any]]) -> str:
-    lines = [f"{'config':<10} {'seeds':>5} " + " ".join(f"{c:>22}" for c in TABLE_COLUMNS) + "  hyperparameters"]
-    for row in table:
-        cells = " ".join(f"{row[c + '_mean']:>12.3f} +- {row[c + '_sd']:<6.3f}" for c in TABLE_COLUMNS)
-        lines.append(f"{row['config']:<10} {row['seeds']:>5} {cells}  {json.dumps(row['hyperparams'])}")
-    return "\n".join(lines)
-
-
 def zoo_yaml(config: TrainConfig) -> str:
     """A resolved configuration in rl-zoo3's YAML format, readable by rl-zoo3 and ``dwr-gym train --hyperparams``."""
     import yaml
@@ -224,31 +218,7 @@ def zoo_yaml(config: TrainConfig) -> str:
     )
     if config.env_kwargs:
         section["env_kwargs"] = dict(config.env_kwargs)
-    return header + yaml.safe_dump({ENV_ID: section}, sort_keys=False)
-
-
-def plot_curves(groups: dict[str, dict[str, Any]], path: Path, metrics: tuple[str, ...]) -> None:
-    """Learning curves: per configuration, the mean over seeds with a +- sd band."""
-    from train.plotting import pyplot, save
-
-    plt = pyplot()
-    fig, axes = plt.subplots(1, len(metrics), figsize=(6 * len(metrics), 4), squeeze=False)
-    for config_id, group in groups.items():
-        runs = list(group["runs"].values())
-        length = min(len(r) for r in runs)
-        steps = np.array([r["timesteps"] for r in runs[0][:length]])
-        for ax, metric in zip(axes[0], metrics, strict=True):
-            values = np.array([[row[metric] for row in r[:length]] for r in runs])
-            mean = np.nanmean(values, axis=0)
-            sd = np.nanstd(values, axis=0, ddof=1) if len(runs) > 1 else np.zeros_like(mean)
-            (line,) = ax.plot(steps, mean, label=f"{config_id} ({len(runs)} seeds)")
-            ax.fill_between(steps, mean - sd, mean + sd, color=line.get_color(), alpha=0.2)
-    for ax, metric in zip(axes[0], metrics, strict=True):
-        ax.set_xlabel("environment steps")
-        ax.set_ylabel(metric)
-        ax.grid(alpha=0.3)
-    axes[0][0].legend(fontsize=7)
-    save(fig, path)
+    return header + yaml.safe_dump({config.env_id: section}, sort_keys=False)
 
 
 def parse_resources(text: str) -> dict[str, float]:
@@ -264,140 +234,3 @@ def parse_resources(text: str) -> dict[str, float]:
             raise ConfigError(f"--resources-per-trial {text!r} is invalid: expected e.g. cpu=1 or cpu=2,gpu=0.5")
         resources[key.strip()] = amount
     return resources
-
-
-def add_sweep_parser(sub: Any) -> None:
-    """The ``sweep`` subcommand."""
-    p = sub.add_parser("sweep", help="seeds and hyperparameter searches on Ray Tune (local, or a cluster)",
-                       description="Each trial runs the training of `dwr-gym train`; needs the extra [sweep].")  # fmt: skip
-    p.add_argument("--algo", default="ppo", help="algorithm: ppo, sac or td3 (default: ppo)")
-    p.add_argument("--residual", action="store_true", help="residual agents on the PTC expert")
-    p.add_argument("--total-timesteps", type=int, default=200_000, help="env steps per run (default: 200000)")
-    p.add_argument("--num-envs", type=int, default=16, help="robots per vector env (default: 16)")
-    p.add_argument("--env-kwargs", nargs="*", metavar="KEY=VALUE", default=[], help="env keywords, e.g. T_con=25")
-    p.add_argument("--hyperparams", help="rl-zoo3 YAML the configurations start from (default: train/hyperparams/)")
-    p.add_argument("--eval-freq", type=int, default=20_000, help="evaluate every this many env steps (default: 20000)")
-    p.add_argument("--eval-episodes", type=int, default=100, help="scenarios per evaluation (default: 100)")
-    p.add_argument("--seeds", type=int, default=3, help="seeds per configuration: 0 .. N-1 (default: 3)")
-    p.add_argument(
-        "--param",
-        action="append",
-        default=[],
-        metavar="KEY=SPEC",
-        help="a hyperparameter to search: KEY=v1,v2,... or KEY=uniform|loguniform|int:LOW:HIGH; repeatable",
-    )
-    p.add_argument(
-        "--search",
-        choices=SEARCHES,
-        default="grid",
-        help="grid: every combination of choices; random: --num-samples draws; optuna: Optuna's TPE "
-        "through Ray Tune, each trial training all its seeds (default: grid)",
-    )
-    p.add_argument("--num-samples", type=int, default=8, help="configurations drawn by random/optuna (default: 8)")
-    p.add_argument("--search-seed", type=int, default=0, help="seed of the random/optuna search (default: 0)")
-    p.add_argument(
-        "--metric",
-        choices=METRICS,
-        default="return_mean",
-        help="what the best configuration maximises (minimises for energy/time/distance)",
-    )
-    p.add_argument("--address", help="join a running Ray cluster (e.g. auto or ray://host:10001); default: local Ray")
-    p.add_argument("--resources-per-trial", default="cpu=1", help="Ray resources of one trial (default: cpu=1)")
-    p.add_argument("--out", default="results/sweep", help="output directory (default: results/sweep)")
-    p.add_argument(
-        "--name",
-        help="prefix of the run directories <out>/runs/<name>-<config>-seed<seed>, which label "
-        "the agents in `dwr-gym compare` (default: ppo, ppo-residual, ...)",
-    )
-    p.add_argument("--resume", action="store_true", help="continue an interrupted sweep in --out")
-    p.set_defaults(func=cmd_sweep)  # fmt: skip
-
-
-def cmd_sweep(args: argparse.Namespace) -> int:
-    """Run the sweep, then write trials.csv, best.yml and learning_curves.png in --out."""
-    from train.cli import UsageError, parse_env_kwargs
-
-    try:
-        import ray
-        from ray import tune
-    except ImportError as error:
-        raise UsageError('Ray Tune is not installed: pip install "dwr-gym[sweep]"') from error
-    out = Path(args.out).resolve()
-    base = {"algo": args.algo, "residual": args.residual, "total_timesteps": args.total_timesteps,
-            "num_envs": args.num_envs, "env_kwargs": parse_env_kwargs(args.env_kwargs),
-            "eval_freq": args.eval_freq, "eval_episodes": args.eval_episodes}  # fmt: skip
-    if args.hyperparams:
-        base["hyperparams"] = str(Path(args.hyperparams).resolve())
-    try:
-        for name in ("seeds", "num_samples"):
-            if getattr(args, name) < 1:
-                raise ConfigError(f"--{name.replace('_', '-')} {getattr(args, name)!r} is invalid: expected >= 1")
-        space = dict(parse_param(item) for item in args.param)
-        resources = parse_resources(args.resources_per_trial)
-        seeds = list(range(args.seeds))
-        if args.search == "optuna":
-            if not space:
-                raise ConfigError("--search optuna needs at least one --param")
-            configs = sample_configurations(space, "random", 1, args.search_seed)  # to validate the keys
-        else:
-            configs = sample_configurations(space, args.search, args.num_samples, args.search_seed) if space else [{}]
-        for hp in configs:
-            trial_config(base, hp, 0, out / "runs" / "check")
-    except ConfigError as error:
-        raise UsageError(str(error)) from error
-    experiment = out / "ray"
-    name = args.name or f"{args.algo}{'-residual' if args.residual else ''}"
-    if not args.resume and (out / "runs").exists():
-        raise UsageError(f"--out {str(out)!r} already holds a sweep: use --resume to continue it, or another --out")
-    ray.init(address=args.address, include_dashboard=False, configure_logging=False, log_to_driver=False)
-    metric = args.metric
-    mode = "max" if metric in ("return_mean", "success_rate") else "min"
-    run = tune.with_resources(trainable, resources)
-    if args.resume and tune.Tuner.can_restore(str(experiment / "sweep")):
-        tuner = tune.Tuner.restore(str(experiment / "sweep"), run, resume_unfinished=True, resume_errored=True)
-    elif args.search == "optuna":
-        from optuna.samplers import TPESampler
-        from ray.tune.search.optuna import OptunaSearch
-
-        tuner = tune.Tuner(
-            run,
-            param_space={**optuna_space(space), "out": str(out), "base": base, "seeds": seeds, "name": name},
-            tune_config=tune.TuneConfig(num_samples=args.num_samples, metric=metric, mode=mode,
-                                        search_alg=OptunaSearch(sampler=TPESampler(seed=args.search_seed))),
-            run_config=tune.RunConfig(name="sweep", storage_path=str(experiment), verbose=1),
-        )  # fmt: skip
-    else:
-        trials = [{**hp, "config_id": f"c{i:03d}", "seed": seed, "out": str(out), "base": base, "name": name}
-                  for i, hp in enumerate(configs) for seed in seeds]  # fmt: skip
-        tuner = tune.Tuner(
-            run,
-            param_space={"trial": tune.grid_search(trials)},
-            tune_config=tune.TuneConfig(metric=metric, mode=mode),
-            run_config=tune.RunConfig(name="sweep", storage_path=str(experiment), verbose=1),
-        )
-    results = tuner.fit()
-    errors = results.errors
-    ray.shutdown()
-    report(out, metric, base)
-    if errors:
-        raise UsageError(f"{len(errors)} trial(s) failed, the first with: {str(errors[0]).splitlines()[-1]}")
-    return 0
-
-
-def report(out: Path, metric: str, base: dict[str, Any]) -> None:
-    """Print and write the table of trials, the best configuration (rl-zoo3 YAML) and the learning curves."""
-    groups = collect(out)
-    if not groups:
-        print("no finished runs")
-        return
-    table = summarize(groups, metric)
-    print(format_table(table))
-    with (out / "trials.csv").open("w", newline="") as handle:
-        writer = csv.DictWriter(handle, fieldnames=list(table[0]))
-        writer.writeheader()
-        writer.writerows({**row, "hyperparams": json.dumps(row["hyperparams"])} for row in table)
-    best = trial_config(base, table[0]["hyperparams"], 0, out / "runs" / "best")
-    (out / "best.yml").write_text(zoo_yaml(best))
-    plot_curves(groups, out / "learning_curves.png", ("return_mean", "success_rate"))
-    print(f"best: {table[0]['config']} by {metric}; wrote {out / 'trials.csv'}, {out / 'best.yml'}, "
-          f"{out / 'learning_curves.png'}")  # fmt: skip

@@ -1,11 +1,13 @@
-"""Loading trained agents (a run directory or its model .zip) as policies, and the shipped ones."""
+"""Loading trained agents (a run directory or its model .zip) as policies, and the ones shipped with dwr-gym."""
 
 from __future__ import annotations
 
 from pathlib import Path
 from typing import Any
 
-PRETRAINED_DIR = Path(__file__).parent / "pretrained"
+from train.learning.runs import MODEL_FILE, AgentLoadError, find_run_dir, load_config
+
+PRETRAINED_DIR = Path(__file__).resolve().parent.parent / "pretrained"
 PRETRAINED = {
     "residual-ppo": PRETRAINED_DIR / "residual_ppo",
     "ppo": PRETRAINED_DIR / "ppo",
@@ -14,22 +16,11 @@ PRETRAINED = {
 }
 
 
-class AgentLoadError(Exception):
-    """The agent file is missing or unreadable."""
-
-
-def find_run_dir(path: Path) -> Path:
-    """The run directory holding config.yaml for a model file, a checkpoint or a run directory."""
-    for candidate in (path, *path.parents[:3]):
-        if candidate.is_dir() and (candidate / "config.yaml").is_file():
-            return candidate
-    raise AgentLoadError(f"agent {str(path)!r} is invalid: no config.yaml found beside it or above it")
-
-
 def load_agent(path: str | Path) -> tuple[str, Any]:
     """(label, policy) for a saved agent: a run directory (its model.zip) or a .zip inside a run."""
-    from train.config import ConfigError, algorithm_class
-    from train.training import MODEL_FILE, as_policy, load_config
+    from train.learning.config import ConfigError
+    from train.learning.hyperparams import algorithm_class
+    from train.learning.training import as_policy
 
     path = Path(path)
     if not path.exists():
@@ -37,7 +28,13 @@ def load_agent(path: str | Path) -> tuple[str, Any]:
     model_path = path / MODEL_FILE if path.is_dir() else path
     if not model_path.is_file():
         raise AgentLoadError(f"agent {str(path)!r} is invalid: no {MODEL_FILE} in it")
-    run_dir = find_run_dir(path if path.is_dir() else path.parent)
+    if model_path.suffix != ".zip":
+        raise AgentLoadError(f"agent {str(path)!r} is invalid: it is not a model .zip; expected a run directory "
+                             f"or a model .zip in one")  # fmt: skip
+    try:
+        run_dir = find_run_dir(path if path.is_dir() else path.parent)
+    except AgentLoadError:
+        raise AgentLoadError(f"agent {str(path)!r} is invalid: no config.yaml beside it or above it") from None
     try:
         config = load_config(run_dir)
         model = algorithm_class(config.algo).load(model_path, device="cpu")
@@ -46,18 +43,23 @@ def load_agent(path: str | Path) -> tuple[str, Any]:
     label = run_dir.name.replace("_", "-") if path.is_dir() else f"{run_dir.name}/{model_path.stem}"
     policy = as_policy(model, config)
     handover = load_extra(run_dir).get("handover")
-    if handover:  # a network that hands over to an analytic law for the finish (train.residual.HandoverPolicy)
-        from dwr_gym.params import EnvParams
-        from train.residual import make_handover_policy
+    if handover:  # a network that hands over to an analytic law for the finish (train.learning.handover.HandoverPolicy)
+        from train.learning.handover import make_handover_policy
 
         try:
             policy = make_handover_policy(
-                policy, handover["expert"], EnvParams.from_kwargs(**config.env_kwargs), handover["distance"],
+                policy, handover["expert"], config.env_params(), handover["distance"],
                 handover["time_fraction"], handover.get("speed_margin", 0.0),
             )  # fmt: skip
         except (KeyError, TypeError, ValueError) as error:
             raise AgentLoadError(f"agent {str(path)!r} has an invalid handover section: {error}") from error
     return label, policy
+
+
+def trained_env_id(path: str | Path) -> str:
+    """The env id an agent was trained on (its config.yaml's ``env_id``; v0 for runs that recorded none)."""
+    path = Path(path)
+    return load_config(find_run_dir(path if path.is_dir() else path.parent)).env_id
 
 
 def load_extra(run_dir: Path) -> dict[str, Any]:
@@ -71,3 +73,15 @@ def load_extra(run_dir: Path) -> dict[str, Any]:
 def pretrained_paths() -> dict[str, Path]:
     """The agents shipped with the package that are present in this installation."""
     return {name: path for name, path in PRETRAINED.items() if (path / "model.zip").is_file()}
+
+
+__all__ = [
+    "PRETRAINED",
+    "PRETRAINED_DIR",
+    "AgentLoadError",
+    "find_run_dir",
+    "load_agent",
+    "load_extra",
+    "pretrained_paths",
+    "trained_env_id",
+]

@@ -1,0 +1,75 @@
+"""``dwr-gym compare``: trained agents against the PTC expert and the other controllers; a table, CSV, JSON and
+figures."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from train.commands.shared import (
+    UsageError,
+    add_agents_argument,
+    add_scenario_arguments,
+    checked_env,
+    checked_optimum,
+    checked_selection,
+    load_agents,
+)
+
+
+def add_parser(sub: Any) -> None:
+    """The ``compare`` subcommand."""
+
+    p = sub.add_parser("compare", help="compare trained agents with the PTC expert and the other controllers")
+    add_scenario_arguments(p, "results/compare")
+    add_agents_argument(p, "compared with the controllers (default: the agents shipped with dwr-gym)")
+    p.set_defaults(func=run)  # fmt: skip
+
+
+def run(args: argparse.Namespace) -> int:
+    """Evaluate agents and controllers on the same scenarios; print the table, write CSV, JSON and plots."""
+    from pathlib import Path
+
+    env_id, env_kwargs = checked_env(args)
+    controllers = checked_selection(args)
+    try:
+        import matplotlib  # noqa: F401
+        import stable_baselines3  # noqa: F401
+    except ImportError as error:
+        raise UsageError(f'{error.name} is not installed: pip install "dwr-gym[train,plots]"') from error
+    from train.evaluation.compare import compare
+    from train.learning.agents import AgentLoadError, find_run_dir, pretrained_paths
+    from train.reporting.compare_figures import plot_learning_curves, plot_time_series, plot_trajectories
+    from train.reporting.results import write_results
+    from train.reporting.tables import EVAL_COLUMNS, print_blocks, table_notes
+
+    paths = [Path(p) for p in args.agents] if args.agents else list(pretrained_paths().values())
+    if not paths:
+        raise UsageError("no agents given and no pretrained agent is installed: pass --agents PATH")
+    agents = load_agents([str(p) for p in paths], env_id)
+    run_dirs = {}
+    for label, path in zip(agents, paths, strict=True):
+        try:
+            run_dirs[label] = find_run_dir(path if path.is_dir() else path.parent)
+        except AgentLoadError:
+            pass
+    rows, recorded, labels = compare(agents, controllers, args.scenarios, args.n, args.seed, env_kwargs,
+                                     progress=not args.no_progress, optimum=checked_optimum(args), T_cons=args.T_con)  # fmt: skip
+    rows = [{**row, "env_id": env_id} for row in rows]
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    figures = [out / "trajectories.png", out / "time_series.png"]
+    plot_trajectories(recorded, labels, figures[0])
+    plot_time_series(recorded, figures[1])
+    if run_dirs:
+        figures.append(out / "learning_curves.png")
+        plot_learning_curves(run_dirs, figures[2])
+    print(f"env: {env_id}")
+    print_blocks(rows, EVAL_COLUMNS)
+    if table_notes(rows):
+        print(table_notes(rows))
+    for path in write_results(rows, args.out, "comparison"):
+        print(f"wrote {path}")
+    for figure in figures:
+        print(f"wrote {figure}")
+    return 0

@@ -1,0 +1,45 @@
+"""``dwr-gym evaluate``: controllers and saved agents on named scenario sets; a table, CSV and JSON."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from train.commands.shared import (
+    add_agents_argument,
+    add_scenario_arguments,
+    checked_env,
+    checked_optimum,
+    checked_selection,
+    load_agents,
+)
+
+
+def add_parser(sub: Any) -> None:
+    """The ``evaluate`` subcommand."""
+    p = sub.add_parser("evaluate", help="evaluate controllers and agents on named scenario sets")
+    add_scenario_arguments(p, "results/evaluate")
+    add_agents_argument(p, "evaluated beside the controllers")
+    p.set_defaults(func=run)  # fmt: skip
+
+
+def run(args: argparse.Namespace) -> int:
+    """Evaluate controllers (and saved agents) on named scenario sets."""
+    env_id, env_kwargs = checked_env(args)
+    names = checked_selection(args)
+    policies: dict[str, Any] = {name: name for name in names}
+    policies.update(load_agents(args.agents, env_id))
+    from train.evaluation.evaluate import evaluate_sets
+    from train.reporting.results import write_results
+    from train.reporting.tables import EVAL_COLUMNS, print_blocks, table_notes
+
+    rows = evaluate_sets(policies, args.scenarios, args.n, args.seed, env_kwargs, progress=not args.no_progress,
+                          optimum=checked_optimum(args), T_cons=args.T_con)  # fmt: skip
+    rows = [{**row, "env_id": env_id} for row in rows]
+    print(f"env: {env_id}")
+    print_blocks(rows, EVAL_COLUMNS)
+    if table_notes(rows):
+        print(table_notes(rows))
+    for path in write_results(rows, args.out, "evaluation"):
+        print(f"wrote {path}")
+    return 0

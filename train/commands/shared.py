@@ -1,0 +1,231 @@
+"""What the commands share: the one-line usage error, argument types and checks, the scenario options,
+loading agents. It imports no command."""
+
+from __future__ import annotations
+
+import argparse
+import ast
+import json
+import sys
+from collections.abc import Sequence
+from typing import Any, NoReturn
+
+
+class UsageError(Exception):
+    """Bad user input: printed as one line, exit code 2."""
+
+
+class Parser(argparse.ArgumentParser):
+    """An ArgumentParser whose errors are one line (no usage block), exit code 2, like every other bad input.
+
+    Options must be spelled out: with argparse's prefix matching, ``--env`` would be read as ``--env-kwargs``.
+    Subcommands' parsers are of this class too, so the same holds for every command.
+    """
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("allow_abbrev", False)
+        super().__init__(*args, **kwargs)
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+def count(text: str) -> int:
+    """An argparse type for counts and seeds: accepts 1000, 1e3 and 1_000; the option's own check says what range
+    it allows, so that --n -5 and --n 0 get the same message."""
+    from dwr_gym.validation import as_int
+
+    try:
+        return as_int("value", text.replace("_", ""), -(10**12), 10**12, text=True)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"invalid value {text!r}: expected an integer, e.g. 1000 or 1e3") from None
+
+
+def check_writable_dir(flag: str, path: str) -> None:
+    """Create ``path`` if needed and check a file can be written in it, before any work starts."""
+    import tempfile
+    from pathlib import Path
+
+    out = Path(path)
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"{flag} {path!r} is invalid: it is a file, expected a directory")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=out):
+            pass
+    except OSError as error:
+        raise UsageError(f"{flag} {path!r} is not writable: {error.strerror or error}") from None
+
+
+def parse_env_kwargs(items: Sequence[str] | None) -> dict[str, Any]:
+    """Parse ``KEY=VALUE`` pairs; VALUE is read as JSON when it parses, else as a string."""
+    kwargs: dict[str, Any] = {}
+    for item in items or ():
+        key, sep, raw = item.partition("=")
+        if not sep or not key:
+            raise UsageError(f"--env-kwargs item {item!r} is invalid: expected KEY=VALUE, e.g. T_con=25")
+        try:
+            value = json.loads(raw)
+        except json.JSONDecodeError:
+            try:  # Python literals such as (1.5, 3.0) or None
+                value = ast.literal_eval(raw)
+            except (ValueError, SyntaxError, MemoryError, RecursionError):
+                value = _float_or_text(raw)
+        kwargs[key] = tuple(value) if isinstance(value, list) else value
+    return kwargs
+
+
+def _float_or_text(raw: str) -> float | str:
+    """``raw`` as a float where Python reads one (nan, inf, -inf, 1e3), so that the check names the number."""
+    try:
+        return float(raw)
+    except ValueError:
+        return raw
+
+
+def add_env_arguments(p: argparse.ArgumentParser, kwargs_example: str = "T_con=25 dt=0.02") -> None:
+    """``--env ID`` and ``--env-kwargs KEY=VALUE ...``: the env every command that makes one runs on."""
+    from train.env_ids import ENV_HELP, TASK_ENV_ID
+
+    p.add_argument("--env", default=TASK_ENV_ID, metavar="ID", help=f"{ENV_HELP} (default: {TASK_ENV_ID})")
+    p.add_argument("--env-kwargs", nargs="*", metavar="KEY=VALUE",
+                   help=f"env keywords on top of the env id's, e.g. {kwargs_example}")  # fmt: skip
+
+
+def add_agents_argument(p: argparse.ArgumentParser, what: str) -> None:
+    """``--agents PATH ...``, the one spelling of every command (``--agent PATH``, repeatable, means the same)."""
+    p.add_argument("--agents", "--agent", dest="agents", nargs="+", action="extend", metavar="PATH",
+                   help=f"saved agents, each a run directory or its model .zip: {what}")  # fmt: skip
+
+
+def checked_env(args: argparse.Namespace) -> tuple[str, dict[str, Any]]:
+    """``--env`` without a ``dwr_gym:`` prefix, and the env's keywords: the id's registered ones, then ``--env-kwargs``."""
+    from train.env_ids import check_env_id, env_keywords
+
+    try:
+        env_id = check_env_id(args.env)
+    except ValueError as error:
+        raise UsageError(str(error)) from None
+    kwargs = env_keywords(env_id, parse_env_kwargs(args.env_kwargs))
+    validated_env_params(kwargs)
+    return env_id, kwargs
+
+
+def validated_env_params(env_kwargs: dict[str, Any]) -> Any:
+    """EnvParams from keywords, turning a ValueError into a UsageError."""
+    from dwr_gym.disturbances import split_env_kwargs
+    from dwr_gym.params import EnvParams
+
+    try:
+        return EnvParams.from_kwargs(**split_env_kwargs(env_kwargs)[0])  # robot= and wheel_saturation= too
+    except ValueError as error:
+        raise UsageError(f"invalid env keyword: {error}") from error
+
+
+def checked_optimum(args: argparse.Namespace) -> str:
+    """``--optimum``, turned off with a notice when CasADi is not installed."""
+    from train.evaluation.optimum import casadi_available
+
+    if args.optimum != "none" and not casadi_available():
+        print('note: energy / optimal needs CasADi: pip install "dwr-gym[optimal]"; skipped', file=sys.stderr)
+        return "none"
+    return str(args.optimum)
+
+
+def checked_selection(args: argparse.Namespace) -> list[str]:
+    """The controllers of ``--controllers`` ('all' expands); validates them, ``--scenarios`` and ``--n``."""
+    from baselines.registry import CONTROLLER_NAMES, CONTROLLERS
+    from train.evaluation.disturbance_sets import ROBUSTNESS_SETS
+    from train.evaluation.optimum import casadi_available
+    from train.evaluation.scenarios import SCENARIO_SETS
+
+    if "all" in args.controllers:
+        names = [*CONTROLLERS, *(["optimal"] if casadi_available() else [])]
+    else:
+        names = args.controllers
+    for name in names:
+        if name not in CONTROLLER_NAMES:
+            raise UsageError(
+                f"--controllers {name!r} is invalid: expected 'all' or any of {', '.join(CONTROLLER_NAMES)}"
+            )
+        if name == "optimal" and not casadi_available():
+            raise UsageError('--controllers optimal needs CasADi: pip install "dwr-gym[optimal]"')
+    for T_con in args.T_con or ():
+        if not 0.0 < T_con <= 1e6:
+            raise UsageError(f"--T-con {T_con} is invalid: expected prescribed times in (0, 1e6] s")
+    for name in args.scenarios:
+        if name not in SCENARIO_SETS + ROBUSTNESS_SETS:
+            raise UsageError(
+                f"--scenarios {name!r} is invalid: expected any of {', '.join(SCENARIO_SETS + ROBUSTNESS_SETS)}"
+            )
+    if not 1 <= args.n <= 10**7:
+        raise UsageError(f"--n {args.n} is invalid: expected an integer in [1, 1e7]")
+    if not 0 <= args.seed < 2**32:
+        raise UsageError(f"--seed {args.seed} is invalid: expected an integer in [0, 2**32 - 1]")
+    check_writable_dir("--out", args.out)
+    return list(names)
+
+
+def add_scenario_arguments(p: argparse.ArgumentParser, out: str) -> None:
+    """The options shared by ``evaluate`` and ``compare``: the env, the controllers and the scenario sets."""
+    from baselines.registry import CONTROLLER_NAMES
+    from train.evaluation.disturbance_sets import ROBUSTNESS_SETS
+    from train.evaluation.optimum import OPTIMA
+    from train.evaluation.scenarios import SCENARIO_SETS
+
+    p.add_argument(
+        "--controllers",
+        nargs="+",
+        default=["all"],
+        metavar="NAME",
+        help=f"controllers: 'all' or any of {', '.join(CONTROLLER_NAMES)} "
+        "(default: all; 'optimal' needs the optimal extra)",
+    )
+    p.add_argument(
+        "--T-con",
+        type=float,
+        nargs="+",
+        metavar="SECONDS",
+        help="evaluate at each of these prescribed times, one block each; replaces the env's T_con_range "
+        "(default: the scenario's own: drawn per episode by v1's random set, the paper's for paper-fig5/7)",
+    )
+    p.add_argument("--optimum", choices=OPTIMA, default="pose",
+                   help="the optimum of the E/opt columns: minimum energy to the goal 'pose' (default), to the "
+                   "'position' only, or 'none'; solved once per episode with CasADi and cached")  # fmt: skip
+    p.add_argument(
+        "--scenarios",
+        nargs="+",
+        default=list(SCENARIO_SETS),
+        metavar="SET",
+        help=f"scenario sets: any of {', '.join(SCENARIO_SETS)} (default: these), or the imperfect robots' "
+        f"{', '.join(ROBUSTNESS_SETS)} (see 'Robustness' in the README)",
+    )
+    p.add_argument("--n", type=count, default=1000, help="number of random start poses for 'random' (default: 1000)")
+    p.add_argument("--seed", type=count, default=0, help="seed of the random scenario set (default: 0)")
+    p.add_argument("--out", default=out, help=f"output directory (default: {out})")
+    p.add_argument("--no-progress", action="store_true", help="no progress bars")  # fmt: skip
+    add_env_arguments(p)
+
+
+def load_agents(paths: Sequence[str] | None, env_id: str | None = None) -> dict[str, Any]:
+    """Saved agents by label (the file's stem); a missing or unreadable file is a UsageError.
+
+    With ``env_id``, a note on stderr names the agents trained on another env than the one they will run on.
+    """
+    if not paths:
+        return {}
+    from train.learning.agents import AgentLoadError, load_agent, trained_env_id
+
+    agents, elsewhere = {}, {}
+    for path in paths:
+        try:
+            label, agent = load_agent(path)
+            trained = trained_env_id(path)
+        except AgentLoadError as error:
+            raise UsageError(str(error)) from error
+        agents[label] = agent
+        if env_id is not None and trained != env_id:
+            elsewhere.setdefault(trained, []).append(label)
+    for trained, labels in elsewhere.items():
+        print(f"note: {', '.join(labels)} trained on {trained}, run here on {env_id}", file=sys.stderr)
+    return agents

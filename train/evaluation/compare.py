@@ -1,0 +1,34 @@
+"""``dwr-gym compare``'s measurements: trained agents against the PTC expert and the other laws, on the same
+scenarios, and the recorded Figure 5 rollouts that its figures draw."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from train.evaluation.evaluate import evaluate, evaluate_sets
+from train.evaluation.rollout import RolloutResult
+from train.evaluation.scenarios import make_scenario
+
+TRAJECTORY_SCENARIO = "paper-fig5"
+
+
+def compare(
+    agents: dict[str, Any],
+    controllers: list[str],
+    scenarios: list[str],
+    n: int,
+    seed: int,
+    env_kwargs: dict[str, Any] | None = None,
+    progress: bool = True,
+    optimum: str = "none",
+    T_cons: list[float] | None = None,
+) -> tuple[list[dict[str, Any]], dict[str, RolloutResult], tuple[str, ...]]:
+    """Evaluate agents and controllers on each scenario set (at each T_con).
+
+    Returns the rows, every policy's recorded rollouts from Figure 5's starts, and those starts' labels.
+    """
+    policies: dict[str, Any] = {**agents, **{name: name for name in controllers}}
+    rows = evaluate_sets(policies, scenarios, n, seed, env_kwargs or {}, progress, optimum=optimum, T_cons=T_cons)
+    trajectory_scenario = make_scenario(TRAJECTORY_SCENARIO, env_kwargs=env_kwargs)
+    recorded = evaluate(policies, trajectory_scenario, record=True)
+    return rows, recorded, trajectory_scenario.labels

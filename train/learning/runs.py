@@ -1,0 +1,204 @@
+"""The run directory of ``dwr-gym train``: its files, its config.yaml, its lock, its state, and resuming it.
+
+A run directory holds one run: ``config.yaml`` (the full configuration), ``model.zip`` (the newest
+checkpoint), ``best_model.zip``, ``evaluations.csv``, ``checkpoints/``, ``tb/`` and the state that a
+resumed run continues from.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+from train.learning.config import ConfigError, TrainConfig
+
+CONFIG_FILE = "config.yaml"
+MODEL_FILE = "model.zip"
+EVAL_FILE = "evaluations.csv"
+STATE_FILE = "run_state.json"
+RESUME_FILE = "resume_state.pkl"
+LOCK_FILE = ".lock"
+RUN_OUTPUTS = (MODEL_FILE, "best_model.zip", EVAL_FILE, CONFIG_FILE, STATE_FILE, RESUME_FILE, "replay_buffer.pkl",
+               "checkpoints", "tb")  # fmt: skip
+
+
+class AgentLoadError(Exception):
+    """The agent file is missing or unreadable."""
+
+
+class RunDirError(ConfigError):
+    """A run directory that cannot be used as asked (in use, or holding another run)."""
+
+
+def find_run_dir(path: Path) -> Path:
+    """The run directory holding config.yaml for a model file, a checkpoint or a run directory."""
+    for candidate in (path, *path.parents[:3]):
+        if candidate.is_dir() and (candidate / "config.yaml").is_file():
+            return candidate
+    raise AgentLoadError(f"agent {str(path)!r} is invalid: no config.yaml found beside it or above it")
+
+
+def save_config(config: TrainConfig, run_dir: Path, extra: dict[str, Any] | None = None) -> None:
+    """Write the full configuration beside the model (YAML), so any run can be repeated exactly."""
+    import yaml
+
+    import dwr_gym
+
+    data = {"config": config.to_dict(), "dwr_gym_version": dwr_gym.__version__, **(extra or {})}
+    (run_dir / CONFIG_FILE).write_text(yaml.safe_dump(json.loads(json.dumps(data, default=str)), sort_keys=False))
+
+
+def load_config(run_dir: Path) -> TrainConfig:
+    """The TrainConfig saved in a run directory."""
+    import yaml
+
+    path = run_dir / CONFIG_FILE
+    if not path.is_file():
+        raise ConfigError(f"{str(path)!r} not found: a trained agent needs the config.yaml written beside it")
+    data = yaml.safe_load(path.read_text())
+    config = data.get("config", data) if isinstance(data, dict) else None
+    if not isinstance(config, dict):
+        raise ConfigError(f"{str(path)!r} is not a dwr-gym training config")
+    config["env_kwargs"] = {k: tuple(v) if isinstance(v, list) else v for k, v in config.get("env_kwargs", {}).items()}
+    return TrainConfig.from_dict(config)
+
+
+def read_state(run_dir: Path) -> dict[str, Any]:
+    """The run's progress: timesteps and wall time of the last save, best score, whether it finished."""
+    path = run_dir / STATE_FILE
+    return json.loads(path.read_text()) if path.is_file() else {}
+
+
+def write_state(run_dir: Path, state: dict[str, Any]) -> None:
+    """Write run_state.json atomically (a kill leaves the old or the new file, never half of one)."""
+    tmp = run_dir / (STATE_FILE + ".tmp")
+    tmp.write_text(json.dumps(state, indent=2) + "\n")
+    tmp.replace(run_dir / STATE_FILE)
+
+
+def resume_command(run_dir: Path) -> str:
+    return f"dwr-gym train --resume {run_dir}"
+
+
+def checkpoint_steps(path: Path, state: dict[str, Any]) -> int | None:
+    """The step count of a checkpoint: from its name (algo_<steps>_steps.zip), or the run state for model.zip."""
+    import re
+
+    match = re.search(r"_(\d+)_steps\.zip$", path.name)
+    if match:
+        return int(match.group(1))
+    return int(state["timesteps"]) if path.name == MODEL_FILE and "timesteps" in state else None
+
+
+def resume_config(given: dict[str, Any]) -> TrainConfig:
+    """The saved config of the run to resume (``given['resume']``: its directory or its newest checkpoint)."""
+    target = Path(given["resume"])
+    if not target.exists():
+        raise ConfigError(f"--resume {str(target)!r} is invalid: no such run directory or checkpoint")
+    allowed = {"resume", "total_timesteps", "progress", "device"}
+    extra = sorted(set(given) - allowed)
+    if extra:
+        flags = ", ".join("--" + name.replace("_", "-") for name in extra)
+        raise ConfigError(f"--resume reuses the run's saved config; {flags} cannot be changed (only "
+                          f"--total-timesteps, --device, --no-progress)")  # fmt: skip
+    try:
+        run_dir = find_run_dir(target if target.is_dir() else target.parent)
+    except AgentLoadError as error:
+        raise ConfigError(str(error)) from None
+    state = read_state(run_dir)
+    if "timesteps" not in state or not (run_dir / MODEL_FILE).is_file():
+        raise ConfigError(f"--resume {str(target)!r} is invalid: {str(run_dir)!r} has no checkpoint to resume from")
+    checkpoint = target if target.is_file() else run_dir / MODEL_FILE
+    steps = checkpoint_steps(checkpoint, state)
+    if steps != state["timesteps"]:
+        raise ConfigError(
+            f"--resume {str(target)!r} is invalid: the run is at {state['timesteps']} steps and this checkpoint "
+            f"at {steps}; resuming from it would replace newer results. Resume with: {resume_command(run_dir)}"
+        )
+    config = load_config(run_dir)
+    for key in ("total_timesteps", "progress", "device"):
+        if key in given:
+            setattr(config, key, given[key])
+    config.resume, config.run_dir = str(checkpoint), str(run_dir)
+    config.validate()
+    if config.total_timesteps <= state["timesteps"]:
+        raise ConfigError(
+            f"--total-timesteps {config.total_timesteps} is invalid: the run has done {state['timesteps']} steps "
+            "already; give a larger budget to continue it"
+        )
+    return config
+
+
+class RunLock:
+    """An exclusive lock on a run directory, held for the whole run and released by the OS if the process dies."""
+
+    def __init__(self, run_dir: Path) -> None:
+        self.path = run_dir / LOCK_FILE
+        self.handle: Any = None
+
+    def acquire(self) -> None:
+        self.handle = self.path.open("a+")
+        try:
+            import fcntl
+
+            fcntl.flock(self.handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except ImportError:  # no fcntl (Windows): no lock
+            return
+        except OSError:
+            self.handle.seek(0)
+            owner = self.handle.read().strip() or "another process"
+            self.handle.close()
+            raise RunDirError(
+                f"--run-dir {str(self.path.parent)!r} is in use by a running training ({owner})"
+            ) from None
+        self.handle.seek(0)
+        self.handle.truncate()
+        self.handle.write(f"pid {os.getpid()}")
+        self.handle.flush()
+
+    def release(self) -> None:
+        if self.handle is not None:
+            self.handle.close()
+            self.handle = None
+
+
+def prepare_run_dir(config: TrainConfig) -> tuple[Path, RunLock]:
+    """The run directory, locked; refuses one holding another run unless resuming it or --overwrite."""
+    import shutil
+
+    run_dir = Path(config.run_dir or config.default_run_dir())
+    if run_dir.exists() and not run_dir.is_dir():
+        raise RunDirError(f"--run-dir {str(run_dir)!r} is invalid: it is a file, expected a directory")
+    try:
+        run_dir.mkdir(parents=True, exist_ok=True)
+        lock = RunLock(run_dir)
+        lock.acquire()
+    except OSError as error:
+        raise RunDirError(f"--run-dir {str(run_dir)!r} is not writable: {error.strerror or error}") from None
+    leftovers = sorted(name for name in RUN_OUTPUTS if (run_dir / name).exists())
+    if leftovers and config.resume is None:
+        if not config.overwrite:
+            lock.release()
+            raise RunDirError(
+                f"--run-dir {str(run_dir)!r} already holds a run ({', '.join(leftovers)}): continue it with "
+                f"{resume_command(run_dir)}, choose another --run-dir, or add --overwrite to delete it"
+            )
+        for name in leftovers:
+            path = run_dir / name
+            shutil.rmtree(path) if path.is_dir() else path.unlink()
+    return run_dir, lock
+
+
+def truncate_log(path: Path, steps: int) -> None:
+    """Drop evaluation rows logged after the checkpoint a run resumes from, so the log stays monotonic."""
+    if not path.is_file():
+        return
+    with path.open(newline="") as handle:
+        rows = list(csv.reader(handle))
+    kept = [rows[0], *(row for row in rows[1:] if row and int(float(row[0])) <= steps)]
+    if len(kept) != len(rows):
+        with path.open("w", newline="") as handle:
+            csv.writer(handle).writerows(kept)
