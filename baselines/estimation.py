@@ -38,6 +38,8 @@ from dwr_gym.validation import as_float
 
 #: The filter's state: the pose (x, y, psi), the additive disturbance (b_u, b_omega), the input gain a and coupling g.
 STATE_SIZE = 7
+#: A new delay replaces the assumed one when its score is below this fraction of the assumed one's.
+DELAY_SWITCH = 0.5
 #: What the robot does with a command when nothing disturbs it: (b_u, b_omega, a, g) = (0, 0, 1, 0).
 NOMINAL_RESPONSE = (0.0, 0.0, 1.0, 0.0)
 Array = NDArray[np.float64]
@@ -77,6 +79,11 @@ class PoseFilterParams(ControllerParams):
     """Guard: a is clipped to this range; its inverse scales the command."""
     coupling_limit: float = 6.0  # [1/m]
     """Guard: g is clipped to +-this."""
+    max_delay: int = 12  # [control periods]
+    """The input delays the filter tells apart, 0 to this: it predicts with the command the robot executes now and
+    returns the pose predicted for when the next command takes effect (a Smith predictor); 0 assumes none."""
+    delay_memory: float = 1.0  # [s]
+    """Time constant over which the heading's residuals decide the delay."""
 
     def validate(self) -> None:
         as_float("position_noise", self.position_noise, 0.0, 1e3, low_inclusive=False)
@@ -88,6 +95,9 @@ class PoseFilterParams(ControllerParams):
         set_(self, "disturbance_limit", _pair("disturbance_limit", self.disturbance_limit, 0.0, 1e3))
         for name in ("gain_rate", "coupling_rate", "gain_prior", "coupling_prior", "coupling_limit"):
             as_float(name, getattr(self, name), 0.0, 1e3)
+        if isinstance(self.max_delay, bool) or not isinstance(self.max_delay, (int, np.integer)) or not 0 <= self.max_delay <= 100:
+            raise ValueError(f"max_delay={self.max_delay!r} is invalid: expected an integer in [0, 100] (control periods)")
+        as_float("delay_memory", self.delay_memory, 0.0, 1e6, low_inclusive=False)
         low, high = _pair("gain_range", self.gain_range, 1e-3, 1e3)
         if not low <= 1.0 <= high:
             raise ValueError(f"gain_range={self.gain_range!r} is invalid: expected (low, high) with low <= 1 <= high")
@@ -212,7 +222,13 @@ class PoseFilter:
     """The filter's estimate for N robots, kept between control periods.
 
     Call :meth:`update` once per control period with what the robots measured and what they were commanded in
-    the period before (the command the policy sent, within the limits); it returns the estimated pose (N, 3).
+    the period before (the command the policy sent, within the limits); it returns the pose (N, 3) to act on.
+
+    The input delay is told apart online: for each delay of 0 to ``max_delay`` periods, the heading change between
+    two fresh measurements is compared with the turn the command of that many periods before would have made, and
+    the squared differences are averaged over ``delay_memory``; the delay that explains the turns best (by a margin,
+    so that noise does not toggle it) is the one the prediction uses, and the returned pose is the estimate carried
+    forward through the commands already sent but not yet executed. Without delay this is the plain filter.
     """
 
     def __init__(self, params: PoseFilterParams | None = None, dt: float = 0.05, **kwargs: Any) -> None:
@@ -220,10 +236,21 @@ class PoseFilter:
         self.dt = as_float("dt", dt, 0.0, 1e3, low_inclusive=False)
         self._process = self.params.process_covariance(self.dt)
         self._measurement = self.params.measurement_covariance()
-        self.mean: Array = np.zeros((0, STATE_SIZE))
-        self.covariance: Array = np.zeros((0, STATE_SIZE, STATE_SIZE))
-        self._started = np.zeros(0, dtype=bool)
-        self._last_measured: Array = np.zeros((0, 3))
+        self._forget = float(np.exp(-self.dt / self.params.delay_memory))
+        self._resize(0)
+
+    def _resize(self, n: int) -> None:
+        depth = self.params.max_delay + 1
+        self.mean: Array = np.zeros((n, STATE_SIZE))
+        self.covariance: Array = np.zeros((n, STATE_SIZE, STATE_SIZE))
+        self._started = np.zeros(n, dtype=bool)
+        self._last_measured: Array = np.full((n, 3), np.nan)
+        self._history: Array = np.zeros((n, depth, 2))  # the commands of the last periods, oldest first
+        self._scores: Array = np.zeros((n, depth))  # how badly each delay explains the recent turns
+        self._last_turned: Array = np.full(n, np.nan)  # the last measured heading change (NaN: none)
+        self._last_predicted: Array = np.zeros((n, depth))  # the heading changes each delay predicted for it
+        self.delay = np.zeros(n, dtype=np.int64)
+        """The input delay [control periods] each robot's estimate assumes."""
 
     def reset(self, mask: ArrayLike | None = None) -> None:
         """Forget the estimate of the robots in ``mask`` (all without one): their next measurement starts anew."""
@@ -238,23 +265,67 @@ class PoseFilter:
         return self.mean[:, 3:]
 
     def update(self, measured: Array, commanded: Array) -> Array:
-        """Predict with ``commanded`` (N, 2) [m/s, rad/s], the commands of the last period, then correct with
-        ``measured`` (N, 3) unless it repeats the last measurement exactly; returns the estimated pose (N, 3)."""
+        """Predict with the command the robots executed (``commanded`` (N, 2) [m/s, rad/s] is the one sent last
+        period), correct with ``measured`` (N, 3) unless it repeats the last measurement exactly; returns the pose
+        (N, 3) at which the next command will take effect."""
         n = measured.shape[0]
         if self.mean.shape[0] != n:
-            self.mean, self.covariance = np.zeros((n, STATE_SIZE)), np.zeros((n, STATE_SIZE, STATE_SIZE))
-            self._started, self._last_measured = np.zeros(n, dtype=bool), np.full((n, 3), np.nan)
+            self._resize(n)
         fresh = ~self._started
-        mean, covariance = predict(self.mean, self.covariance, commanded[:, 0], commanded[:, 1], self.dt, self._process)
+        depth = self._history.shape[1]
+        self._history = np.concatenate([self._history[:, 1:], commanded[:, None, :]], axis=1)
+        self._history[fresh] = 0.0
+        self._history[fresh, -1] = commanded[fresh]
         valid = np.any(measured != self._last_measured, axis=1)
+        if depth > 1:
+            self._identify_delay(measured, valid & ~fresh)
+        executed = self._history[np.arange(n), depth - 1 - self.delay]
+        mean, covariance = predict(self.mean, self.covariance, executed[:, 0], executed[:, 1], self.dt, self._process)
         mean, covariance = correct(mean, covariance, measured, valid, self._measurement)
         self.params.clip(mean)
         if fresh.any():  # a new episode starts from its first measurement and the response's prior
             mean[fresh] = np.concatenate([measured[fresh], np.tile(NOMINAL_RESPONSE, (int(fresh.sum()), 1))], axis=1)
             covariance[fresh] = self.params.initial_covariance()
+            self._scores[fresh] = 0.0
+            self._last_turned[fresh] = np.nan
+            self.delay[fresh] = 0
         self.mean, self.covariance, self._last_measured = mean, covariance, measured.copy()
         self._started[:] = True
-        return self.mean[:, :3].copy()
+        return self.ahead()
+
+    def _identify_delay(self, measured: Array, valid: NDArray[np.bool_]) -> None:
+        """Score each delay by how well the change of the commands it assumes explains the change of the measured
+        turn rate (second differences of the heading: a disturbance that varies slowly, or a response the filter
+        has not learnt yet, cancels out; only the commands' own changes are evidence)."""
+        n, depth = self._history.shape[:2]
+        pair = valid & np.all(np.isfinite(self._last_measured), axis=1)
+        turned = np.full(n, np.nan)
+        turned[pair] = model.wrap_angle(measured[pair, 2] - self._last_measured[pair, 2])
+        history = self._history[:, ::-1].reshape(-1, 2)  # per robot, delay 0 first
+        _, omega = robot_velocities(history[:, 0], history[:, 1], np.repeat(self.mean[:, 3:], depth, axis=0))
+        predicted = self.dt * omega.reshape(n, depth)
+        both = pair & np.isfinite(self._last_turned)
+        if both.any():
+            residual = (turned[both] - self._last_turned[both])[:, None] - (predicted[both] - self._last_predicted[both])
+            scores = self._forget * self._scores[both] + residual**2
+            self._scores[both] = scores
+            rows = np.arange(scores.shape[0])
+            best, current = np.argmin(scores, axis=1), self.delay[both]
+            better = scores[rows, best] < DELAY_SWITCH * scores[rows, current]
+            self.delay[both] = np.where(better, best, current)
+        self._last_turned, self._last_predicted = turned, predicted
+
+    def ahead(self) -> Array:
+        """The estimated pose carried forward through the commands sent but not yet executed (its delay's)."""
+        pose = self.mean[:, :3].copy()
+        depth = self._history.shape[1]
+        for lag in range(int(self.delay.max(initial=0)), 0, -1):
+            moving = self.delay >= lag
+            command = self._history[moving, depth - lag]
+            u, omega = robot_velocities(command[:, 0], command[:, 1], self.mean[moving, 3:])
+            x, y, psi = model.unicycle_step_exact(pose[moving, 0], pose[moving, 1], pose[moving, 2], u, omega, self.dt)
+            pose[moving] = np.stack([x, y, psi], axis=1)
+        return pose
 
 
 class FilteredPolicy:

@@ -64,7 +64,7 @@ def casadi_step_exact(state: Any, command: Any, h: Any) -> Any:
     )
 
 
-@lru_cache(maxsize=32)
+@lru_cache(maxsize=64)
 def minimum_energy_solver(intervals: int, max_iter: int = 1000, tol: float = 1e-10, response: bool = False) -> Any:
     """The IPOPT solver of the multiple-shooting problem with ``intervals`` held commands (built once, cached).
 
@@ -147,6 +147,7 @@ def solve_minimum_energy(
     warm_start: NDArray[np.float64] | None = None,
     guesses: int = 2,
     response: tuple[float, float, float, float] | None = None,
+    pad_to: int = 1,
 ) -> Plan:
     """The minimum-energy plan from ``start`` (goal frame: goal at the origin, heading 0) to the goal.
 
@@ -162,6 +163,8 @@ def solve_minimum_energy(
 
     With ``response`` (b_u, b_omega, a, g) the robot does (a u + b_u, a omega + g u + b_omega) with the planned
     commands (u, omega), which stay within the limits; the plan's energy is that of the robot's velocities.
+    ``pad_to`` solves a problem of the next multiple of ``pad_to`` intervals whose last ones hold the robot still
+    at the goal, and returns the plan without them: the same plan from fewer solvers to build and cache.
     """
     h = dt * hold_steps
     if intervals is None:
@@ -179,6 +182,8 @@ def solve_minimum_energy(
             f"the robot needs at least {smallest:.4g} s at u_max={u_max:g} m/s, omega_max={omega_max:g} rad/s "
             f"(dt={dt:g} s); expected T_con >= {smallest:.4g}"
         )
+    planned = intervals
+    intervals = -(-intervals // pad_to) * pad_to  # the next multiple of pad_to
     solver = minimum_energy_solver(intervals, response=response is not None)
     parameters = h if response is None else [h, *response]
     n_states = 3 * (intervals + 1)
@@ -188,6 +193,12 @@ def solve_minimum_energy(
     lower[n_states::2], upper[n_states::2] = -u_max, u_max
     lower[n_states + 1 :: 2], upper[n_states + 1 :: 2] = -omega_max, omega_max
     lower[n_states : n_states + 2 * frozen] = upper[n_states : n_states + 2 * frozen] = 0.0
+    if response is not None:  # held still the robot moves with its disturbance: the padding commands cancel it
+        b_u, b_w, a, g = response
+        padding_command = np.tile([-b_u / a, (-b_w + g * b_u / a) / a], intervals - planned)
+    else:
+        padding_command = np.zeros(2 * (intervals - planned))
+    lower[n_states + 2 * planned :] = upper[n_states + 2 * planned :] = padding_command
 
     candidates: list[tuple[NDArray[np.float64], float | None]] = []
     if warm_start is not None:
@@ -198,7 +209,12 @@ def solve_minimum_energy(
         targets.append(math.copysign(2.0 * math.pi, start[2]))
     for target in targets:
         for reverse in (False, True)[:guesses]:
-            candidates.append((frozen_guess(start, intervals, frozen, h, target, reverse), target if heading else None))
+            guess = frozen_guess(start, planned, frozen, h, target, reverse)
+            if intervals > planned:  # the padding: the robot at the goal, holding still
+                states, commands = guess[: 3 * (planned + 1)], guess[3 * (planned + 1) :]
+                goal = np.tile(states[-3:], intervals - planned)
+                guess = np.concatenate([states, goal, commands, padding_command])
+            candidates.append((guess, target if heading else None))
     best: Plan | None = None
     began = time.perf_counter()
     iterations = 0
@@ -219,7 +235,8 @@ def solve_minimum_energy(
             f"IPOPT found no plan from start={tuple(round(v, 4) for v in start)} in {intervals * h:g} s "
             f"(last status: {solver.stats()['return_status']})"
         )
-    return Plan(best.commands, best.states, h, best.energy, iterations, time.perf_counter() - began, best.solution)
+    elapsed = time.perf_counter() - began
+    return Plan(best.commands[:planned], best.states[: planned + 1], h, best.energy, iterations, elapsed, best.solution)
 
 
 def frozen_guess(

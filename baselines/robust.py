@@ -53,6 +53,8 @@ CRUISE, FINISH = 0, 1
 FINISH_LAWS: tuple[str, ...] = ("pt-astolfi", "ptc")
 #: A plan (or re-plan) has at least this many intervals; with less time left the finish law takes over.
 MIN_PLAN_INTERVALS = 4
+#: Plans are solved on problems of a multiple of this many intervals (fewer solvers to build; see solve_minimum_energy).
+PAD_TO = 8
 #: Tries of a plan, each with 1.3 times the time of the one before, before the finish law takes over.
 PLAN_ATTEMPTS = 3
 
@@ -263,7 +265,8 @@ class RobustPTController(Controller):
             least = least_arrival_time(start, max(reach[0], 1e-3), max(reach[1], 1e-3), True)
             left = max(p.plan_arrival * T_con[i] - step[i] * p.dt, 1.1 * least, MIN_PLAN_INTERVALS * h)
             jobs[i] = {"start": start, "arrival_time": left, "dt": p.dt, "u_max": p.u_max, "omega_max": p.omega_max,
-                       "heading": True, "hold_steps": p.hold_steps, "response": tuple(float(v) for v in response)}  # fmt: skip
+                       "heading": True, "hold_steps": p.hold_steps, "response": tuple(float(v) for v in response),
+                       "pad_to": PAD_TO}  # fmt: skip
         for attempt in range(PLAN_ATTEMPTS):
             if not jobs:
                 break
