@@ -95,8 +95,14 @@ class PoseFilterParams(ControllerParams):
         set_(self, "disturbance_limit", _pair("disturbance_limit", self.disturbance_limit, 0.0, 1e3))
         for name in ("gain_rate", "coupling_rate", "gain_prior", "coupling_prior", "coupling_limit"):
             as_float(name, getattr(self, name), 0.0, 1e3)
-        if isinstance(self.max_delay, bool) or not isinstance(self.max_delay, (int, np.integer)) or not 0 <= self.max_delay <= 100:
-            raise ValueError(f"max_delay={self.max_delay!r} is invalid: expected an integer in [0, 100] (control periods)")
+        if (
+            isinstance(self.max_delay, bool)
+            or not isinstance(self.max_delay, (int, np.integer))
+            or not 0 <= self.max_delay <= 100
+        ):
+            raise ValueError(
+                f"max_delay={self.max_delay!r} is invalid: expected an integer in [0, 100] (control periods)"
+            )
         as_float("delay_memory", self.delay_memory, 0.0, 1e6, low_inclusive=False)
         low, high = _pair("gain_range", self.gain_range, 1e-3, 1e3)
         if not low <= 1.0 <= high:
@@ -170,7 +176,7 @@ def predict(
     ``mean`` (N, 7), ``covariance`` (N, 7, 7), commands (N,), ``process`` Q (7, 7). The Jacobian is that of
     the chord along the mid-heading (exact for the arc up to terms in (omega dt)^2).
     """
-    x, y, psi, b_u, b_w, a, g = mean.T
+    x, y, psi = mean[:, 0], mean[:, 1], mean[:, 2]
     u_c, w_c = linear_velocity, angular_velocity
     u, w = robot_velocities(u_c, w_c, mean[:, 3:])
     new_x, new_y, new_psi = model.unicycle_step_exact(x, y, psi, u, w, dt)
@@ -215,7 +221,9 @@ def measured_pose(inputs: ControllerInput) -> Array:
 def with_pose(inputs: ControllerInput, pose: Array) -> ControllerInput:
     """``inputs`` with its distance, azimuth and heading those of the goal-frame ``pose`` (N, 3)."""
     x, y = pose[:, 0], pose[:, 1]
-    return inputs._replace(distance=model.distance(x, y), azimuth=model.azimuth(x, y), heading=model.wrap_angle(pose[:, 2]))
+    return inputs._replace(
+        distance=model.distance(x, y), azimuth=model.azimuth(x, y), heading=model.wrap_angle(pose[:, 2])
+    )
 
 
 class PoseFilter:
@@ -306,7 +314,9 @@ class PoseFilter:
         predicted = self.dt * omega.reshape(n, depth)
         both = pair & np.isfinite(self._last_turned)
         if both.any():
-            residual = (turned[both] - self._last_turned[both])[:, None] - (predicted[both] - self._last_predicted[both])
+            residual = (turned[both] - self._last_turned[both])[:, None] - (
+                predicted[both] - self._last_predicted[both]
+            )
             scores = self._forget * self._scores[both] + residual**2
             self._scores[both] = scores
             rows = np.arange(scores.shape[0])

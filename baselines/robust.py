@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from baselines.base import Controller, ControllerInput, ControllerParams, prescribed_time
+from baselines.base import K_MAX, Controller, ControllerInput, ControllerParams, prescribed_time
 from baselines.estimation import (
     NOMINAL_RESPONSE,
     PoseFilter,
@@ -49,7 +49,7 @@ from dwr_gym import model
 from dwr_gym.model import FloatArray
 from dwr_gym.validation import as_bool, as_choice, as_float, as_int
 
-CRUISE, FINISH = 0, 1
+CRUISE, FINISH, LEARNED = 0, 1, 2
 FINISH_LAWS: tuple[str, ...] = ("pt-astolfi", "ptc")
 #: A plan (or re-plan) has at least this many intervals; with less time left the finish law takes over.
 MIN_PLAN_INTERVALS = 4
@@ -79,6 +79,10 @@ class RobustPTParams(ControllerParams):
     tube: float = 0.05  # [m]
     """Re-plan when the estimated position is further than this from the plan's (or the plan ended short)."""
     max_replans: int = 20
+    near_goal: float = 0.1  # [m]
+    """Re-plans from within this distance of the goal aim at its position alone: a plan that must also turn to the
+    goal heading in the last centimetres and second swings the robot to and fro (it arrives with the heading it has,
+    which the plans up to there made close to the goal's)."""
     """Re-plans per episode; after them a robot that leaves the tube is handed to the finish law."""
     k_along: float = 1.0  # [1/s]
     k_lateral: float = 4.0  # [1/m^2]
@@ -101,6 +105,12 @@ class RobustPTParams(ControllerParams):
     """Correct the command by the robot's estimated response (a disturbance observer; needs ``estimator``)."""
     workers: int = 0
     """Processes that solve a batch of plans in parallel; 0 uses every core (at most 8), 1 none."""
+    k: float = K_MAX
+    """The env's arcsine gain of eq. (6), for the observation a learned cruise reads."""
+    handover_time: float = 0.7
+    """With a learned cruise: the planner takes over once t > handover_time * T_con ..."""
+    handover_margin: float = 1.5
+    """... or once the time left is under handover_margin times the straight-line time d / u_max (behind)."""
 
     def validate(self) -> None:
         for name in ("T_con", "dt", "u_max", "omega_max"):
@@ -111,6 +121,7 @@ class RobustPTParams(ControllerParams):
         as_int("hold_steps", self.hold_steps, 1, 10_000)
         as_float("tube", self.tube, 0.0, 1e3, low_inclusive=False)
         as_int("max_replans", self.max_replans, 0, 1_000)
+        as_float("near_goal", self.near_goal, 0.0, 1e3)
         for name in ("k_along", "k_lateral", "k_heading", "k_rho"):
             as_float(name, getattr(self, name), 0.0, 1e9, low_inclusive=False)
         as_float("k_beta", self.k_beta, -1e9, 0.0, high_inclusive=False)
@@ -122,6 +133,9 @@ class RobustPTParams(ControllerParams):
             raise ValueError(f"estimator={self.estimator!r} is invalid: expected PoseFilterParams or None")
         as_bool("cancel_disturbance", self.cancel_disturbance)
         as_int("workers", self.workers, 0, 256)
+        as_float("k", self.k, 0.0, K_MAX)
+        as_float("handover_time", self.handover_time, 0.0, 1.0, low_inclusive=False)
+        as_float("handover_margin", self.handover_margin, 0.0, 1e6)
 
 
 def tracking_commands(
@@ -146,8 +160,12 @@ class RobustPTController(Controller):
 
     name = "robust-pt"
 
-    def __init__(self, params: RobustPTParams | None = None, **kwargs: Any) -> None:
+    def __init__(self, params: RobustPTParams | None = None, cruise: Any = None, **kwargs: Any) -> None:
         self.params: RobustPTParams = params if params is not None else RobustPTParams.from_kwargs(**kwargs)
+        self.cruise = cruise
+        """A learned cruise (anything with stable-baselines3's ``predict`` on the env's observations, e.g. a network
+        cloned by train.learning.robust_dagger) that drives on the estimate until the planner takes over; None: plan
+        from the start."""
         p = self.params
         self._pool: Any = None
         if p.plan:
@@ -187,7 +205,7 @@ class RobustPTController(Controller):
         if mask is not None and np.shape(index) != (self._n,):
             return
         self._last_step[index] = -1
-        self._phase[index] = CRUISE if self.params.plan else FINISH
+        self._phase[index] = LEARNED if self.cruise is not None else CRUISE if self.params.plan else FINISH
         self._planned[index] = False
         self._replans[index] = 0
         self._direction[index] = 0.0
@@ -216,11 +234,14 @@ class RobustPTController(Controller):
         pose = measured if self._filter is None else self._filter.update(measured, self._command)
         estimate = with_pose(inputs, pose)
 
+        u, omega = np.zeros(n), np.zeros(n)
+        learned = (self._phase == LEARNED) & ~self._frozen
+        if learned.any():
+            self._learned_cruise(np.flatnonzero(learned), estimate, T_con, u, omega)
         cruise = (self._phase == CRUISE) & ~self._frozen
         new = cruise & ~self._planned
         if new.any():
             self._plan(np.flatnonzero(new), pose, step, T_con)
-        u, omega = np.zeros(n), np.zeros(n)
         cruise = (self._phase == CRUISE) & ~self._frozen
         if cruise.any():
             index = np.flatnonzero(cruise)
@@ -247,7 +268,30 @@ class RobustPTController(Controller):
         self._command = np.nan_to_num(command)  # Guard: the filter's prediction must never see a NaN
         return self._command[:, 0].copy(), self._command[:, 1].copy()
 
-    def _plan(self, index: NDArray[np.intp], pose: NDArray[np.float64], step: NDArray[np.int64], T_con: NDArray[np.float64]) -> None:
+    def _learned_cruise(
+        self, index: NDArray[np.intp], estimate: ControllerInput, T_con: NDArray[np.float64], u: FloatArray, omega: FloatArray
+    ) -> None:
+        """The learned cruise's velocities for the robots ``index`` (into ``u``, ``omega``), until the planner takes over
+        (past handover_time * T_con, or behind schedule)."""
+        p = self.params
+        time, distance = np.asarray(estimate.time)[index], estimate.distance[index]
+        late = (time > p.handover_time * T_con[index]) | (T_con[index] - time < p.handover_margin * distance / p.u_max)
+        self._phase[index[late]] = CRUISE if p.plan else FINISH
+        keep = index[~late]
+        if keep.size:
+            d, alpha, psi = estimate.distance[keep], estimate.azimuth[keep], estimate.heading[keep]
+            T = T_con[keep]
+            obs = np.stack([d, np.cos(alpha), np.sin(alpha), np.cos(psi), np.sin(psi),
+                            model.orientation_error(alpha, psi, d, p.k), np.asarray(estimate.time)[keep] / T, T,
+                            np.asarray(estimate.initial_distance)[keep], np.asarray(estimate.initial_orientation_error)[keep]],
+                           axis=1).astype(np.float32)  # fmt: skip
+            actions, _ = self.cruise.predict(obs, deterministic=True)
+            velocities = np.clip(np.asarray(actions, dtype=np.float64).reshape(-1, 2), -1.0, 1.0) * self._limits
+            u[keep], omega[keep] = velocities[:, 0], velocities[:, 1]
+
+    def _plan(
+        self, index: NDArray[np.intp], pose: NDArray[np.float64], step: NDArray[np.int64], T_con: NDArray[np.float64]
+    ) -> None:
         """Plan the robots ``index`` from their estimated poses, with their estimated responses, to arrive at
         plan_arrival * T_con, or, with too little time left for that, as early as the limits allow: the margin is
         spent only as far as the robot is behind. A plan that proves infeasible (a failing wheel slows the robot more
@@ -262,10 +306,11 @@ class RobustPTController(Controller):
         for i, response in responses.items():
             start = (float(pose[i, 0]), float(pose[i, 1]), float(pose[i, 2]))
             reach = (response[2] * p.u_max - abs(response[0]), response[2] * p.omega_max - abs(response[1]))
-            least = least_arrival_time(start, max(reach[0], 1e-3), max(reach[1], 1e-3), True)
+            near = math.hypot(start[0], start[1]) < p.near_goal  # the last centimetres: the position alone
+            least = least_arrival_time(start, max(reach[0], 1e-3), max(reach[1], 1e-3), not near)
             left = max(p.plan_arrival * T_con[i] - step[i] * p.dt, 1.1 * least, MIN_PLAN_INTERVALS * h)
             jobs[i] = {"start": start, "arrival_time": left, "dt": p.dt, "u_max": p.u_max, "omega_max": p.omega_max,
-                       "heading": True, "hold_steps": p.hold_steps, "response": tuple(float(v) for v in response),
+                       "heading": not near, "hold_steps": p.hold_steps, "response": tuple(float(v) for v in response),
                        "pad_to": PAD_TO}  # fmt: skip
         for attempt in range(PLAN_ATTEMPTS):
             if not jobs:
@@ -315,12 +360,16 @@ class RobustPTController(Controller):
         start = self._states[index, interval]
         command = self._commands[index, interval]
         since = (offset - interval * p.hold_steps) * p.dt  # time into the interval [s]
-        x, y, psi = model.unicycle_step_exact(start[:, 0], start[:, 1], start[:, 2], command[:, 0], command[:, 1], since)
+        x, y, psi = model.unicycle_step_exact(
+            start[:, 0], start[:, 1], start[:, 2], command[:, 0], command[:, 1], since
+        )
         reference = np.stack([x, y, psi], axis=1)
         u, omega, error = tracking_commands(pose, reference, command, p)
         return u, omega, ended, error > p.tube
 
-    def _finish(self, index: NDArray[np.intp], inputs: ControllerInput, T_con: NDArray[np.float64]) -> tuple[FloatArray, FloatArray]:
+    def _finish(
+        self, index: NDArray[np.intp], inputs: ControllerInput, T_con: NDArray[np.float64]
+    ) -> tuple[FloatArray, FloatArray]:
         """Astolfi's law scaled to T = finish_arrival * T_con, with the reverse decision held by hysteresis (or PTC)."""
         p = self.params
         if self._ptc is not None:

@@ -113,7 +113,9 @@ class RandomPerturbation:
     and ``info``.
     """
 
-    def __init__(self, distribution: DisturbanceDistribution, drive: DifferentialDrive | None, params: EnvParams, n: int):
+    def __init__(
+        self, distribution: DisturbanceDistribution, drive: DifferentialDrive | None, params: EnvParams, n: int
+    ):
         if distribution.delay >= params.max_episode_steps:
             raise ValueError(f"DisturbanceDistribution.delay={distribution.delay} is invalid: expected an integer in "
                              f"[0, {params.max_episode_steps - 1}], shorter than the episode")  # fmt: skip

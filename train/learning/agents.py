@@ -53,6 +53,14 @@ def load_agent(path: str | Path) -> tuple[str, Any]:
             )  # fmt: skip
         except (KeyError, TypeError, ValueError) as error:
             raise AgentLoadError(f"agent {str(path)!r} has an invalid handover section: {error}") from error
+    robust = load_extra(run_dir).get("robust_agent")
+    if robust is not None:  # robust-pt whose cruise is the network (train.learning.robust_dagger)
+        from train.learning.robust_dagger import agent
+
+        try:
+            policy = agent(policy, config.env_params(), **robust)
+        except (TypeError, ValueError, ImportError) as error:
+            raise AgentLoadError(f"agent {str(path)!r} has an invalid robust_agent section: {error}") from error
     return label, policy
 
 
