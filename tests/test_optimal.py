@@ -209,3 +209,18 @@ def test_a_second_reset_without_a_step_gets_a_new_plan_and_a_finished_robot_no_m
     for _ in range(5):
         expert.predict(clipped)
     assert controller.solves <= solves + 1  # no re-planning on every call
+
+
+def test_each_episode_is_measured_against_the_optimum_of_its_own_T_con() -> None:
+    """A set with T_con drawn per episode (as v1 draws it): every episode's optimum equals a single solve at
+    that episode's T_con, and not the one at the env's nominal T_con."""
+    kwargs = {**dwr_gym.V1_DEFAULTS, "T_con_range": (3.0, 12.0), "start_distance": (0.3, 1.0), "dt": 0.25}
+    scenario = make_scenario("random", n=4, seed=2, env_kwargs=kwargs)
+    assert scenario.T_cons is not None and np.ptp(scenario.T_cons) > 2.0
+    result = evaluate({"ptc": "ptc"}, scenario, optimum="position")["ptc"]
+    limits = {"dt": 0.25, "u_max": 0.5, "omega_max": 2.0, "heading": False}
+    for i, (start, T_con) in enumerate(zip(scenario.starts, scenario.T_cons, strict=True)):  # goals at the origin
+        own = solve_minimum_energy(tuple(start), float(T_con), **limits).energy  # type: ignore[arg-type]
+        nominal = solve_minimum_energy(tuple(start), 20.0, **limits).energy  # type: ignore[arg-type]
+        assert result.optimal_energy[i] == pytest.approx(own, rel=1e-6)  # type: ignore[index]
+        assert abs(own - nominal) > 0.2 * own  # so that using the nominal T_con would be seen
