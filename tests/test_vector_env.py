@@ -222,15 +222,44 @@ def test_sb3_adapter_conventions_and_ppo_learns_on_the_native_batch() -> None:
     assert venv.get_attr("params")[0].T_con == 2.0
 
     model = PPO("MlpPolicy", make_sb3_vec_env(num_envs=8, seed=1, **KWARGS), n_steps=32, batch_size=64, seed=0)
-    before = [p.detach().clone() for p in model.policy.parameters()]
     model.learn(total_timesteps=512)
     assert model.num_timesteps >= 512
     # episode statistics without a VecMonitor: SB3 logs rollout/ep_rew_mean and ep_len_mean from them
     assert len(model.ep_info_buffer) > 0 and all(0 < e["l"] <= 30 for e in model.ep_info_buffer)
     assert len(model.ep_success_buffer) == len(model.ep_info_buffer)
-    assert any(
-        not np.allclose(a.numpy(), b.detach().numpy()) for a, b in zip(before, model.policy.parameters(), strict=True)
-    )
+
+
+def evaluation(model: Any, episodes: int = 64, seed: int = 100) -> tuple[float, float]:
+    """(mean return, success rate) of the deterministic policy on a fixed seeded set of episodes."""
+    env = gym.make_vec(ENV_ID, num_envs=episodes, **KWARGS)
+    obs, _ = env.reset(seed=seed)
+    returns, done, success = np.zeros(episodes), np.zeros(episodes, bool), np.zeros(episodes, bool)
+    while not done.all():
+        obs, rewards, terminated, truncated, info = env.step(model.predict(obs, deterministic=True)[0])
+        returns += np.where(done, 0.0, rewards)
+        success |= ~done & info["is_success"]
+        done |= terminated | truncated
+    return float(returns.mean()), float(success.mean())
+
+
+def test_ppo_learns_on_the_native_batch() -> None:
+    """4096 steps of PPO on the short task raise the evaluation return and success, for each of three seeds.
+
+    Measured (seeds 0, 1, 2): return -5.72 -> 7.30, -5.76 -> -3.68, -5.79 -> -3.86; success 0 -> 0.86, 0.31, 0.16."""
+    from stable_baselines3 import PPO
+
+    from dwr_gym.sb3 import make_sb3_vec_env
+
+    rises = []
+    for seed in range(3):
+        model = PPO("MlpPolicy", make_sb3_vec_env(num_envs=8, seed=1, **KWARGS), n_steps=32, batch_size=64,
+                    seed=seed, device="cpu")  # fmt: skip
+        before, success_before = evaluation(model)
+        model.learn(total_timesteps=4096)
+        after, success_after = evaluation(model)
+        assert success_before == 0.0 and success_after > 0.05, (seed, success_after)
+        rises.append(after - before)
+    assert min(rises) > 1.0 and np.mean(rises) > 3.0, rises
 
 
 def test_float32_mode_tracks_float64_and_keeps_its_dtype() -> None:
