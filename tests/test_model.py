@@ -171,3 +171,74 @@ def test_edge_states_are_finite(alpha_minus_psi: float) -> None:
         assert abs(e) <= model.MAX_ORIENTATION_ERROR + 1e-12
         assert np.isfinite(model.azimuth_rate(1.0, 0.0, -alpha_minus_psi, d))
         assert np.isfinite(model.orientation_error_rate(1.0, 1.0, 0.0, -alpha_minus_psi, d, K))
+
+
+# (function, scalar arguments, positions that may be arrays): each function broadcasts a float beside an array
+BROADCAST = [
+    (model.distance, (-0.3, 0.4), (0, 1)),
+    (model.azimuth, (-0.3, 0.4), (0, 1)),
+    (model.arcsine_term, (1.2, 0.7, K), (0, 1)),
+    (model.arcsine_term_rate, (1.2, -0.3, 0.7, 0.2, K), (0, 1, 2, 3)),
+    (model.azimuth_rate, (0.4, 1.2, -0.5, 0.7), (0, 1, 2, 3)),
+    (model.distance_rate, (0.4, 1.2, -0.5), (0, 1, 2)),
+    (model.orientation_error, (1.2, -0.5, 0.7, K), (0, 1, 2)),
+    (model.conventional_scaling, (5.0, 20.0), (0, 1)),
+    (model.conventional_scaling_power, (5.0, 20.0, 1, 1), (0, 1)),
+    (model.fractional_scaling, (5.0, 20.0, 12.0), (0, 1, 2)),
+    (model.unicycle_derivative, (0.9, 0.4, -0.3), (0, 1, 2)),
+    (model.unicycle_step_exact, (0.1, -0.2, 0.9, 0.4, 1.7, 0.05), (0, 1, 2, 3, 4)),
+    (model.velocity_constraint, (1.2, -0.5), (0, 1)),
+]
+
+
+@pytest.mark.parametrize(("function", "args", "positions"), BROADCAST, ids=[b[0].__name__ for b in BROADCAST])
+def test_a_float_beside_an_array_broadcasts(function: object, args: tuple, positions: tuple[int, ...]) -> None:
+    """ "Arrays of matching, broadcastable shapes": one argument an array of two robots, the others floats."""
+
+    def first_robot(values: object) -> list[float]:  # each output (or each of a tuple), at robot 0
+        outputs = values if isinstance(values, tuple) else (values,)
+        return [float(np.atleast_1d(v)[0]) for v in outputs]
+
+    scalar = first_robot(function(*args))  # type: ignore[operator]
+    for position in positions:
+        mixed = list(args)
+        mixed[position] = np.array([args[position], args[position] + 0.1])
+        result = first_robot(function(*mixed))  # type: ignore[operator]
+        np.testing.assert_allclose(result, scalar, rtol=1e-15, atol=1e-15, err_msg=str(position))
+
+
+@pytest.mark.parametrize("h", [0.2, 0.5, -1.0, 3.0])
+def test_sinc_beyond_the_series_is_sin_h_over_h(h: float) -> None:
+    assert model.sinc(h) == pytest.approx(math.sin(h) / h, rel=1e-15)
+    batch = model.sinc(np.array([0.05, h, 0.0]))
+    np.testing.assert_allclose(batch, [math.sin(0.05) / 0.05, math.sin(h) / h, 1.0], rtol=1e-15)
+    assert model.sinc(np.zeros(0)).shape == (0,)  # an empty batch is an empty batch
+
+
+def test_backstepping_delta_of_one_robot_matches_eq19() -> None:
+    for x in (-3.0, -0.2, 1e-3, 0.7, 3.5):
+        assert model.backstepping_delta(x) == pytest.approx((1 - math.cos(x)) / x, rel=1e-12)
+
+
+def test_scaling_functions_from_t0_and_their_default_caps() -> None:
+    assert model.conventional_scaling(8.0, 20.0, t0=3.0) == pytest.approx(20.0 / 15.0)  # T / (T + t0 - t)
+    assert model.conventional_scaling(3.0, 20.0, t0=3.0) == pytest.approx(1.0)  # 1 at t0
+    assert model.conventional_scaling_power(15.0, 20.0, 1, 1) == pytest.approx(16.0)  # (20 / 5)^2
+    assert model.conventional_scaling_power(18.0, 20.0, 2, 1) == pytest.approx(1000.0)  # (20 / 2)^3
+    assert model.conventional_scaling(20.0, 20.0) == pytest.approx(1e6, rel=1e-12)  # the documented default cap
+    assert model.conventional_scaling_power(20.0, 20.0, 1, 1) == pytest.approx(1e6, rel=1e-12)
+    assert model.fractional_scaling(20.0, 20.0, 20.0) == pytest.approx(1e6, rel=1e-12)
+
+
+def test_integrate_unicycle_defaults_to_one_exact_step() -> None:
+    args = (0.1, -0.2, 0.9, 0.4, 1.7, 0.05)
+    assert model.integrate_unicycle(*args) == model.unicycle_step_exact(*args)
+    batch = [np.array([v, v]) for v in args[:5]]
+    np.testing.assert_array_equal(model.integrate_unicycle(*batch, 0.05), model.unicycle_step_exact(*batch, 0.05))
+
+
+@pytest.mark.parametrize("integrator", ["exact", "euler", "rk4"])
+def test_turning_on_the_spot_moves_only_the_heading(integrator: str) -> None:
+    x, y, psi = model.integrate_unicycle(0.3, -0.4, 3.0, 0.0, 2.0, 0.25, integrator, 2)  # type: ignore[arg-type]
+    assert (x, y) == (0.3, -0.4)
+    assert psi == pytest.approx(3.0 + 0.5 - 2.0 * math.pi)  # wrapped to [-pi, pi)

@@ -1,0 +1,256 @@
+"""Mutation score of the test suite: mutmut over the env's mathematics, the controllers and the evaluation.
+
+    python benchmarks/mutation.py                       # every group, ~2-4 h of one core; writes the JSON
+    python benchmarks/mutation.py --groups model core   # some groups only (the others keep their last results)
+    python benchmarks/mutation.py --docs                # regenerate docs/testing.md from the JSON only
+
+Each group mutates some modules (mutmut's ``only_mutate`` globs, so a module split into several files stays
+covered) and runs a fast, targeted selection of the tests on each mutant: mutmut runs, per mutant, only
+the selected tests that executed the mutated function. The tests that run the command line in a subprocess
+are left out (a subprocess imports the unmutated package), as are the training runs (too slow per mutant).
+Each group works in its own copy of the project under ``--work`` (default ``/tmp/dwr-gym-mutation``), so
+the source tree is never touched.
+
+The score counts as killed what mutmut reports as killed or timeout, as not killed what survived or what
+no selected test executes, and leaves out the mutants listed in ``benchmarks/mutation_equivalent.json``
+(each with the reason it is equivalent: no test can tell it from the original). Results go to
+``benchmarks/results/mutation.json``; ``docs/testing.md`` is generated from that file.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "benchmarks" / "results" / "mutation.json"
+EQUIVALENT = ROOT / "benchmarks" / "mutation_equivalent.json"
+DOCS = ROOT / "docs" / "testing.md"
+COPIED = ("dwr_gym", "baselines", "train", "tests", "benchmarks", "pyproject.toml", "README.md", "docs")
+#: Tests never run on mutants: subprocesses import the unmutated package; training runs take minutes per mutant.
+DESELECTED = (
+    "not test_cli_with and not fresh_interpreter and not spawn and not learns and not imitate and not sac_her"
+    " and not end_to_end and not cloning_run"
+)
+
+#: group -> (the files it mutates, as mutmut globs; the tests run on its mutants)
+GROUPS: dict[str, tuple[list[str], list[str]]] = {
+    "model": (["dwr_gym/model.py"],
+              ["tests/test_model.py", "tests/test_paper_by_hand.py", "tests/test_golden.py", "tests/test_env.py"]),
+    "core": (["dwr_gym/core.py", "dwr_gym/core/*"],
+             ["tests/test_env.py", "tests/test_vector_env.py", "tests/test_golden.py", "tests/test_paper_by_hand.py",
+              "tests/test_prescribed_time.py", "tests/test_goal_env.py"]),
+    "disturbances": (["dwr_gym/disturbances.py"],
+                     ["tests/test_robustness.py", "tests/test_paper_by_hand.py"]),
+    "baselines": (["baselines/*"],
+                  ["tests/test_controllers.py", "tests/test_paper_by_hand.py", "tests/test_optimal.py",
+                   "tests/test_dagger.py"]),
+    "evaluation": (["train/evaluation.py", "train/evaluation/*"],
+                   ["tests/test_controllers.py", "tests/test_optimal.py", "tests/test_prescribed_time.py",
+                    "tests/test_robustness.py"]),
+}  # fmt: skip
+#: Groups whose module runs code at import (dwr_gym.model builds its torch-backed functions then): mutmut imports
+#: them anew for each mutant instead of forking after collection, which would keep the unmutated import.
+IMPORT_PER_MUTANT = {"model"}
+
+
+def mutmut_config(group: str) -> str:
+    """The [tool.mutmut] table of one group."""
+    globs, tests = GROUPS[group]
+    table = {
+        "source_paths": ["dwr_gym", "baselines", "train"],
+        "only_mutate": globs,
+        "also_copy": ["tests", "benchmarks", "README.md", "docs"],
+        "pytest_add_cli_args_test_selection": tests,
+        "pytest_add_cli_args": ["-p", "no:xdist", "-p", "no:cacheprovider", "-m", "not slow", "-k", DESELECTED,
+                                "-W", "ignore::DeprecationWarning"],
+        "timeout_multiplier": 5.0,
+        "forkserver_warmup": "none" if group in IMPORT_PER_MUTANT else "collect",
+    }  # fmt: skip
+    return "\n[tool.mutmut]\n" + "".join(f"{key} = {json.dumps(value)}\n" for key, value in table.items())
+
+
+def prepare(group: str, work: Path) -> Path:
+    """A fresh copy of the project for one group, with its mutmut configuration."""
+    target = work / group
+    if target.exists():
+        shutil.rmtree(target)
+    target.mkdir(parents=True)
+    ignore = shutil.ignore_patterns("__pycache__", "*.pyc", ".venv", "mutants", "results")
+    for name in COPIED:
+        source = ROOT / name
+        if source.is_dir():
+            shutil.copytree(source, target / name, ignore=ignore)
+        elif source.is_file():
+            shutil.copy2(source, target / name)
+    pyproject = (target / "pyproject.toml").read_text()
+    pyproject = re.sub(r"\n\[tool\.mutmut\].*?(?=\n\[|\Z)", "", pyproject, flags=re.S)
+    (target / "pyproject.toml").write_text(pyproject + mutmut_config(group))
+    return target
+
+
+def mutmut(directory: Path, *args: str, log: Path | None = None) -> str:
+    """Run mutmut in ``directory`` under nice, one torch/BLAS thread per process."""
+    command = ["nice", "-n", "10", str(Path(sys.executable).with_name("mutmut")), *args]
+    env = {**os.environ, "OMP_NUM_THREADS": "1", "MPLBACKEND": "Agg", "SDL_VIDEODRIVER": "dummy",
+           "SDL_AUDIODRIVER": "dummy", "PYTHONDONTWRITEBYTECODE": "1"}  # fmt: skip
+    if log is None:
+        return subprocess.run(command, cwd=directory, env=env, capture_output=True, text=True, check=False).stdout
+    with log.open("w") as handle:
+        subprocess.run(command, cwd=directory, env=env, stdout=handle, stderr=subprocess.STDOUT, check=False)
+    return ""
+
+
+STATUS = {1: "killed", 3: "killed", 0: "survived", 5: "no tests", 33: "no tests", 36: "timeout", -24: "timeout",
+          24: "timeout", 152: "timeout", 255: "timeout", None: "not checked", 34: "skipped"}  # fmt: skip
+
+
+def collect(group: str, directory: Path) -> list[dict[str, Any]]:
+    """Every mutant of the group: its name, file, status and (unless killed) its diff."""
+    mutants = []
+    for meta in sorted((directory / "mutants").rglob("*.py.meta")):
+        source = str(meta.relative_to(directory / "mutants"))[: -len(".meta")]
+        exit_codes = json.loads(meta.read_text())["exit_code_by_key"]
+        for name, code in sorted(exit_codes.items()):
+            mutants.append({"name": name, "file": source, "status": STATUS.get(code, "suspicious")})
+    for mutant in mutants:
+        if mutant["status"] not in ("killed", "timeout"):
+            mutant["diff"] = diff_lines(mutmut(directory, "show", mutant["name"]))
+    return mutants
+
+
+def diff_lines(show: str) -> list[str]:
+    """The changed lines of ``mutmut show``'s unified diff."""
+    return [line for line in show.splitlines() if line[:1] in "+-" and not line.startswith(("+++", "---"))]
+
+
+def mutant_key(mutant: dict[str, Any]) -> str:
+    """A key of a mutant that survives renumbering: its file, function and changed lines."""
+    function = mutant["name"].rsplit("__mutmut_", 1)[0].rsplit(".", 1)[-1]
+    return f"{mutant['file']}:{function}: " + " / ".join(line.strip() for line in mutant.get("diff", []))
+
+
+def score(mutants: list[dict[str, Any]], equivalent: dict[str, str]) -> dict[str, Any]:
+    """Counts and the score (killed / non-equivalent) of a list of mutants."""
+    counts: dict[str, int] = {}
+    for mutant in mutants:
+        mutant["equivalent"] = (
+            equivalent.get(mutant_key(mutant)) if mutant["status"] not in ("killed", "timeout") else None
+        )
+        status = "equivalent" if mutant["equivalent"] else mutant["status"]
+        counts[status] = counts.get(status, 0) + 1
+    killed = counts.get("killed", 0) + counts.get("timeout", 0)
+    relevant = len(mutants) - counts.get("equivalent", 0) - counts.get("not checked", 0)
+    return {"mutants": len(mutants), **dict(sorted(counts.items())), "non_equivalent": relevant,
+            "score": killed / relevant if relevant else float("nan")}  # fmt: skip
+
+
+def refresh_tests(directory: Path) -> None:
+    """Copy the current tests into a group's work copy and its mutants/ tree (for --recheck)."""
+    for target in (directory, directory / "mutants"):
+        shutil.rmtree(target / "tests")
+        shutil.copytree(ROOT / "tests", target / "tests", ignore=shutil.ignore_patterns("__pycache__"))
+
+
+def run(groups: list[str], work: Path, max_children: int, recheck: bool = False) -> None:
+    """Run mutmut on each group and store its mutants in the results JSON. With ``recheck``, only the mutants
+    not killed in the last run are tested again, against the current tests, in the last run's work copy."""
+    results = json.loads(RESULTS.read_text()) if RESULTS.is_file() else {"groups": {}}
+    for group in groups:
+        began = time.perf_counter()
+        log = work / f"{group}.log"
+        if recheck:
+            directory = work / group
+            refresh_tests(directory)
+            names = [m["name"] for m in results["groups"][group]["mutants"] if m["status"] not in ("killed", "timeout")]
+            print(f"{group}: rechecking {len(names)} mutants in {directory} (log {log})", flush=True)
+            mutmut(directory, "run", "--max-children", str(max_children), *names, log=log)
+        else:
+            directory = prepare(group, work)
+            print(f"{group}: mutmut in {directory} (log {log})", flush=True)
+            mutmut(directory, "run", "--max-children", str(max_children), log=log)
+        mutants = collect(group, directory)
+        if not mutants:
+            raise SystemExit(f"{group}: mutmut produced no mutants; see {log}")
+        minutes = (time.perf_counter() - began) / 60.0 + (results["groups"][group]["minutes"] if recheck else 0.0)
+        results["groups"][group] = {"files": GROUPS[group][0], "tests": GROUPS[group][1], "mutants": mutants,
+                                    "minutes": minutes, "max_children": max_children}  # fmt: skip
+        RESULTS.parent.mkdir(parents=True, exist_ok=True)
+        RESULTS.write_text(json.dumps(results, indent=1) + "\n")
+        print(f"{group}: {len(mutants)} mutants in {results['groups'][group]['minutes']:.1f} min", flush=True)
+
+
+def write_docs() -> None:
+    """docs/testing.md from the results JSON and the list of equivalent mutants."""
+    results = json.loads(RESULTS.read_text())
+    equivalent: dict[str, str] = json.loads(EQUIVALENT.read_text()) if EQUIVALENT.is_file() else {}
+    rows, survivors, everything = [], [], []
+    for group, data in results["groups"].items():
+        summary = score(data["mutants"], equivalent)
+        everything += data["mutants"]
+        rows.append(f"| {group} | {', '.join(f'`{f}`' for f in data['files'])} | {summary['mutants']} | "
+                    f"{summary.get('killed', 0) + summary.get('timeout', 0)} | {summary.get('equivalent', 0)} | "
+                    f"{summary.get('survived', 0)} | {summary.get('no tests', 0)} | {100 * summary['score']:.1f} % | "
+                    f"{data['minutes']:.0f} |")  # fmt: skip
+        survivors += [m for m in data["mutants"] if m["status"] not in ("killed", "timeout")]
+    total = score(everything, equivalent)
+    lines = [
+        "# Testing",
+        "",
+        "## Mutation score",
+        "",
+        "Generated by `python benchmarks/mutation.py --docs` from `benchmarks/results/mutation.json`, which",
+        "`python benchmarks/mutation.py` writes (mutmut, one group of modules at a time, each with a targeted",
+        "selection of the tests; see the script's docstring).",
+        "",
+        f"**{100 * total['score']:.1f} %** of the {total['non_equivalent']} non-equivalent mutants are killed "
+        f"({total['mutants']} mutants, {total.get('equivalent', 0)} equivalent).",
+        "",
+        "| group | files | mutants | killed | equivalent | survived | no test runs it | score | minutes |",
+        "|---|---|---|---|---|---|---|---|---|",
+        *rows,
+        "",
+        "Killed includes mutants that made a test time out. A mutant in code no selected test executes counts",
+        "as not killed. Equivalent mutants are listed with the reason no test can tell them from the original",
+        "(`benchmarks/mutation_equivalent.json`).",
+        "",
+        "## Mutants not killed",
+        "",
+        "| mutant | status | change | why |",
+        "|---|---|---|---|",
+    ]
+    for mutant in survivors:
+        change = " / ".join(line.strip() for line in mutant.get("diff", [])).replace("|", "\\|")
+        why = (mutant.get("equivalent") or "").replace("|", "\\|")
+        status = "equivalent" if why else mutant["status"]
+        lines.append(f"| `{mutant['name']}` | {status} | `{change}` | {why} |")
+    DOCS.write_text("\n".join(lines) + "\n")
+    print(f"wrote {DOCS}: {100 * total['score']:.1f} % of {total['non_equivalent']} non-equivalent mutants killed")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--groups", nargs="+", choices=list(GROUPS), default=list(GROUPS))
+    parser.add_argument("--work", type=Path, default=Path("/tmp/dwr-gym-mutation"))
+    parser.add_argument("--max-children", type=int, default=1, help="mutants tested at once (default 1 core)")
+    parser.add_argument("--docs", action="store_true", help="only regenerate docs/testing.md from the JSON")
+    parser.add_argument("--recheck", action="store_true",
+                        help="test only the mutants not killed last time, against the current tests")  # fmt: skip
+    args = parser.parse_args()
+    if shutil.which("mutmut", path=str(Path(sys.executable).parent)) is None:
+        raise SystemExit('mutmut is not installed: pip install "dwr-gym[mutation]"')
+    if not args.docs:
+        run(args.groups, args.work, args.max_children, args.recheck)
+    write_docs()
+
+
+if __name__ == "__main__":
+    main()
