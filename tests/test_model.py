@@ -242,3 +242,16 @@ def test_turning_on_the_spot_moves_only_the_heading(integrator: str) -> None:
     x, y, psi = model.integrate_unicycle(0.3, -0.4, 3.0, 0.0, 2.0, 0.25, integrator, 2)  # type: ignore[arg-type]
     assert (x, y) == (0.3, -0.4)
     assert psi == pytest.approx(3.0 + 0.5 - 2.0 * math.pi)  # wrapped to [-pi, pi)
+
+
+def test_scaling_power_caps_only_its_result_at_max_gain() -> None:
+    """With n + m = 1 and a cap above mu_1's own default cap (1e6), mu_1 itself is capped at max_gain, not 1e6."""
+    assert model.conventional_scaling_power(20.0 - 2e-8, 20.0, 1, 0, max_gain=1e9) == pytest.approx(1e9, rel=1e-6)
+
+
+def test_scalar_math_is_numpys_names_over_python_numbers() -> None:
+    xp = model.SCALAR_MATH
+    assert xp.where(True, 1.5, 2.5) == 1.5 and xp.where(False, 1.5, 2.5) == 2.5
+    assert xp.logical_not(True) is False and xp.logical_not(False) is True
+    assert xp.copy(1.5) == 1.5 and xp.maximum(1.0, 2.0) == 2.0 and xp.minimum(1.0, 2.0) == 1.0
+    assert model.namespace(1.0, 2.0) is xp and model.namespace(1.0, np.zeros(2)) is model.ARRAY_MATH
