@@ -303,3 +303,17 @@ def test_an_autoreset_episode_starts_as_a_reset_at_its_start_pose_does(dtype: st
             np.testing.assert_array_equal(info[key][ended], expected_info[key][ended])
         assert not rewards[ended].any()
     assert restarted >= 16
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_a_fresh_state_is_n_robots_at_the_goal_in_its_dtype_with_integer_counters(dtype: type) -> None:
+    state = core.TaskState.zeros(3, dtype)
+    for name in ("step_count", "prescribed_steps", "max_steps"):
+        value = getattr(state, name)
+        assert value.dtype == np.int64 and value.shape == (3,) and not value.any(), name
+    for name in ("x", "y", "psi", "goal_x", "goal_y", "goal_psi", "energy", "initial_distance",
+                 "initial_orientation_error", "lyapunov", "goal_sin", "T_con"):  # fmt: skip
+        value = getattr(state, name)
+        assert value.dtype == dtype and value.shape == (3,) and not value.any(), name
+    np.testing.assert_array_equal(state.goal_cos, np.ones(3, dtype))  # the goal heading 0: cos 1, sin 0
+    np.testing.assert_array_equal(np.array(state.world_pose()), np.zeros((3, 3)))
