@@ -113,14 +113,15 @@ STATUS = {1: "killed", 3: "killed", 0: "survived", 5: "no tests", 33: "no tests"
           24: "timeout", 152: "timeout", 255: "timeout", None: "not checked", 34: "skipped"}  # fmt: skip
 
 
-def collect(group: str, directory: Path) -> list[dict[str, Any]]:
-    """Every mutant of the group: its name, file, status and (unless killed) its diff."""
+def collect(group: str, directory: Path, names: list[str] | None = None) -> list[dict[str, Any]]:
+    """The group's mutants (only ``names`` if given): name, file, status and (unless killed) the diff."""
     mutants = []
     for meta in sorted((directory / "mutants").rglob("*.py.meta")):
         source = str(meta.relative_to(directory / "mutants"))[: -len(".meta")]
         exit_codes = json.loads(meta.read_text())["exit_code_by_key"]
         for name, code in sorted(exit_codes.items()):
-            mutants.append({"name": name, "file": source, "status": STATUS.get(code, "suspicious")})
+            if names is None or name in names:
+                mutants.append({"name": name, "file": source, "status": STATUS.get(code, "suspicious")})
     for mutant in mutants:
         if mutant["status"] not in ("killed", "timeout"):
             mutant["diff"] = diff_lines(mutmut(directory, "show", mutant["name"]))
@@ -153,39 +154,34 @@ def score(mutants: list[dict[str, Any]], equivalent: dict[str, str]) -> dict[str
             "score": killed / relevant if relevant else float("nan")}  # fmt: skip
 
 
-def refresh_tests(directory: Path) -> None:
-    """Copy the current tests into a group's work copy and its mutants/ tree (for --recheck)."""
-    for target in (directory, directory / "mutants"):
-        shutil.rmtree(target / "tests")
-        shutil.copytree(ROOT / "tests", target / "tests", ignore=shutil.ignore_patterns("__pycache__"))
-
-
-def run(groups: list[str], work: Path, max_children: int, recheck: bool = False) -> None:
+def run(groups: list[str], work: Path, max_children: int, recheck: bool = False, collect_only: bool = False) -> None:
     """Run mutmut on each group and store its mutants in the results JSON. With ``recheck``, only the mutants
-    not killed in the last run are tested again, against the current tests, in the last run's work copy."""
-    results = json.loads(RESULTS.read_text()) if RESULTS.is_file() else {"groups": {}}
+    not killed in the last run are tested again, against the current tests (mutmut still generates all)."""
     for group in groups:
         began = time.perf_counter()
         log = work / f"{group}.log"
-        if recheck:
-            directory = work / group
-            refresh_tests(directory)
-            names = [m["name"] for m in results["groups"][group]["mutants"] if m["status"] not in ("killed", "timeout")]
-            print(f"{group}: rechecking {len(names)} mutants in {directory} (log {log})", flush=True)
+        directory = work / group if collect_only else prepare(group, work)
+        previous = json.loads(RESULTS.read_text())["groups"][group] if recheck else None
+        names = [m["name"] for m in previous["mutants"] if m["status"] not in ("killed", "timeout")] if previous else []
+        print(f"{group}: mutmut in {directory} (log {log})" + (f", rechecking {len(names)}" if recheck else ""),
+              flush=True)  # fmt: skip
+        if not collect_only:
             mutmut(directory, "run", "--max-children", str(max_children), *names, log=log)
-        else:
-            directory = prepare(group, work)
-            print(f"{group}: mutmut in {directory} (log {log})", flush=True)
-            mutmut(directory, "run", "--max-children", str(max_children), log=log)
-        mutants = collect(group, directory)
+        mutants = collect(group, directory, names if recheck else None)
         if not mutants:
             raise SystemExit(f"{group}: mutmut produced no mutants; see {log}")
-        minutes = (time.perf_counter() - began) / 60.0 + (results["groups"][group]["minutes"] if recheck else 0.0)
+        minutes = (time.perf_counter() - began) / 60.0
+        if previous is not None:  # the killed mutants of the last run stand; the others take their new status
+            rechecked = {m["name"]: m for m in mutants}
+            mutants = [rechecked.get(m["name"], m) for m in previous["mutants"]]
+            minutes += previous["minutes"]
+        # read again just before writing: groups may run at the same time in separate processes
+        results = json.loads(RESULTS.read_text()) if RESULTS.is_file() else {"groups": {}}
         results["groups"][group] = {"files": GROUPS[group][0], "tests": GROUPS[group][1], "mutants": mutants,
                                     "minutes": minutes, "max_children": max_children}  # fmt: skip
         RESULTS.parent.mkdir(parents=True, exist_ok=True)
         RESULTS.write_text(json.dumps(results, indent=1) + "\n")
-        print(f"{group}: {len(mutants)} mutants in {results['groups'][group]['minutes']:.1f} min", flush=True)
+        print(f"{group}: {len(mutants)} mutants in {minutes:.1f} min", flush=True)
 
 
 def write_docs() -> None:
@@ -242,13 +238,18 @@ def main() -> None:
     parser.add_argument("--work", type=Path, default=Path("/tmp/dwr-gym-mutation"))
     parser.add_argument("--max-children", type=int, default=1, help="mutants tested at once (default 1 core)")
     parser.add_argument("--docs", action="store_true", help="only regenerate docs/testing.md from the JSON")
+    parser.add_argument(
+        "--collect-only",
+        action="store_true",
+        help="only read the results of an earlier (or interrupted) run from its work copy",
+    )
     parser.add_argument("--recheck", action="store_true",
                         help="test only the mutants not killed last time, against the current tests")  # fmt: skip
     args = parser.parse_args()
     if shutil.which("mutmut", path=str(Path(sys.executable).parent)) is None:
         raise SystemExit('mutmut is not installed: pip install "dwr-gym[mutation]"')
     if not args.docs:
-        run(args.groups, args.work, args.max_children, args.recheck)
+        run(args.groups, args.work, args.max_children, args.recheck, args.collect_only)
     write_docs()
 
 
