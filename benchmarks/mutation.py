@@ -228,8 +228,26 @@ def write_docs() -> None:
         why = (mutant.get("equivalent") or "").replace("|", "\\|")
         status = "equivalent" if why else mutant["status"]
         lines.append(f"| `{mutant['name']}` | {status} | `{change}` | {why} |")
+    lines += planted_section()
     DOCS.write_text("\n".join(lines) + "\n")
     print(f"wrote {DOCS}: {100 * total['score']:.1f} % of {total['non_equivalent']} non-equivalent mutants killed")
+
+
+def planted_section() -> list[str]:
+    """The table of benchmarks/planted_bugs.py's results, if it has run."""
+    path = ROOT / "benchmarks" / "results" / "planted_bugs.json"
+    if not path.is_file():
+        return []
+    lines = ["", "## Planted bugs", "",
+             "Generated from `benchmarks/results/planted_bugs.json`, which `python benchmarks/planted_bugs.py` writes:",
+             "each bug an audit planted (issue 26) is planted again in a copy of the tree and the default suite run",
+             "there. A golden or pinned record only detects a change, so each bug must fail another test too.", "",
+             "| bug | file | tests failed | of them not golden/pinned | for example |", "|---|---|---|---|---|"]  # fmt: skip
+    for result in json.loads(path.read_text()).values():
+        example = result["failed_not_pinned"][0] if result["failed_not_pinned"] else "none"
+        lines.append(f"| {result['description']} | `{result['file']}` | {len(result['failed'])} | "
+                     f"{len(result['failed_not_pinned'])} | `{example}` |")  # fmt: skip
+    return lines
 
 
 def main() -> None:
