@@ -218,3 +218,49 @@ def test_pt_astolfi_is_astolfi_on_the_time_scale_of_eq_12() -> None:
     plain = AstolfiController(AstolfiParams(k_rho=1.5, k_alpha=4.7, k_beta=-1.7))(inputs)
     for a, b in zip(scaled, plain, strict=True):  # rate 1 / (T - t) with T = 0.5 * 20 s, t = 4 s
         np.testing.assert_allclose(a, b / 6.0, rtol=1e-12)
+
+
+class FullSpeedAhead:
+    """A policy that always commands (u_max, 0): straight lines whose metrics are known by hand."""
+
+    def predict(
+        self, observation: Any, state: Any = None, episode_start: Any = None, deterministic: bool = True
+    ) -> Any:
+        return np.tile(np.array([1.0, 0.0], np.float32), (len(observation), 1)), None
+
+
+def test_rollout_metrics_of_straight_drives_by_hand() -> None:
+    """At u = 0.5 m/s for dt = 0.05 s: 1 m ahead arrives at step 40 (2 s, T_con 20 s); 5 m ahead at step 200 (10 s,
+    late for its T_con of 8 s); a robot facing away leaves the 5 m arena at step 180 (d = 0.51 + 0.025 k > 5). Each
+    sees one command step, 0 -> 0.5 m/s."""
+    params = EnvParams()
+    starts = np.array([[-1.0, 0.0, 0.0], [3.0, 4.0, math.atan2(-4.0, -3.0)], [-0.51, 0.0, math.pi]])
+    result = rollout(FullSpeedAhead(), params, starts, np.zeros((3, 3)), T_con=np.array([20.0, 8.0, 20.0]))
+    np.testing.assert_array_equal(result.success, [True, False, False])
+    np.testing.assert_array_equal(result.arrived, [True, True, False])
+    np.testing.assert_array_equal(result.left_arena, [False, False, True])
+    np.testing.assert_allclose(result.arrival_time[:2], [2.0, 10.0])
+    assert np.isnan(result.arrival_time[2])
+    np.testing.assert_allclose(result.peak_linear_velocity, 0.5)
+    np.testing.assert_allclose(result.peak_angular_velocity, 0.0, atol=0)
+    steps = np.array([40, 200, 180])
+    np.testing.assert_allclose(result.path_length, 0.5 * 0.05 * steps)
+    np.testing.assert_allclose(result.energy, 0.25 * 0.05 * steps)
+    np.testing.assert_allclose(result.command_rate_rms, np.sqrt((0.5 / 0.05) ** 2 / steps))
+    np.testing.assert_allclose(result.final_distance[[0, 2]], [0.0, 5.01], atol=1e-9)
+    np.testing.assert_allclose(result.final_heading_error, [0.0, math.atan2(4.0, -3.0), math.pi], atol=1e-12)
+    np.testing.assert_array_equal(result.T_con, [20.0, 8.0, 20.0])
+    summary = result.summary()
+    assert (summary["n"], summary["success_rate"], summary["arrival_rate"]) == (3.0, 1 / 3, 2 / 3)
+    assert summary["arrival_time_mean"] == pytest.approx(6.0) and summary["arrival_time_max"] == pytest.approx(10.0)
+    assert summary["arrival_fraction_mean"] == pytest.approx((0.1 + 1.25) / 2)
+    assert summary["arrival_fraction_max"] == pytest.approx(1.25)
+    assert summary["final_distance_max"] == pytest.approx(5.01) and summary["final_heading_error_max"] == pytest.approx(
+        math.pi
+    )
+    assert summary["peak_u_max"] == summary["peak_u_mean"] == pytest.approx(0.5) and summary["peak_omega_max"] == 0.0
+    assert summary["energy_mean"] == pytest.approx(0.0125 * 420 / 3)
+    assert summary["path_length_mean"] == pytest.approx(0.025 * 420 / 3)
+    assert summary["return_mean"] == pytest.approx(np.mean(result.episode_return))
+    assert np.isnan(summary["energy_ratio_mean"]) and np.isnan(summary["optimal_energy_mean"])
+    assert summary["planner_failures"] == summary["optimum_failures"] == 0.0
