@@ -17,7 +17,8 @@ from scipy.integrate import solve_ivp
 import dwr_gym  # noqa: F401  (registers the envs)
 from baselines import ControllerInput, PTCController, PTCParams
 from dwr_gym import model
-from dwr_gym.disturbances import VelocityBias
+from dwr_gym.disturbances import ActuatorFault, VelocityBias, VelocityRandomWalk, VelocitySinusoid, WheelSlip
+from dwr_gym.robots import DifferentialDrive
 
 pytestmark = pytest.mark.filterwarnings("ignore:.*out of date")  # v0 is what these tests step
 K = 1.0 / (2.0 * math.pi)
@@ -167,3 +168,45 @@ def test_additive_disturbance_acts_after_a_saturated_turn() -> None:
     assert info["disturbance"]["wheel_saturated"]
     assert info["linear_velocity"] == pytest.approx(0.11 + 0.05, rel=1e-12)
     assert info["angular_velocity"] == pytest.approx(1.375 + 0.3, rel=1e-12)
+
+
+GEOMETRY = {"robot": DifferentialDrive(0.033, 0.16)}  # TurtleBot3 Burger's wheels without a speed limit
+
+
+def velocities(env: gym.Env, action: tuple[float, float], steps: int) -> list[tuple[float, float]]:  # type: ignore[type-arg]
+    env.reset(seed=0, options={"start": (0.0, 0.0, 0.0), "goal": (1.0, 0.0, 0.0)})
+    infos = [env.step(np.array(action, dtype=np.float32))[4] for _ in range(steps)]
+    return [(i["linear_velocity"], i["angular_velocity"]) for i in infos]
+
+
+def test_sinusoidal_disturbance_by_hand() -> None:
+    """u + a_u sin(2 pi t / period + phase), t the start of each control period (k dt)."""
+    env = gym.make(ENV_ID, disturbances=[VelocitySinusoid(0.1, 0.2, period=2.0, phase=0.3)])
+    for k, (u, omega) in enumerate(velocities(env, (0.5, 0.25), 6)):
+        wave = math.sin(2.0 * math.pi * k * 0.05 / 2.0 + 0.3)
+        assert u == pytest.approx(0.25 + 0.1 * wave, rel=1e-12)
+        assert omega == pytest.approx(0.5 + 0.2 * wave, rel=1e-12)
+
+
+def test_wheel_slip_and_a_left_wheel_fault_by_hand() -> None:
+    """Command (0.25 m/s, 0.5 rad/s): wheel rim speeds r w = u -+ omega b / 2 = 0.21 and 0.29 m/s."""
+    slip = gym.make(ENV_ID, **GEOMETRY, disturbances=[WheelSlip(left=0.8, right=0.6)])
+    u, omega = velocities(slip, (0.5, 0.25), 1)[0]
+    assert u == pytest.approx((0.21 * 0.8 + 0.29 * 0.6) / 2.0, rel=1e-12)  # (v_L + v_R) / 2
+    assert omega == pytest.approx((0.29 * 0.6 - 0.21 * 0.8) / 0.16, rel=1e-12)  # (v_R - v_L) / b
+    fault = gym.make(ENV_ID, **GEOMETRY, disturbances=[ActuatorFault("left", 0.5, start_time=0.1)])
+    before, _, after = velocities(fault, (0.5, 0.25), 3)  # periods starting at 0, 0.05 and 0.1 s
+    assert before == pytest.approx((0.25, 0.5), rel=1e-12)
+    assert after == pytest.approx(((0.21 * 0.5 + 0.29) / 2.0, (0.29 - 0.21 * 0.5) / 0.16), rel=1e-12)
+
+
+def test_random_walk_increments_have_the_documented_spread_and_restart_each_episode() -> None:
+    """Increments of standard deviation intensity sqrt(dt) = 0.2 sqrt(0.05) = 0.0447 m/s per period, from 0."""
+    env = gym.make(ENV_ID, T_con=40.0, disturbances=[VelocityRandomWalk(linear_intensity=0.2, seed=1)])
+    walk = np.array([u for u, _ in velocities(env, (0.0, 0.0), 1000)])
+    increments = np.diff(np.concatenate([[0.0], walk]))
+    assert np.std(increments) == pytest.approx(0.2 * math.sqrt(0.05), rel=0.1)
+    assert abs(np.mean(increments)) < 0.01
+    assert np.all([omega == 0.0 for _, omega in velocities(env, (0.0, 0.0), 50)])
+    first = velocities(env, (0.0, 0.0), 1)[0][0]  # a new episode starts the walk at 0: one increment from there
+    assert abs(first) < 5 * 0.2 * math.sqrt(0.05) < np.max(np.abs(walk))
