@@ -22,6 +22,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import random
 import re
 import shutil
 import subprocess
@@ -154,7 +155,21 @@ def score(mutants: list[dict[str, Any]], equivalent: dict[str, str]) -> dict[str
             "score": killed / relevant if relevant else float("nan")}  # fmt: skip
 
 
-def run(groups: list[str], work: Path, max_children: int, recheck: bool = False, collect_only: bool = False) -> None:
+def all_names(directory: Path) -> list[str]:
+    """Every mutant mutmut generated in a work copy."""
+    return sorted(name for meta in (directory / "mutants").rglob("*.py.meta")
+                  for name in json.loads(meta.read_text())["exit_code_by_key"])  # fmt: skip
+
+
+def run(
+    groups: list[str],
+    work: Path,
+    max_children: int,
+    recheck: bool = False,
+    collect_only: bool = False,
+    sample: int = 0,
+    seed: int = 0,
+) -> None:
     """Run mutmut on each group and store its mutants in the results JSON. With ``recheck``, only the mutants
     not killed in the last run are tested again, against the current tests (mutmut still generates all)."""
     for group in groups:
@@ -165,9 +180,17 @@ def run(groups: list[str], work: Path, max_children: int, recheck: bool = False,
         names = [m["name"] for m in previous["mutants"] if m["status"] not in ("killed", "timeout")] if previous else []
         print(f"{group}: mutmut in {directory} (log {log})" + (f", rechecking {len(names)}" if recheck else ""),
               flush=True)  # fmt: skip
+        population = None
+        if sample and not recheck and not collect_only:
+            # mutmut generates the mutants and maps tests to functions, then stops at the unknown name
+            mutmut(directory, "run", "--max-children", str(max_children), "no_such_mutant", log=log)
+            everything = all_names(directory)
+            population = len(everything)
+            names = sorted(random.Random(seed).sample(everything, min(sample, population)))
+            print(f"{group}: a random sample of {len(names)} of its {population} mutants (seed {seed})", flush=True)
         if not collect_only:
             mutmut(directory, "run", "--max-children", str(max_children), *names, log=log)
-        mutants = collect(group, directory, names if recheck else None)
+        mutants = collect(group, directory, names if (recheck or population) else None)
         if not mutants:
             raise SystemExit(f"{group}: mutmut produced no mutants; see {log}")
         minutes = (time.perf_counter() - began) / 60.0
@@ -177,8 +200,11 @@ def run(groups: list[str], work: Path, max_children: int, recheck: bool = False,
             minutes += previous["minutes"]
         # read again just before writing: groups may run at the same time in separate processes
         results = json.loads(RESULTS.read_text()) if RESULTS.is_file() else {"groups": {}}
+        if previous is not None:
+            population = previous.get("population")
         results["groups"][group] = {"files": GROUPS[group][0], "tests": GROUPS[group][1], "mutants": mutants,
-                                    "minutes": minutes, "max_children": max_children}  # fmt: skip
+                                    "minutes": minutes, "max_children": max_children,
+                                    "population": population or len(mutants)}  # fmt: skip
         RESULTS.parent.mkdir(parents=True, exist_ok=True)
         RESULTS.write_text(json.dumps(results, indent=1) + "\n")
         print(f"{group}: {len(mutants)} mutants in {minutes:.1f} min", flush=True)
@@ -192,7 +218,8 @@ def write_docs() -> None:
     for group, data in results["groups"].items():
         summary = score(data["mutants"], equivalent)
         everything += data["mutants"]
-        rows.append(f"| {group} | {', '.join(f'`{f}`' for f in data['files'])} | {summary['mutants']} | "
+        tested = f"{summary['mutants']} of {data.get('population', summary['mutants'])}"
+        rows.append(f"| {group} | {', '.join(f'`{f}`' for f in data['files'])} | {tested} | "
                     f"{summary.get('killed', 0) + summary.get('timeout', 0)} | {summary.get('equivalent', 0)} | "
                     f"{summary.get('survived', 0)} | {summary.get('no tests', 0)} | {100 * summary['score']:.1f} % | "
                     f"{data['minutes']:.0f} |")  # fmt: skip
@@ -208,12 +235,14 @@ def write_docs() -> None:
         "selection of the tests; see the script's docstring).",
         "",
         f"**{100 * total['score']:.1f} %** of the {total['non_equivalent']} non-equivalent mutants are killed "
-        f"({total['mutants']} mutants, {total.get('equivalent', 0)} equivalent).",
+        f"({total['mutants']} mutants tested, {total.get('equivalent', 0)} of them equivalent).",
         "",
-        "| group | files | mutants | killed | equivalent | survived | no test runs it | score | minutes |",
+        "| group | files | mutants tested | killed | equivalent | survived | no test runs it | score | minutes |",
         "|---|---|---|---|---|---|---|---|---|",
         *rows,
         "",
+        "Where fewer mutants were tested than mutmut generated, they are a seeded random sample",
+        "(`--sample N --seed S`); the full run is the same command without `--sample`.",
         "Killed includes mutants that made a test time out. A mutant in code no selected test executes counts",
         "as not killed. Equivalent mutants are listed with the reason no test can tell them from the original",
         "(`benchmarks/mutation_equivalent.json`).",
@@ -267,7 +296,7 @@ def main() -> None:
     if shutil.which("mutmut", path=str(Path(sys.executable).parent)) is None:
         raise SystemExit('mutmut is not installed: pip install "dwr-gym[mutation]"')
     if not args.docs:
-        run(args.groups, args.work, args.max_children, args.recheck, args.collect_only)
+        run(args.groups, args.work, args.max_children, args.recheck, args.collect_only, args.sample, args.seed)
     write_docs()
 
 
