@@ -290,6 +290,10 @@ def main() -> None:
         action="store_true",
         help="only read the results of an earlier (or interrupted) run from its work copy",
     )
+    parser.add_argument(
+        "--sample", type=int, default=0, help="test a seeded random sample of this many mutants per group (0: all)"
+    )
+    parser.add_argument("--seed", type=int, default=0, help="seed of --sample")
     parser.add_argument("--recheck", action="store_true",
                         help="test only the mutants not killed last time, against the current tests")  # fmt: skip
     args = parser.parse_args()
