@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from pathlib import Path
 from typing import Any
 
@@ -250,3 +251,41 @@ def test_tolerance_table_reads_the_largest_magnitude_held_without_a_dip() -> Non
             row("c", 0, 1.0), row("c", 4, 1.0), row("c", 8, 0.95), row("c", 16, 0.95)]  # fmt: skip
     assert tolerated(rows) == {("delay", "a"): 4, ("delay", "b"): None, ("delay", "c"): 16}
     assert "| 4 | - | 16+ |" in tolerance_markdown(rows)
+
+
+# (class, field, lowest allowed, highest allowed, whether the highest is excluded)
+DISTURBANCE_RANGES = [
+    (VelocityBias, "linear", -100.0, 100.0, False), (VelocityBias, "angular", -100.0, 100.0, False),
+    (VelocitySinusoid, "linear_amplitude", 0.0, 100.0, False), (VelocitySinusoid, "angular_amplitude", 0.0, 100.0, False),
+    (VelocitySinusoid, "phase", -1e6, 1e6, False),
+    (VelocityRandomWalk, "linear_intensity", 0.0, 100.0, False),
+    (VelocityRandomWalk, "angular_intensity", 0.0, 100.0, False),
+    (WheelSlip, "left", 0.0, 1.0, False), (WheelSlip, "right", 0.0, 1.0, False),
+    (ActuatorFault, "fraction", 0.0, 1.0, False), (ActuatorFault, "start_time", 0.0, 1e6, False),
+    (MeasurementDropout, "probability", 0.0, 1.0, True),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("cls", "field", "low", "high", "high_excluded"), DISTURBANCE_RANGES,
+                         ids=[f"{c.__name__}.{f}" for c, f, *_ in DISTURBANCE_RANGES])  # fmt: skip
+def test_each_disturbance_field_takes_its_range_as_a_float_and_names_itself_outside(
+    cls: type, field: str, low: float, high: float, high_excluded: bool
+) -> None:
+    for inside in (low, np.float32(0.5 * (low + high)), high - 1e-9 if high_excluded else high):
+        value = getattr(cls(**{field: inside}), field)
+        assert type(value) is float and value == float(inside), (inside, value)  # numpy numbers become floats
+    step = 1e-6 * max(1.0, abs(high))
+    for outside in (low - step, high if high_excluded else high + step, math.nan):
+        with pytest.raises(ValueError, match=re.escape(f"{cls.__name__}.{field}={outside!r} is invalid")):
+            cls(**{field: outside})
+
+
+def test_disturbance_integers_are_validated_and_kept_as_ints() -> None:
+    assert InputDelay(np.int64(3)).steps == 3 and type(InputDelay(np.int64(3)).steps) is int
+    for cls in (VelocityRandomWalk, MeasurementDropout):
+        assert type(cls(seed=np.int64(7)).seed) is int and cls(seed=np.int64(7)).seed == 7
+        for bad in (-1, 1.5, True):
+            with pytest.raises(ValueError, match=re.escape(f"seed={bad!r} is invalid")):
+                cls(seed=bad)
+    with pytest.raises(ValueError, match=r"VelocitySinusoid.period=0.0 is invalid: expected a finite number in \(0, "):
+        VelocitySinusoid(period=0.0)
