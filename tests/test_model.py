@@ -255,3 +255,56 @@ def test_scalar_math_is_numpys_names_over_python_numbers() -> None:
     assert xp.logical_not(True) is False and xp.logical_not(False) is True
     assert xp.copy(1.5) == 1.5 and xp.maximum(1.0, 2.0) == 2.0 and xp.minimum(1.0, 2.0) == 1.0
     assert model.namespace(1.0, 2.0) is xp and model.namespace(1.0, np.zeros(2)) is model.ARRAY_MATH
+
+
+TORCH_PROBE = """
+import json, sys
+import numpy as np
+from dwr_gym import model
+rng = np.random.default_rng(0)
+x, y = rng.uniform(-0.9, 0.9, 2048), rng.uniform(-3.0, 3.0, 2048)
+xp, result, calls = model.ARRAY_MATH, {}, []
+xp.sin(x)
+result["torch imported"] = "torch" in sys.modules
+import torch
+for name in ("sin", "cos", "tanh", "asin", "atan2"):  # count what torch computes
+    setattr(torch, name, (lambda f, n: lambda *a: (calls.append(n), f(*a))[1])(getattr(torch, name), name))
+for name in ("sin", "cos", "tanh", "arcsin", "arctan2"):
+    args = (x, y) if name == "arctan2" else (x,)
+    big = getattr(xp, name)(*args)
+    assert type(big) is np.ndarray and big.dtype == np.float64 and big.shape == x.shape, name
+    assert getattr(xp, name).__name__ == name
+    result[name] = float(np.max(np.abs(big - getattr(np, name)(*args))))
+    # below TORCH_MIN_SIZE, strided, float32 or read-only arrays: numpy's own function, bit for bit
+    readonly = x.copy()
+    readonly.flags.writeable = False
+    for case in (x[:10], x[::2], x.astype(np.float32), readonly):
+        other = (y[: case.size].astype(case.dtype),) if name == "arctan2" else ()
+        assert np.array_equal(getattr(xp, name)(case, *other), getattr(np, name)(case, *other)), name
+result["torch calls"] = calls
+print(json.dumps(result))
+"""
+
+
+@pytest.mark.parametrize("switch", ["1", "0"])
+def test_torch_backed_functions_equal_numpys_and_DWR_GYM_TORCH_0_keeps_torch_out(switch: str) -> None:
+    """In a fresh interpreter (the functions are built at import): torch computes large float64 arrays to within
+    1e-15 of numpy; DWR_GYM_TORCH=0 leaves torch unimported and numpy computes everything."""
+    pytest.importorskip("torch")
+    import json
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    # the same calls in this process too, so that a tool mapping tests to the functions they run (mutmut) sees these
+    assert model._vectorised("tanh")(np.zeros(3)).tolist() == [0.0, 0.0, 0.0]
+    model._torch_module()
+    env = {**os.environ, "DWR_GYM_TORCH": switch}
+    done = subprocess.run([sys.executable, "-c", TORCH_PROBE], capture_output=True, text=True, env=env, timeout=300,
+                          cwd=Path(__file__).resolve().parents[1], check=False)  # fmt: skip
+    assert done.returncode == 0, done.stderr[-2000:]
+    result = json.loads(done.stdout)
+    assert result.pop("torch imported") is (switch == "1")
+    assert result.pop("torch calls") == (["sin", "cos", "tanh", "asin", "atan2"] if switch == "1" else [])
+    assert max(result.values()) <= (1e-15 if switch == "1" else 0.0), result  # 1 ulp of values up to pi
