@@ -24,7 +24,7 @@ from baselines import (
 )
 from dwr_gym import model
 from dwr_gym.params import EnvParams
-from train.evaluation import FIG5_HEADINGS, Scenario, evaluate, make_scenario, rollout
+from train.evaluation import FIG5_HEADINGS, Scenario, evaluate, evaluate_sets, make_scenario, rollout
 
 FIG5 = make_scenario("paper-fig5")
 FIG7 = make_scenario("paper-fig7")
@@ -264,3 +264,25 @@ def test_rollout_metrics_of_straight_drives_by_hand() -> None:
     assert summary["return_mean"] == pytest.approx(np.mean(result.episode_return))
     assert np.isnan(summary["energy_ratio_mean"]) and np.isnan(summary["optimal_energy_mean"])
     assert summary["planner_failures"] == summary["optimum_failures"] == 0.0
+    assert summary["final_distance_mean"] == pytest.approx(5.01 / 3)
+    assert summary["final_heading_error_mean"] == pytest.approx((math.atan2(4.0, -3.0) + math.pi) / 3)
+    assert summary["command_rate_rms_mean"] == pytest.approx(np.mean(10.0 / np.sqrt(steps)))
+    assert len(summary) == 23  # the keys above and the energy-ratio ones
+
+
+def test_evaluate_sets_gives_one_row_per_set_T_con_and_policy_as_evaluate_summarises_them() -> None:
+    rows = evaluate_sets({"ptc": "ptc", "astolfi": "astolfi"}, ["random"], n=4, seed=1, env_kwargs={"dt": 0.1},
+                         T_cons=[10.0, 30.0])  # fmt: skip
+    assert [(r["scenario"], r["T_con"], r["policy"]) for r in rows] == [
+        ("random", 10.0, "ptc"),
+        ("random", 10.0, "astolfi"),
+        ("random", 30.0, "ptc"),
+        ("random", 30.0, "astolfi"),
+    ]
+    for row in rows:
+        scenario = make_scenario("random", n=4, seed=1, env_kwargs={"dt": 0.1, "T_con": row["T_con"]})
+        expected = evaluate({row["policy"]: row["policy"]}, scenario, seed=1)[row["policy"]].summary()
+        assert {k: v for k, v in row.items() if k in expected} == pytest.approx(expected, nan_ok=True)
+        assert row["optimum_note"] == "" and math.isnan(row["energy_ratio_mean"])  # no optimum by default
+    per_episode = evaluate_sets({"ptc": "ptc"}, ["random"], n=3, seed=2, env_kwargs={"T_con_range": (5.0, 9.0)})
+    assert len(per_episode) == 1 and math.isnan(per_episode[0]["T_con"])  # T_con drawn per episode: no one value
