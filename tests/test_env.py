@@ -99,6 +99,17 @@ def test_reset_options_place_robot_and_goal_exactly() -> None:
     assert obs[1] == pytest.approx(1.0) and obs[2] == pytest.approx(0.0, abs=1e-7)  # goal straight ahead in x
 
 
+@pytest.mark.parametrize("goal", [(0.0, 1.0, 0.0), (1.0, 0.0, 0.0), (0.0, 0.0, 0.5), (0.0, 0.0, 0.0)])
+def test_info_pose_is_the_world_pose_for_goals_off_the_origin_on_each_axis(goal: tuple[float, float, float]) -> None:
+    """The single env skips the frame change only when the goal is (0, 0, 0); any one coordinate off needs it."""
+    env = make()
+    _, info = env.reset(options={"start": (0.3, -0.2, 0.1), "goal": goal})
+    np.testing.assert_allclose(info["pose"], [0.3, -0.2, 0.1], atol=1e-12)
+    _, _, _, _, info = env.step(np.array([1.0, 0.0], dtype=np.float32))  # 0.025 m along the heading 0.1
+    np.testing.assert_allclose(info["pose"], [0.3 + 0.025 * math.cos(0.1), -0.2 + 0.025 * math.sin(0.1), 0.1],
+                               atol=1e-12)  # fmt: skip
+
+
 def test_any_goal_pose_is_the_paper_case_in_the_goal_frame() -> None:
     env = make()
     paper, _ = env.reset(options={"start": (0.0, 0.0, 0.3), "goal": (0.8, 0.0, 0.0)})
