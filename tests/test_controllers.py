@@ -286,3 +286,15 @@ def test_evaluate_sets_gives_one_row_per_set_T_con_and_policy_as_evaluate_summar
         assert row["optimum_note"] == "" and math.isnan(row["energy_ratio_mean"])  # no optimum by default
     per_episode = evaluate_sets({"ptc": "ptc"}, ["random"], n=3, seed=2, env_kwargs={"T_con_range": (5.0, 9.0)})
     assert len(per_episode) == 1 and math.isnan(per_episode[0]["T_con"])  # T_con drawn per episode: no one value
+
+
+def test_the_paper_scenarios_are_the_papers_figures() -> None:
+    """Figures 5/6: start (0, 0) with psi0 in {0, -pi/4, -pi/2, -3pi/4, pi, 3pi/4, pi/2, pi/4}, goal (0.8, 0),
+    T_con = 20 s. Figures 7/9: start (-0.4, 0) with psi0 = -178 deg, goal (0.8, 0), T_con = 70 s, K1 = 2.5, K2 = 40."""
+    headings = [0.0, -math.pi / 4, -math.pi / 2, -3 * math.pi / 4, math.pi, 3 * math.pi / 4, math.pi / 2, math.pi / 4]
+    np.testing.assert_array_equal(FIG5.starts, [[0.0, 0.0, h] for h in headings])
+    np.testing.assert_array_equal(FIG5.goals, [[0.8, 0.0, 0.0]] * 8)
+    assert FIG5.env_kwargs == {"T_con": 20.0} and FIG5.size == 8 and FIG5.T_cons is None
+    np.testing.assert_array_equal(FIG7.starts, [[-0.4, 0.0, math.radians(-178.0)]])
+    np.testing.assert_array_equal(FIG7.goals, [[0.8, 0.0, 0.0]])
+    assert FIG7.env_kwargs == {"T_con": 70.0} and FIG7.controller_kwargs["ptc"] == {"K1": 2.5, "K2": 40.0, "K": 1.2}

@@ -289,3 +289,12 @@ def test_disturbance_integers_are_validated_and_kept_as_ints() -> None:
                 cls(seed=bad)
     with pytest.raises(ValueError, match=r"VelocitySinusoid.period=0.0 is invalid: expected a finite number in \(0, "):
         VelocitySinusoid(period=0.0)
+
+
+def test_random_disturbances_without_a_seed_draw_fresh_entropy() -> None:
+    kwargs = {"disturbances": [VelocityRandomWalk(0.05, 0.2), MeasurementDropout(0.3)]}
+    first, second = gym.make(ENV_ID, **kwargs), gym.make(ENV_ID, **kwargs)
+    for env in (first, second):
+        env.reset(options={"start": (0.0, 0.0, 0.0), "goal": (1.0, 0.0, 0.0)})  # no seed
+    walks = [[env.step(np.zeros(2, np.float32))[4]["linear_velocity"] for _ in range(5)] for env in (first, second)]
+    assert walks[0] != walks[1] and all(np.isfinite(walks).ravel())
