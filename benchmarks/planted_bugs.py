@@ -6,7 +6,7 @@
 A golden or pinned record (tests/test_golden.py, the pinned v0 returns and trajectories) detects a change,
 not a bug that was there when it was recorded; so each bug must also fail another test. The source tree
 is never touched: each bug is planted in ``git archive HEAD`` unpacked under ``--work``. Results go to
-``benchmarks/results/planted_bugs.json``, from which ``benchmarks/mutation.py --docs`` writes the table of
+``docs/testing/planted_bugs.json``, from which ``benchmarks/mutation.py --docs`` writes the table of
 docs/testing.md.
 """
 
@@ -22,7 +22,7 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-RESULTS = ROOT / "benchmarks" / "results" / "planted_bugs.json"
+RESULTS = ROOT / "docs" / "testing" / "planted_bugs.json"
 #: Tests that compare with a recorded output rather than with an independent reference.
 PINNED = re.compile(r"test_golden\.py|test_v0_returns_|test_v0_defaults_are_bit_for_bit")
 ADDITIVE = "        for i, item in enumerate(self.disturbances):\n            if isinstance(item, VelocityBias):"
