@@ -188,7 +188,7 @@ def test_sinusoidal_disturbance_by_hand() -> None:
         assert omega == pytest.approx(0.5 + 0.2 * wave, rel=1e-12)
 
 
-def test_wheel_slip_and_a_left_wheel_fault_by_hand() -> None:
+def test_wheel_slip_and_wheel_faults_by_hand() -> None:
     """Command (0.25 m/s, 0.5 rad/s): wheel rim speeds r w = u -+ omega b / 2 = 0.21 and 0.29 m/s."""
     slip = gym.make(ENV_ID, **GEOMETRY, disturbances=[WheelSlip(left=0.8, right=0.6)])
     u, omega = velocities(slip, (0.5, 0.25), 1)[0]
@@ -198,6 +198,10 @@ def test_wheel_slip_and_a_left_wheel_fault_by_hand() -> None:
     before, _, after = velocities(fault, (0.5, 0.25), 3)  # periods starting at 0, 0.05 and 0.1 s
     assert before == pytest.approx((0.25, 0.5), rel=1e-12)
     assert after == pytest.approx(((0.21 * 0.5 + 0.29) / 2.0, (0.29 - 0.21 * 0.5) / 0.16), rel=1e-12)
+    right = gym.make(ENV_ID, **GEOMETRY, disturbances=[ActuatorFault("right", 0.5)])
+    assert velocities(right, (0.5, 0.25), 1)[0] == pytest.approx(
+        ((0.21 + 0.29 * 0.5) / 2.0, (0.29 * 0.5 - 0.21) / 0.16)
+    )
 
 
 def test_random_walk_increments_have_the_documented_spread_and_restart_each_episode() -> None:

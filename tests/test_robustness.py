@@ -173,7 +173,11 @@ def test_preset_wheel_limits_are_never_exceeded(robot: str, saturation: str) -> 
         ({"robot": "e_puck", "wheel_saturation": "bend"}, "wheel_saturation='bend' is invalid"),
         ({"disturbances": [InputDelay(600)]}, "InputDelay.steps=600 is invalid: expected an integer in [0, 599]"),
         ({"disturbances": ["bias"]}, "disturbances item 'bias' is invalid"),
-        ({"disturbances": [WheelSlip(0.5, 1.0)]}, "WheelSlip acts on the wheels: pass robot="),
+        (
+            {"disturbances": [WheelSlip(0.5, 1.0)]},
+            "WheelSlip acts on the wheels: pass robot=... (a preset or a DifferentialDrive) with it",
+        ),
+        ({"wheel_saturation": "clip"}, "wheel_saturation='clip' is invalid without a robot: pass robot=... too"),
         ({"robot": GEOMETRY, "disturbances": [ActuatorFault(start_time=31.0)]}, "ActuatorFault.start_time=31.0"),
     ],
 )
@@ -298,3 +302,16 @@ def test_random_disturbances_without_a_seed_draw_fresh_entropy() -> None:
         env.reset(options={"start": (0.0, 0.0, 0.0), "goal": (1.0, 0.0, 0.0)})  # no seed
     walks = [[env.step(np.zeros(2, np.float32))[4]["linear_velocity"] for _ in range(5)] for env in (first, second)]
     assert walks[0] != walks[1] and all(np.isfinite(walks).ravel())
+
+
+def test_the_disturbance_flags_are_booleans_from_the_reset_on_and_float32_stays_float32() -> None:
+    kwargs = {"robot": "turtlebot3_burger", "disturbances": [VelocityBias(0.01, 0.0), MeasurementDropout(0.2)]}
+    _, info = gym.make(ENV_ID, **kwargs).reset(seed=0)
+    for key in ("wheel_saturated", "fault_active", "measurement_held"):
+        assert info["disturbance"][key] is False, key
+    vec = gym.make_vec(ENV_ID, num_envs=3, dtype="float32", **kwargs)
+    _, infos = vec.reset(seed=0)
+    assert all(infos["disturbance"][key].dtype == np.bool_ for key in ("wheel_saturated", "measurement_held"))
+    _, _, _, _, infos = vec.step(np.full((3, 2), 0.5, np.float32))
+    assert infos["linear_velocity"].dtype == np.float32 and infos["angular_velocity"].dtype == np.float32
+    np.testing.assert_allclose(infos["linear_velocity"], 0.5 * 0.22 + 0.01, rtol=1e-6)
