@@ -291,6 +291,7 @@ def test_disturbance_integers_are_validated_and_kept_as_ints() -> None:
         for bad in (-1, 1.5, True):
             with pytest.raises(ValueError, match=re.escape(f"seed={bad!r} is invalid")):
                 cls(seed=bad)
+    assert type(VelocitySinusoid(period=np.int64(3)).period) is float and VelocitySinusoid(period=1e6).period == 1e6
     with pytest.raises(ValueError, match=r"VelocitySinusoid.period=0.0 is invalid: expected a finite number in \(0, "):
         VelocitySinusoid(period=0.0)
 
