@@ -292,9 +292,19 @@ def test_the_paper_scenarios_are_the_papers_figures() -> None:
     """Figures 5/6: start (0, 0) with psi0 in {0, -pi/4, -pi/2, -3pi/4, pi, 3pi/4, pi/2, pi/4}, goal (0.8, 0),
     T_con = 20 s. Figures 7/9: start (-0.4, 0) with psi0 = -178 deg, goal (0.8, 0), T_con = 70 s, K1 = 2.5, K2 = 40."""
     headings = [0.0, -math.pi / 4, -math.pi / 2, -3 * math.pi / 4, math.pi, 3 * math.pi / 4, math.pi / 2, math.pi / 4]
-    np.testing.assert_array_equal(FIG5.starts, [[0.0, 0.0, h] for h in headings])
-    np.testing.assert_array_equal(FIG5.goals, [[0.8, 0.0, 0.0]] * 8)
-    assert FIG5.env_kwargs == {"T_con": 20.0} and FIG5.size == 8 and FIG5.T_cons is None
-    np.testing.assert_array_equal(FIG7.starts, [[-0.4, 0.0, math.radians(-178.0)]])
-    np.testing.assert_array_equal(FIG7.goals, [[0.8, 0.0, 0.0]])
-    assert FIG7.env_kwargs == {"T_con": 70.0} and FIG7.controller_kwargs["ptc"] == {"K1": 2.5, "K2": 40.0, "K": 1.2}
+    fig5, fig7 = make_scenario("paper-fig5"), make_scenario("paper-fig7")  # built here, not at import
+    np.testing.assert_array_equal(fig5.starts, [[0.0, 0.0, h] for h in headings])
+    np.testing.assert_array_equal(fig5.goals, [[0.8, 0.0, 0.0]] * 8)
+    assert fig5.env_kwargs == {"T_con": 20.0} and fig5.size == 8 and fig5.T_cons is None
+    assert fig5.labels == ("psi0=+0deg", "psi0=-45deg", "psi0=-90deg", "psi0=-135deg", "psi0=+180deg", "psi0=+135deg",
+                           "psi0=+90deg", "psi0=+45deg")  # fmt: skip
+    np.testing.assert_array_equal(fig7.starts, [[-0.4, 0.0, math.radians(-178.0)]])
+    np.testing.assert_array_equal(fig7.goals, [[0.8, 0.0, 0.0]])
+    assert fig7.env_kwargs == {"T_con": 70.0} and fig7.labels == ("psi0=-178deg",)
+    assert fig7.controller_kwargs == {
+        "ptc": {"K1": 2.5, "K2": 40.0, "K": 1.2},
+        "conventional-ptc": {"K1": 2.5, "K2": 40.0},
+    }
+    assert make_scenario("paper-fig5", env_kwargs={"dt": 0.01}).env_kwargs == {"T_con": 20.0, "dt": 0.01}
+    with pytest.raises(ValueError, match="scenario='paper-fig99' is invalid: expected one of paper-fig5, paper-fig7"):
+        make_scenario("paper-fig99")
