@@ -15,7 +15,14 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import dwr_gym  # noqa: F401  (registers the envs)
-from baselines import ControllerInput, PTCController, PTCParams
+from baselines import (
+    ControllerInput,
+    ConventionalPTCController,
+    FabregasController,
+    FixedTimeController,
+    PTCController,
+    PTCParams,
+)
 from dwr_gym import model
 from dwr_gym.disturbances import ActuatorFault, VelocityBias, VelocityRandomWalk, VelocitySinusoid, WheelSlip
 from dwr_gym.robots import DifferentialDrive
@@ -214,3 +221,72 @@ def test_random_walk_increments_have_the_documented_spread_and_restart_each_epis
     assert np.all([omega == 0.0 for _, omega in velocities(env, (0.0, 0.0), 50)])
     first = velocities(env, (0.0, 0.0), 1)[0][0]  # a new episode starts the walk at 0: one increment from there
     assert abs(first) < 5 * 0.2 * math.sqrt(0.05) < np.max(np.abs(walk))
+
+
+def feedforward_by_hand(d: float, alpha: float, psi: float, u: float, k: float) -> tuple[float, float]:
+    """(d u Delta + alpha_dot + zeta_dot of eq. (18), e_psi of eq. (6)) for the linear velocity u."""
+    bearing = wrap(alpha - psi)
+    zeta = math.asin(k * alpha * math.tanh(d))
+    alpha_dot, d_dot = u * math.sin(bearing) / d, -u * math.cos(bearing)
+    zeta_dot = k * (alpha_dot * math.tanh(d) + alpha * (1.0 - math.tanh(d) ** 2) * d_dot)
+    zeta_dot /= math.sqrt(1.0 - (k * alpha * math.tanh(d)) ** 2)
+    return d * u * (1.0 - math.cos(bearing)) / bearing + alpha_dot + zeta_dot, bearing + zeta
+
+
+def law(controller: object, d: float, alpha: float, psi: float, t: float) -> tuple[float, float]:
+    inputs = ControllerInput(*(np.array([v], dtype=np.float64) for v in (d, alpha, psi, t, 0.8, 1.0)))
+    u, omega = controller(inputs)  # type: ignore[operator]
+    return float(u[0]), float(omega[0])
+
+
+@pytest.mark.parametrize("state", [(0.8, 0.3, -1.1, 4.0), (0.37, -2.5, 1.9, 12.0), (2.2, 1.0, 1.3, 17.0)])
+@pytest.mark.parametrize("power", [1, 2])
+def test_conventional_ptc_by_hand(state: tuple[float, float, float, float], power: int) -> None:
+    """Figure 8's comparison: eqs. (16)-(18) with beta = 1 and mu = (T / (T - t))^(n + m) / T of eqs. (12)-(13)."""
+    d, alpha, psi, t = state
+    mu = min((20.0 / (20.0 - t)) ** power / 20.0, 10.0)  # capped at max_gain = 10 1/s
+    e = wrap(alpha - psi) + math.asin(K * alpha * math.tanh(d))
+    p_star = 1.0 / (1.0 + e * e)
+    u = 2.0 * mu * p_star * d
+    feedforward, _ = feedforward_by_hand(d, alpha, psi, u, K)
+    expected = (u, feedforward + 10.0 * p_star * mu * e)
+    assert law(ConventionalPTCController(power=power), *state) == pytest.approx(expected, rel=1e-11)
+
+
+@pytest.mark.parametrize("state", [(0.8, 0.3, -1.1), (0.37, -2.5, 1.9), (2.2, 1.0, 1.3), (0.004, 1.0, 0.0)])
+def test_fixed_time_law_by_hand(state: tuple[float, float, float]) -> None:
+    """u = p* (k1 d^a + k2 d^b), omega = feedforward + p* (k3 |e|^a + k4 |e|^b) sign(e); both 0 within 5 mm."""
+    d, alpha, psi = state
+    e = wrap(alpha - psi) + math.asin(K * alpha * math.tanh(d))
+    p_star = 1.0 / (1.0 + e * e)
+    u = p_star * (0.1 * d**0.5 + 0.1 * d**1.5)
+    feedforward, _ = feedforward_by_hand(d, alpha, psi, u, K)
+    omega = feedforward + p_star * (abs(e) ** 0.5 + abs(e) ** 1.5) * math.copysign(1.0, e)
+    expected = (0.0, 0.0) if d < 0.005 else (u, omega)
+    assert law(FixedTimeController(), *state, 3.0) == pytest.approx(expected, rel=1e-11, abs=0.0)
+    bound = FixedTimeController().settling_time_bound()
+    p_min = 1.0 / (1.0 + (7.0 * math.pi / 6.0) ** 2)
+    assert bound == pytest.approx(
+        {"distance": (1 / 0.05 + 1 / 0.05) / p_min, "orientation": (1 / 0.5 + 1 / 0.5) / p_min}
+    )
+
+
+def test_fabregas_law_and_its_integral_by_hand() -> None:
+    """Ref. [9]: u = K0 d (pi - |alpha - psi|) / pi, omega = K_omega sin(alpha - psi) + K_i sum((alpha - psi) dt)."""
+    controller = FabregasController(K0=0.1, K_omega=0.75, K_i=0.2, dt=0.05)
+    bearings = np.array([1.0, -2.0])
+    inputs = ControllerInput(np.array([0.8, 0.5]), bearings, np.zeros(2), np.zeros(2), np.ones(2), np.ones(2))
+    for step in range(1, 4):
+        u, omega = controller(inputs)
+        np.testing.assert_allclose(u, 0.1 * np.array([0.8, 0.5]) * (math.pi - np.abs(bearings)) / math.pi)
+        np.testing.assert_allclose(omega, 0.75 * np.sin(bearings) + 0.2 * step * 0.05 * bearings, rtol=1e-12)
+    controller.reset(np.array([True, False]))  # robot 0's integral restarts
+    np.testing.assert_allclose(
+        controller(inputs)[1], 0.75 * np.sin(bearings) + 0.2 * np.array([1, 4]) * 0.05 * bearings
+    )
+    controller.reset()
+    np.testing.assert_allclose(controller(inputs)[1], 0.75 * np.sin(bearings) + 0.2 * 0.05 * bearings)
+    limited = FabregasController(K0=0.1, speed_limit=0.03)(inputs)[0]
+    np.testing.assert_allclose(
+        limited, np.minimum(0.1 * np.array([0.8, 0.5]) * (math.pi - np.abs(bearings)) / math.pi, 0.03)
+    )
