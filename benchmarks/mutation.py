@@ -124,7 +124,7 @@ def collect(group: str, directory: Path, names: list[str] | None = None) -> list
             if names is None or name in names:
                 mutants.append({"name": name, "file": source, "status": STATUS.get(code, "suspicious")})
     for mutant in mutants:
-        if mutant["status"] not in ("killed", "timeout"):
+        if mutant["status"] not in ("killed", "timeout", "not checked"):
             mutant["diff"] = diff_lines(mutmut(directory, "show", mutant["name"]))
     return mutants
 
