@@ -177,7 +177,11 @@ def run(
         log = work / f"{group}.log"
         directory = work / group if collect_only else prepare(group, work)
         previous = json.loads(RESULTS.read_text())["groups"][group] if recheck else None
-        names = [m["name"] for m in previous["mutants"] if m["status"] not in ("killed", "timeout")] if previous else []
+        names = (
+            [m["name"] for m in previous["mutants"] if m["status"] not in ("killed", "timeout", "not checked")]
+            if previous
+            else []
+        )
         print(f"{group}: mutmut in {directory} (log {log})" + (f", rechecking {len(names)}" if recheck else ""),
               flush=True)  # fmt: skip
         population = None
