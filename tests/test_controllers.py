@@ -371,3 +371,19 @@ def test_a_controller_keeps_the_params_it_is_given_and_builds_them_from_keywords
     assert cls(given).params is given
     assert cls(**{field: 0.3}).params == given and make_controller(name, **{field: 0.3}).params == given
     assert repr(cls(given)) == f"{cls.__name__}({given})"
+
+
+def test_evaluate_runs_the_scenarios_robot_disturbances_and_seed_as_rollout_does() -> None:
+    from dwr_gym.disturbances import VelocityRandomWalk
+
+    kwargs = {"robot": "turtlebot3_burger", "disturbances": [VelocityRandomWalk(0.02, 0.1)], "observation_noise": 0.01}
+    scenario = make_scenario("random", n=6, seed=2, env_kwargs=kwargs)
+    params = EnvParams.from_kwargs(observation_noise=0.01, u_max=0.22, omega_max=2 * 0.22 / 0.16)
+    expert = ExpertPolicy(PTCController(), params.u_max, params.omega_max)
+    results = [evaluate({"ptc": "ptc"}, scenario, seed=seed)["ptc"] for seed in (3, 4)]
+    direct = rollout(expert, params, scenario.starts, scenario.goals, seed=3, env_kwargs=kwargs)
+    np.testing.assert_array_equal(results[0].energy, direct.energy)
+    np.testing.assert_array_equal(results[0].episode_return, direct.episode_return)
+    assert not np.array_equal(results[0].energy, results[1].energy)  # the seed reaches the noise and the walk
+    nominal = rollout(expert, params, scenario.starts, scenario.goals, seed=3)
+    assert not np.array_equal(results[0].energy, nominal.energy)  # the robot and its disturbances act
