@@ -329,3 +329,16 @@ def test_model_and_env_agree_on_the_paper_quantities() -> None:
     assert info["distance"] == pytest.approx(d)
     assert info["orientation_error"] == pytest.approx(model.orientation_error(alpha, psi, d, 1 / (2 * math.pi)))
     assert math.atan2(obs[2], obs[1]) == pytest.approx(alpha, abs=1e-6)
+
+
+def test_arrival_is_d_at_most_goal_tolerance_and_integer_actions_are_actions() -> None:
+    env = make(goal_tolerance=0.5)
+    env.reset(options={"start": (-0.5, 0.0, 0.0), "goal": (0.0, 0.0, 0.0)})  # d = 0.5 exactly
+    _, _, terminated, _, info = env.step(np.array([0, 0]))  # integers: no motion
+    assert info["distance"] == 0.5 and info["is_success"] and terminated
+    env.reset(options={"start": (-0.5, 0.0, 0.0), "goal": (1.0, 0.0, 0.0)})
+    as_int = env.step(np.array([1, -1]))[4]
+    env.reset(options={"start": (-0.5, 0.0, 0.0), "goal": (1.0, 0.0, 0.0)})
+    as_bool = env.step(np.array([True, False]))[4]
+    assert (as_int["linear_velocity"], as_int["angular_velocity"]) == (0.5, -2.0)
+    assert (as_bool["linear_velocity"], as_bool["angular_velocity"]) == (0.5, 0.0)

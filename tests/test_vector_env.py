@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 import gymnasium as gym
@@ -9,7 +10,7 @@ import numpy as np
 import pytest
 from gymnasium.vector import AutoresetMode, SyncVectorEnv
 
-import dwr_gym  # noqa: F401
+import dwr_gym
 from dwr_gym import core
 from dwr_gym.vector_env import DWRPointStabilizationVectorEnv
 
@@ -317,3 +318,26 @@ def test_a_fresh_state_is_n_robots_at_the_goal_in_its_dtype_with_integer_counter
         assert value.dtype == dtype and value.shape == (3,) and not value.any(), name
     np.testing.assert_array_equal(state.goal_cos, np.ones(3, dtype))  # the goal heading 0: cos 1, sin 0
     np.testing.assert_array_equal(np.array(state.world_pose()), np.zeros((3, 3)))
+
+
+def test_a_robot_on_its_goal_observes_the_azimuth_as_1_0_without_warnings() -> None:
+    """At d = 0, eq. (3)'s (cos, sin) of the azimuth are 0 / 0; the observation holds (1, 0) there."""
+    envs = gym.make_vec(ENV_ID, num_envs=3)
+    starts = np.array([[0.5, 0.5, 0.0], [1.0, 0.0, 0.3], [0.2, -0.1, 0.0]])
+    goals = np.array([[0.5, 0.5, 0.0], [0.0, 0.0, 0.0], [0.2, -0.1, 1.0]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        obs, _ = envs.reset(seed=0, options={"start": starts, "goal": goals})
+    np.testing.assert_array_equal(obs[[0, 2], 0], 0.0)
+    np.testing.assert_array_equal(obs[[0, 2], 1:3], [[1.0, 0.0], [1.0, 0.0]])
+    np.testing.assert_allclose(obs[1, 1:3], [-1.0, 0.0], atol=1e-7)  # the goal lies behind robot 1
+
+
+def test_new_states_keep_integer_counters() -> None:
+    params = dwr_gym.EnvParams()
+    state = core.new_state((np.array([1.0, 2.0]), np.zeros(2), np.zeros(2)), (np.zeros(2),) * 3, params,
+                           T_con=np.array([10.0, 20.0]))  # fmt: skip
+    for name in ("step_count", "prescribed_steps", "max_steps"):
+        assert getattr(state, name).dtype == np.int64, name
+    np.testing.assert_array_equal(state.prescribed_steps, [200, 400])
+    np.testing.assert_array_equal(state.max_steps, [300, 600])
