@@ -387,3 +387,22 @@ def test_evaluate_runs_the_scenarios_robot_disturbances_and_seed_as_rollout_does
     assert not np.array_equal(results[0].energy, results[1].energy)  # the seed reaches the noise and the walk
     nominal = rollout(expert, params, scenario.starts, scenario.goals, seed=3)
     assert not np.array_equal(results[0].energy, nominal.energy)  # the robot and its disturbances act
+
+
+def test_expert_takes_the_action_limits_of_any_kind_of_env() -> None:
+    from stable_baselines3.common.vec_env import DummyVecEnv
+
+    from dwr_gym.sb3 import make_sb3_vec_env
+
+    limits = {"u_max": 0.3, "omega_max": 1.5}
+    envs = [gym.make("DWRPointStabilization-v1", **limits), gym.make_vec("DWRPointStabilization-v1", 2, **limits),
+            make_sb3_vec_env(2, **limits), DummyVecEnv([lambda: gym.make("DWRPointStabilization-v1", **limits)]),
+            EnvParams(**limits)]  # fmt: skip
+    for env in envs:
+        expert = ExpertPolicy.from_env(env, PTCController())
+        assert (expert.u_max, expert.omega_max) == (0.3, 1.5), env
+    with pytest.raises(ValueError, match="is not a DWRPointStabilization env"):
+        ExpertPolicy.from_env(gym.make("CartPole-v1"), PTCController())
+    for bad in ({"u_max": 0.0}, {"omega_max": -1.0}):
+        with pytest.raises(ValueError, match=re.escape(f"{next(iter(bad))}={float(next(iter(bad.values())))!r}")):
+            ExpertPolicy(PTCController(), **{**limits, **bad})
