@@ -406,3 +406,14 @@ def test_expert_takes_the_action_limits_of_any_kind_of_env() -> None:
     for bad in ({"u_max": 0.0}, {"omega_max": -1.0}):
         with pytest.raises(ValueError, match=re.escape(f"{next(iter(bad))}={float(next(iter(bad.values())))!r}")):
             ExpertPolicy(PTCController(), **{**limits, **bad})
+
+
+def test_a_robustness_set_is_the_random_starts_on_the_imperfect_robot_timed_by_its_T_con() -> None:
+    from dwr_gym.disturbances import ActuatorFault
+
+    for T_con in (20.0, 30.0):
+        fault = make_scenario("fault", n=5, seed=3, env_kwargs={"T_con": T_con})
+        np.testing.assert_array_equal(fault.starts, make_scenario("random", n=5, seed=3).starts)
+        (disturbance,) = fault.env_kwargs["disturbances"]
+        assert disturbance == ActuatorFault(wheel="right", fraction=0.5, start_time=T_con / 4)
+        assert fault.env_kwargs["T_con"] == T_con and fault.env_kwargs["robot"].max_wheel_speed == math.inf

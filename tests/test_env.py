@@ -342,3 +342,18 @@ def test_arrival_is_d_at_most_goal_tolerance_and_integer_actions_are_actions() -
     as_bool = env.step(np.array([True, False]))[4]
     assert (as_int["linear_velocity"], as_int["angular_velocity"]) == (0.5, -2.0)
     assert (as_bool["linear_velocity"], as_bool["angular_velocity"]) == (0.5, 0.0)
+
+
+def test_observation_space_bounds_are_the_documented_ones() -> None:
+    space = make(arena_radius=4.0, horizon_factor=2.0).observation_space
+    e_max = 7.0 * math.pi / 6.0
+    np.testing.assert_allclose(space.low, [0, -1, -1, -1, -1, -e_max, 0, 0, 0, -e_max], rtol=1e-7)
+    np.testing.assert_allclose(space.high, [8.0, 1, 1, 1, 1, e_max, 2.0, 20.0, 4.0, e_max], rtol=1e-7)
+
+
+def test_a_start_on_the_arena_border_is_allowed_and_beyond_it_is_refused() -> None:
+    env = make(arena_radius=2.0)
+    _, info = env.reset(options={"start": (-2.0, 0.0, 0.0), "goal": (0.0, 0.0, 0.0)})
+    assert info["distance"] == 2.0
+    with pytest.raises(ValueError, match=r"start pose is 2.001 m from the goal, outside the arena"):
+        env.reset(options={"start": (-2.001, 0.0, 0.0), "goal": (0.0, 0.0, 0.0)})
