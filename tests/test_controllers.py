@@ -370,6 +370,8 @@ def test_a_controller_keeps_the_params_it_is_given_and_builds_them_from_keywords
     given = params_cls.from_kwargs(**{field: 0.3})
     assert cls(given).params is given
     assert cls(**{field: 0.3}).params == given and make_controller(name, **{field: 0.3}).params == given
+    if name in ("astolfi", "pt-astolfi"):  # any positive k_rho below k_alpha
+        assert make_controller(name, k_rho=1e-9).params.k_rho == 1e-9
     assert repr(cls(given)) == f"{cls.__name__}({given})"
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import re
 import sys
 
 import gymnasium as gym
@@ -172,8 +173,29 @@ def test_bad_parameters_and_a_missing_casadi_give_clear_errors(monkeypatch: pyte
     with pytest.raises(ValueError, match=r"unknown parameter\(s\) 'horizon'"):
         make_controller("optimal", horizon=3)
     monkeypatch.setitem(sys.modules, "casadi", None)
-    with pytest.raises(ImportError, match=r'pip install "dwr-gym\[optimal\]"'):
+    with pytest.raises(ImportError, match=r'the optimal controller needs CasADi: pip install "dwr-gym\[optimal\]"'):
         make_controller("optimal")
+
+
+@pytest.mark.parametrize(
+    ("field", "low", "high", "low_excluded"),
+    [("T_con", 0.0, 1e6, True), ("dt", 0.0, 1e6, True), ("u_max", 0.0, 1e6, True), ("omega_max", 0.0, 1e6, True),
+     ("arrival_time", 0.0, 1e6, True), ("arrival_fraction", 0.0, 1.0, True)],
+)  # fmt: skip
+def test_each_optimal_parameter_takes_its_range_and_names_itself_outside(
+    field: str, low: float, high: float, low_excluded: bool
+) -> None:
+    from baselines.nmpc import OptimalParams
+
+    assert getattr(OptimalParams.from_kwargs(**{field: high}), field) == high
+    assert getattr(OptimalParams.from_kwargs(**{field: 0.5 * high}), field) == 0.5 * high
+    for bad in (low if low_excluded else low - 1e-9, high * (1 + 1e-6)):
+        with pytest.raises(ValueError, match=re.escape(f"{field}={float(bad)!r} is invalid")):
+            OptimalParams.from_kwargs(**{field: bad})
+    for name, good, bad in (("workers", 256, 257), ("hold_steps", 10_000, 0)):
+        assert getattr(OptimalParams.from_kwargs(**{name: good, "replan_every": 0}), name) == good
+        with pytest.raises(ValueError, match=re.escape(f"{name}={bad!r} is invalid")):
+            OptimalParams.from_kwargs(**{name: bad, "replan_every": 0})
 
 
 def test_cli_with_an_infeasible_T_con_reports_it_and_still_writes_the_table(tmp_path: object) -> None:
