@@ -419,3 +419,16 @@ def test_a_robustness_set_is_the_random_starts_on_the_imperfect_robot_timed_by_i
         (disturbance,) = fault.env_kwargs["disturbances"]
         assert disturbance == ActuatorFault(wheel="right", fraction=0.5, start_time=T_con / 4)
         assert fault.env_kwargs["T_con"] == T_con and fault.env_kwargs["robot"].max_wheel_speed == math.inf
+
+
+def test_a_controller_never_returns_nan_or_inf_whatever_its_law_computes() -> None:
+    from baselines import Controller
+
+    class Broken(Controller):
+        def compute(self, inputs: ControllerInput) -> Any:
+            bad = np.array([np.nan, np.inf, -np.inf, 0.5])
+            return bad, bad.copy()
+
+    u, omega = Broken()(random_inputs(12, 0))
+    np.testing.assert_array_equal(u, [0.0, 0.0, 0.0, 0.5])
+    np.testing.assert_array_equal(omega, [0.0, 0.0, 0.0, 0.5])

@@ -92,6 +92,10 @@ def test_position_only_optimum_is_cheaper_than_the_pose() -> None:
 def test_an_infeasible_T_con_names_T_con_and_the_smallest_feasible_value() -> None:
     with pytest.raises(InfeasibleArrivalTimeError, match=r"T_con=3 s is infeasible.*expected T_con >= 4"):
         solve_minimum_energy((-2.0, 0.0, 0.0), 3.0, **LIMITS, heading=False)  # type: ignore[arg-type]
+    with pytest.raises(
+        InfeasibleArrivalTimeError, match=r"T_con=9 s is infeasible: from d_0=5 m .* expected T_con >= 10"
+    ):
+        solve_minimum_energy((-3.0, 4.0, 0.0), 9.0, **LIMITS, heading=False)  # type: ignore[arg-type]
 
 
 def test_a_failed_scenario_is_a_failure_in_the_table_not_a_crash(monkeypatch: pytest.MonkeyPatch) -> None:
