@@ -432,3 +432,43 @@ def test_a_controller_never_returns_nan_or_inf_whatever_its_law_computes() -> No
     u, omega = Broken()(random_inputs(12, 0))
     np.testing.assert_array_equal(u, [0.0, 0.0, 0.0, 0.5])
     np.testing.assert_array_equal(omega, [0.0, 0.0, 0.0, 0.5])
+
+
+class TurnAndGo:
+    """A policy that commands (u_max / 2, omega_max) and checks it is asked for deterministic actions."""
+
+    def predict(
+        self, observation: Any, state: Any = None, episode_start: Any = None, deterministic: bool = False
+    ) -> Any:
+        assert deterministic is True and episode_start.dtype == bool
+        return np.tile(np.array([0.5, 1.0], np.float32), (len(observation), 1)), None
+
+
+def test_a_recorded_rollout_holds_the_trajectory_and_its_command_rate_by_hand() -> None:
+    params = EnvParams(T_con=2.0)  # 60 steps to the horizon, none arrives
+    starts = np.array([[-1.0, 0.0, 0.0], [2.0, 1.0, 0.5]])
+    result = rollout(TurnAndGo(), params, starts, np.zeros((2, 3)), record=True)
+    trajectory = result.trajectory
+    assert trajectory is not None and set(trajectory) == {
+        "time",
+        "x",
+        "y",
+        "psi",
+        "distance",
+        "orientation_error",
+        "lyapunov",
+        "linear_velocity",
+        "angular_velocity",
+    }
+    assert trajectory["x"].shape == (61, 2) and trajectory["linear_velocity"].shape == (60, 2)
+    np.testing.assert_allclose(trajectory["time"][:, 0], 0.05 * np.arange(61))
+    np.testing.assert_allclose(np.stack([trajectory[k][0] for k in ("x", "y", "psi")], axis=1), starts)
+    np.testing.assert_allclose(trajectory["distance"], np.hypot(trajectory["x"], trajectory["y"]))
+    np.testing.assert_allclose(trajectory["lyapunov"],
+                               0.5 * (trajectory["distance"] ** 2 + trajectory["orientation_error"] ** 2))  # fmt: skip
+    np.testing.assert_allclose(trajectory["linear_velocity"], 0.25)
+    np.testing.assert_allclose(trajectory["angular_velocity"], 2.0)
+    np.testing.assert_allclose(trajectory["psi"][1:, 0], model.wrap_angle(0.1 * np.arange(1, 61)), atol=1e-12)
+    # one command step, 0 -> (0.25 m/s, 2 rad/s), over 60 steps: RMS of the rate sqrt((0.25^2 + 2^2) / 0.05^2 / 60)
+    np.testing.assert_allclose(result.command_rate_rms, math.sqrt((0.25**2 + 2.0**2) / 0.05**2 / 60))
+    assert rollout(TurnAndGo(), params, starts, np.zeros((2, 3))).trajectory is None
