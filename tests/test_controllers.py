@@ -331,6 +331,8 @@ PARAM_RANGES = [
     (FixedTimeParams, "k", 0.0, K_MAX, False, False), (FixedTimeParams, "stop_distance", 0.0, 1.0, False, False),
     (AstolfiParams, "k_rho", 0.0, None, True, False), (AstolfiParams, "k_beta", -1e9, 0.0, False, True),
     (AstolfiParams, "k_alpha", None, 1e9, False, False),
+    (PrescribedTimeAstolfiParams, "k_beta", -1e9, 0.0, False, True),
+    (PrescribedTimeAstolfiParams, "k_alpha", None, 1e9, False, False),
     (PrescribedTimeAstolfiParams, "T_con", 0.0, 1e9, True, False),
     (PrescribedTimeAstolfiParams, "arrival_fraction", 0.0, 1.0, True, False),
     (PrescribedTimeAstolfiParams, "max_gain", 1.0, 1e9, False, False),
@@ -345,7 +347,7 @@ def test_each_controller_parameter_takes_its_range_and_names_itself_outside(
     for edge, excluded, outside in ((low, low_excluded, -1), (high, high_excluded, 1)):
         if edge is None:
             continue
-        beyond = edge + outside * max(1e-6 * abs(edge), 1e-9)
+        beyond = float(np.nextafter(edge, outside * math.inf))  # the next float past the bound
         for value, valid in ((edge, not excluded), (beyond, False)):
             if valid:
                 optional = field == "speed_limit"  # None by default: numpy numbers are not converted there
@@ -354,6 +356,12 @@ def test_each_controller_parameter_takes_its_range_and_names_itself_outside(
             else:
                 with pytest.raises(ValueError, match=re.escape(f"{field}={float(value)!r} is invalid")):
                     cls.from_kwargs(**{field: value})
+
+
+def test_a_gain_too_large_for_its_own_bound_is_named_itself() -> None:
+    for cls in (AstolfiParams, PrescribedTimeAstolfiParams):  # not k_alpha, which must exceed it
+        with pytest.raises(ValueError, match=re.escape("k_rho=2000000000.0 is invalid")):
+            cls.from_kwargs(k_rho=2e9)
 
 
 def test_conventional_power_is_an_integer_from_1_to_10() -> None:
