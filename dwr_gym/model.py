@@ -80,6 +80,10 @@ def _vectorised(name: str) -> Any:
 
     This numpy evaluates float64 sin, cos, tanh, arcsin and arctan2 one element at a time; torch's
     kernels use SIMD (SLEEF, within 1 ulp), 2-3x faster here. Results agree with numpy's to about 1e-16.
+    torch computes them on the calling thread: its thread pool would split a call of a few microseconds
+    across the cores, and on a busy machine every such call waits for a thread the scheduler has set aside
+    (measured in docs/throughput.md). So torch's thread count is 1 for the call, and restored right after
+    it: the user's setting holds everywhere else.
     """
     numpy_fn = getattr(np, name)
     torch_name = {"arctan2": "atan2", "arcsin": "asin"}.get(name, name)
@@ -94,7 +98,14 @@ def _vectorised(name: str) -> Any:
                     return numpy_fn(*args)
             torch = _torch_module()
             if torch:
-                return getattr(torch, torch_name)(*map(torch.from_numpy, args)).numpy()
+                threads = torch.get_num_threads()
+                if threads == 1:
+                    return getattr(torch, torch_name)(*map(torch.from_numpy, args)).numpy()
+                torch.set_num_threads(1)
+                try:
+                    return getattr(torch, torch_name)(*map(torch.from_numpy, args)).numpy()
+                finally:
+                    torch.set_num_threads(threads)
         return numpy_fn(*args)
 
     fn.__name__ = name

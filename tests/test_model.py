@@ -171,3 +171,40 @@ def test_edge_states_are_finite(alpha_minus_psi: float) -> None:
         assert abs(e) <= model.MAX_ORIENTATION_ERROR + 1e-12
         assert np.isfinite(model.azimuth_rate(1.0, 0.0, -alpha_minus_psi, d))
         assert np.isfinite(model.orientation_error_rate(1.0, 1.0, 0.0, -alpha_minus_psi, d, K))
+
+
+@pytest.mark.parametrize("threads", [1, 2, 3])
+def test_torch_kernels_run_on_the_calling_thread_and_leave_the_users_thread_count(
+    threads: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """torch's thread pool would split each call across the cores, which collapses on a busy machine
+    (docs/throughput.md): the calls run with one thread, and the user's setting is back after each."""
+    torch = pytest.importorskip("torch")
+    seen: list[int] = []
+    original = torch.sin
+
+    def recording_sin(*args: object) -> object:
+        seen.append(torch.get_num_threads())
+        return original(*args)
+
+    before = torch.get_num_threads()
+    torch.set_num_threads(threads)
+    try:
+        monkeypatch.setattr(torch, "sin", recording_sin)
+        x = np.linspace(-3.0, 3.0, model.TORCH_MIN_SIZE)
+        np.testing.assert_allclose(model.ARRAY_MATH.sin(x), np.sin(x), rtol=0, atol=1e-15)
+        assert seen == [1] and torch.get_num_threads() == threads
+        for name in ("cos", "tanh", "arcsin", "arctan2"):
+            args = (x / 3.0, x + 4.0)[: 2 if name == "arctan2" else 1]
+            np.testing.assert_allclose(getattr(model.ARRAY_MATH, name)(*args), getattr(np, name)(*args), atol=1e-15)
+            assert torch.get_num_threads() == threads
+
+        def failing_sin(*args: object) -> object:
+            raise RuntimeError("kernel failed")
+
+        monkeypatch.setattr(torch, "sin", failing_sin)
+        with pytest.raises(RuntimeError, match="kernel failed"):
+            model.ARRAY_MATH.sin(x)
+        assert torch.get_num_threads() == threads  # restored on errors too
+    finally:
+        torch.set_num_threads(before)
