@@ -3,7 +3,8 @@
 Every function takes numpy arrays of matching, broadcastable shapes and returns arrays of the same
 shape: one call handles N robots. Given Python floats instead, the same code runs on the ``math``
 module (see :data:`SCALAR_MATH`), which is what keeps a single robot's step cheap; on large float64
-arrays, its sin, cos, tanh, arcsin and arctan2 are torch's SIMD kernels (see :data:`ARRAY_MATH`). Nothing here keeps state or knows about Gymnasium; the
+arrays, the transcendental functions numpy evaluates one element at a time are torch's SIMD kernels (see
+:data:`ARRAY_MATH` and :data:`TORCH_FUNCTIONS`). Nothing here keeps state or knows about Gymnasium; the
 single env, the vector env and the controllers in :mod:`baselines` all call these functions, so
 each equation of the paper is written exactly once.
 
@@ -75,22 +76,40 @@ def _torch_module() -> Any:
     return _torch
 
 
-def _vectorised(name: str) -> Any:
-    """numpy's float64 function ``name``, computed by torch for large contiguous float64 arrays.
+def _numpy_has_simd_float64() -> bool:
+    """Whether this numpy computes float64 tanh, arcsin and arctan2 with SIMD (Intel's SVML, on CPUs with
+    AVX512_SKX); elsewhere it computes them one element at a time, as it always does sin and cos."""
+    try:
+        from numpy._core._multiarray_umath import __cpu_features__  # what numpy.show_runtime() reports
+    except ImportError:
+        return False
+    return bool(__cpu_features__.get("AVX512_SKX"))
 
-    This numpy evaluates float64 sin, cos, tanh, arcsin and arctan2 one element at a time; torch's
-    kernels use SIMD (SLEEF, within 1 ulp), 2-3x faster here. Results agree with numpy's to about 1e-16.
-    torch computes them on the calling thread: its thread pool would split a call of a few microseconds
-    across the cores, and on a busy machine every such call waits for a thread the scheduler has set aside
-    (measured in docs/throughput.md). So torch's thread count is 1 for the call, and restored right after
-    it: the user's setting holds everywhere else.
+
+#: The float64 functions torch computes for large arrays: those this numpy evaluates one element at a time
+#: (numpy's SIMD tanh, arcsin and arctan2 beat torch's: docs/throughput.md).
+TORCH_FUNCTIONS: frozenset[str] = frozenset(
+    ("sin", "cos") if _numpy_has_simd_float64() else ("sin", "cos", "tanh", "arcsin", "arctan2")
+)
+
+
+def _vectorised(name: str) -> Any:
+    """numpy's float64 function ``name``, computed by torch for large contiguous float64 arrays when it is
+    one of :data:`TORCH_FUNCTIONS`.
+
+    numpy evaluates float64 sin and cos (and, without AVX512, tanh, arcsin and arctan2) one element at a
+    time; torch's kernels use SIMD (SLEEF, within 1 ulp), 2-3x faster. Results agree with numpy's to about
+    1e-16. torch computes them on the calling thread: its thread pool would split a call of a few
+    microseconds across the cores, and on a busy machine every such call waits for a thread the scheduler
+    has set aside (measured in docs/throughput.md). So torch's thread count is 1 for the call, and
+    restored right after it: the user's setting holds everywhere else.
     """
     numpy_fn = getattr(np, name)
     torch_name = {"arctan2": "atan2", "arcsin": "asin"}.get(name, name)
 
     def fn(*args: Any) -> Any:
         first = args[0]
-        if type(first) is np.ndarray and first.size >= TORCH_MIN_SIZE:
+        if type(first) is np.ndarray and first.size >= TORCH_MIN_SIZE and name in TORCH_FUNCTIONS:
             shape = first.shape
             for a in args:  # float64 dtypes are one object: compared by identity; flags: made once
                 if not (type(a) is np.ndarray and a.dtype is _FLOAT64 and a.shape == shape

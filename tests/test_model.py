@@ -180,6 +180,7 @@ def test_torch_kernels_run_on_the_calling_thread_and_leave_the_users_thread_coun
     """torch's thread pool would split each call across the cores, which collapses on a busy machine
     (docs/throughput.md): the calls run with one thread, and the user's setting is back after each."""
     torch = pytest.importorskip("torch")
+    monkeypatch.setattr(model, "TORCH_FUNCTIONS", frozenset(("sin", "cos", "tanh", "arcsin", "arctan2")))
     seen: list[int] = []
     original = torch.sin
 
@@ -208,3 +209,17 @@ def test_torch_kernels_run_on_the_calling_thread_and_leave_the_users_thread_coun
         assert torch.get_num_threads() == threads  # restored on errors too
     finally:
         torch.set_num_threads(before)
+
+
+def test_torch_computes_only_the_functions_numpy_evaluates_one_element_at_a_time(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    torch = pytest.importorskip("torch")
+    calls: list[str] = []
+    for name in ("sin", "tanh"):
+        original = getattr(torch, name)
+        monkeypatch.setattr(torch, name, lambda *a, _f=original, _n=name: calls.append(_n) or _f(*a))
+    x = np.linspace(-1.0, 1.0, model.TORCH_MIN_SIZE)
+    monkeypatch.setattr(model, "TORCH_FUNCTIONS", frozenset(("sin",)))
+    model.ARRAY_MATH.sin(x), model.ARRAY_MATH.tanh(x), model.ARRAY_MATH.sin(x[:-1])  # the last: below the size
+    assert calls == ["sin"]
