@@ -79,10 +79,13 @@ def _torch_module() -> Any:
 def _numpy_has_simd_float64() -> bool:
     """Whether this numpy computes float64 tanh, arcsin and arctan2 with SIMD (Intel's SVML, on CPUs with
     AVX512_SKX); elsewhere it computes them one element at a time, as it always does sin and cos."""
-    try:
-        from numpy._core._multiarray_umath import __cpu_features__  # what numpy.show_runtime() reports
+    try:  # what numpy.show_runtime() reports (numpy._core since numpy 2)
+        from numpy._core._multiarray_umath import __cpu_features__
     except ImportError:
-        return False
+        try:
+            from numpy.core._multiarray_umath import __cpu_features__
+        except ImportError:
+            return False
     return bool(__cpu_features__.get("AVX512_SKX"))
 
 
