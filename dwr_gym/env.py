@@ -288,12 +288,13 @@ class DWRPointStabilizationEnv(HorizonSpec, OneRobotRendering, gym.Env[NDArray[n
         action = np.asarray(action)
         if action.shape != (2,):
             raise ValueError(f"action of shape {action.shape} is invalid: expected shape (2,)")
-        result = core.transition(
-            self._state, action, self.params, self.observation_space,
-            self._noise(2, self.params.actuation_noise), self._noise(3, self.params.observation_noise),
-            self.perturbation,
+        params = self.params
+        result = core.transition(  # the noise drawn only if there is any: the step is bound by the interpreter's calls
+            self._state, action, params, self.observation_space,
+            self._noise(2, params.actuation_noise) if params.actuation_noise > 0 else None,
+            self._noise(3, params.observation_noise) if params.observation_noise > 0 else None, self.perturbation,
         )  # fmt: skip
-        info = core.infos(self._state, result.coords, self.params, result)
+        info = core.infos(self._state, result.coords, params, result)
         if self.perturbation is not None:
             info["disturbance"] = self.perturbation.info(scalar=True)
         if self.render_mode is not None:

@@ -159,7 +159,8 @@ def namespace(*values: Any) -> Any:
 
 def wrap_angle(angle: ArrayLike) -> FloatArray:
     """Wrap angles to [-pi, pi) (to within one rounding error)."""
-    return angle - (2.0 * np.pi) * namespace(angle).floor((angle + np.pi) * (0.5 / np.pi))  # floor: ~5x np.mod's speed
+    xp = SCALAR_MATH if type(angle) is float else namespace(angle)
+    return angle - (2.0 * np.pi) * xp.floor((angle + np.pi) * (0.5 / np.pi))  # floor: ~5x np.mod's speed
 
 
 def rotate(x: ArrayLike, y: ArrayLike, cos_angle: ArrayLike, sin_angle: ArrayLike) -> tuple[FloatArray, FloatArray]:
@@ -206,7 +207,7 @@ def sinc(h: ArrayLike) -> FloatArray:
     sin(h) / h elsewhere."""
     h2 = h * h  # type: ignore[operator]
     series = 1.0 + h2 * (-1.0 / 6.0 + h2 * (1.0 / 120.0 + h2 * (-1.0 / 5040.0 + h2 * (1.0 / 362880.0))))
-    if namespace(h) is SCALAR_MATH:
+    if type(h) is float or namespace(h) is SCALAR_MATH:
         return series if abs(h) <= SINC_SERIES_LIMIT else math.sin(h) / h  # type: ignore[arg-type, operator, return-value]
     if h2.size and h2.max() > SINC_SERIES_LIMIT * SINC_SERIES_LIMIT:  # (np.max's initial= doubles its cost)
         large = np.abs(h) > SINC_SERIES_LIMIT
@@ -224,7 +225,7 @@ def unicycle_step_exact(
     ``u dt [sin(h) / h] [cos, sin](psi + h)`` with h = omega dt / 2, which needs no division by
     omega and is exactly the straight line when omega = 0.
     """
-    xp = namespace(psi, angular_velocity)
+    xp = SCALAR_MATH if type(psi) is float is type(angular_velocity) else namespace(psi, angular_velocity)
     half_turn = 0.5 * dt * angular_velocity  # type: ignore[operator]
     chord = linear_velocity * dt * sinc(half_turn)  # type: ignore[operator]
     mid_heading = psi + half_turn  # type: ignore[operator]
@@ -279,14 +280,14 @@ def integrate_unicycle(
 # ---------------------------------------------------------------------------------------------
 def distance(x: ArrayLike, y: ArrayLike) -> FloatArray:
     """Distance to the goal at the origin, eq. (2)."""
-    xp = namespace(x, y)
+    xp = SCALAR_MATH if type(x) is float is type(y) else namespace(x, y)
     return xp.sqrt(x * x + y * y)  # type: ignore[operator]  # positions are bounded: no overflow
 
 
 def azimuth(x: ArrayLike, y: ArrayLike) -> FloatArray:
     """Azimuth of the goal seen from the robot, eq. (3): atan2(y_d - y, x_d - x) with the goal at 0."""
     # 0.0 - v turns -0.0 into +0.0, so atan2 gives 0 rather than +-pi at d = 0 exactly.
-    xp = namespace(x, y)
+    xp = SCALAR_MATH if type(x) is float is type(y) else namespace(x, y)
     return xp.arctan2(0.0 - y, 0.0 - x)  # type: ignore[operator]
 
 
@@ -297,7 +298,7 @@ def bearing_error(alpha: ArrayLike, psi: ArrayLike) -> FloatArray:
 
 def arcsine_term(alpha: ArrayLike, dist: ArrayLike, k: float) -> FloatArray:
     """The auxiliary arcsine function zeta = asin(k alpha tanh d) of eq. (6)."""
-    xp = namespace(alpha, dist)
+    xp = SCALAR_MATH if type(alpha) is float is type(dist) else namespace(alpha, dist)
     return xp.arcsin(k * alpha * xp.tanh(dist))  # type: ignore[operator]
 
 
@@ -379,7 +380,7 @@ def improved_velocity_constraint_min(Ke: float) -> float:
 def conventional_scaling(t: ArrayLike, T: float, t0: float = 0.0, max_gain: float = 1e6) -> FloatArray:
     """mu_1(t, T) = T / (T + t0 - t), eq. (12); equal to 1 at t0 and unbounded toward t0 + T."""
     # Guard: eq. (12) is infinite at t = t0 + T and negative after; we cap it at max_gain.
-    xp = namespace(t, T)
+    xp = SCALAR_MATH if type(t) is float is type(T) else namespace(t, T)
     return T / xp.maximum(T + t0 - t, T / max_gain)  # type: ignore[operator]
 
 

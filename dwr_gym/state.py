@@ -34,7 +34,8 @@ def error_coordinates(x: FloatArray, y: FloatArray, psi: FloatArray, k: float) -
     """Distance (2), azimuth (3) and orientation error (6) of a batch of goal-frame poses."""
     dist = model.distance(x, y)
     alpha = model.azimuth(x, y)
-    return ErrorCoordinates(x, y, psi, dist, alpha, model.orientation_error(alpha, psi, dist, k))
+    # tuple.__new__ makes the named tuple at twice the speed of ErrorCoordinates(...), whose __new__ is Python code
+    return tuple.__new__(ErrorCoordinates, (x, y, psi, dist, alpha, model.orientation_error(alpha, psi, dist, k)))
 
 
 @dataclass
