@@ -150,7 +150,12 @@ ARRAY_MATH: Any = _ArrayMath()
 
 
 def namespace(*values: Any) -> Any:
-    """:data:`ARRAY_MATH` (numpy) if any value is an array, else :data:`SCALAR_MATH`."""
+    """:data:`ARRAY_MATH` (numpy) if any value is an array, else :data:`SCALAR_MATH`.
+
+    The functions of the single env's step test ``type(x) is float`` inline first and call this only
+    for arrays: for one robot the call cost more than the function's arithmetic (8 calls were 8 % of
+    the step's instructions).
+    """
     for value in values:
         if type(value) is not float and isinstance(value, np.ndarray):  # float first: the single env's case
             return ARRAY_MATH
