@@ -76,9 +76,9 @@ class DWRPointStabilizationVectorEnv(HorizonSpec, VectorEnv):
     match single envs draw for draw. ``render()`` returns a tuple of one frame per sub-env in
     "rgb_array" mode (as ``SyncVectorEnv``), and shows sub-env 0 in "human" mode.
 
-    ``dtype="float32"`` computes the whole batch in single precision: about 1.1-1.5x the throughput of
-    float64 at N = 4096 (see the README's throughput section), at a position resolution of about 5e-7 m
-    at 5 m; the default float64 matches the single env to 1e-9.
+    ``dtype="float32"`` computes the whole batch in single precision, faster than float64 (docs/throughput.md
+    measures by how much), at a position resolution of about 5e-7 m at 5 m; the default float64 matches the
+    single env to 1e-9.
     """
 
     metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 20, "autoreset_mode": AutoresetMode.NEXT_STEP}
