@@ -14,10 +14,11 @@ from dwr_gym.model import FloatArray
 from dwr_gym.params import EnvParams
 from dwr_gym.state import ErrorCoordinates, TaskState, error_coordinates
 
-try:  # the ufunc behind np.clip, without np.clip's Python wrapper (numpy._core since numpy 2)
-    from numpy._core.umath import clip as _clip
+# The ufunc behind np.clip, without np.clip's Python wrapper: faster than np.clip, and than maximum then minimum.
+try:  # (numpy._core since numpy 2)
+    from numpy._core.umath import clip
 except ImportError:
-    from numpy.core.umath import clip as _clip
+    from numpy.core.umath import clip
 
 #: Names of the observation features, in order.
 OBSERVATION_NAMES: tuple[str, ...] = (
@@ -74,7 +75,7 @@ def observe(
              state.step_count * (params.dt / state.T_con), state.T_con, state.initial_distance,
              state.initial_orientation_error], dtype=np.float32,
         )  # fmt: skip
-        return _clip(features, space.low, space.high, out=features)  # the ufunc: 6x np.clip's speed here
+        return clip(features, space.low, space.high, out=features)  # the ufunc: 6x np.clip's speed here
     features = np.empty((len(OBSERVATION_NAMES), dist.shape[0]), dtype=np.float32)  # filled row by row: contiguous
     features[0] = dist
     # -cos(alpha) and -sin(alpha) of eq. (3) without trigonometry; 0 / 0 at the goal, where they are set to (1, 0)
@@ -94,5 +95,5 @@ def observe(
     features[7] = state.T_con
     features[8] = state.initial_distance
     features[9] = state.initial_orientation_error
-    _clip(features, space.low[:, None], space.high[:, None], out=features)  # one pass: 3x maximum then minimum
+    clip(features, space.low[:, None], space.high[:, None], out=features)  # one pass: 3x maximum then minimum
     return features.T
