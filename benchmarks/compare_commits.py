@@ -135,7 +135,8 @@ def main() -> None:
     if args.json:
         args.json.parent.mkdir(parents=True, exist_ok=True)
         record = {"commits": list(commits), "num_envs": args.num_envs, "load_processes": args.load,
-                  "rounds": args.rounds, "ratios": ratios, "median_ratios": [old, new]}  # fmt: skip
+                  "omp_num_threads": os.environ.get("OMP_NUM_THREADS"), "rounds": args.rounds, "ratios": ratios,
+                  "median_ratios": [old, new]}  # fmt: skip
         args.json.write_text(json.dumps(record, indent=1) + "\n")
     loaded = f", {args.load} busy background processes" if args.load else ""
     print(f"median ratio to CartPoleVectorEnv at N = {args.num_envs}{loaded}: {commits[0]} {old:.3f}, {commits[1]} {new:.3f} "

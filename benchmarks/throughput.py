@@ -523,8 +523,10 @@ def render(results: dict[str, Any]) -> list[str]:
 def render_compare(record: dict[str, Any]) -> list[str]:
     """The lines of the block of ``compare_commits.py --json``'s record."""
     (old, new), load = record["commits"], record["load_processes"]
-    lines = [f"float64 vector env at N = {record['num_envs']}, {load} busy background processes; speed relative to "
-             "CartPoleVectorEnv in the same process, per round:"]  # fmt: skip
+    threads = record.get("omp_num_threads")
+    setting = f"OMP_NUM_THREADS={threads}" if threads else "default threads"
+    lines = [f"float64 vector env at N = {record['num_envs']}, {load} busy background processes, {setting}; speed "
+             "relative to CartPoleVectorEnv in the same process, per round:"]  # fmt: skip
     for commit, ratios in zip(record["commits"], record["ratios"], strict=True):
         lines.append(f"{commit:>8}: " + "  ".join(f"{r:.3f}x" for r in ratios))
     old_median, new_median = record["median_ratios"]
@@ -547,6 +549,7 @@ def render_instructions(record: dict[str, Any]) -> list[str]:
 BLOCKS: dict[str, tuple[Path, Callable[[dict[str, Any]], list[str]]]] = {
     "throughput": (JSON_PATH, render),
     "compare": (JSON_PATH.parent / "compare_loaded.json", render_compare),
+    "compare_quiet": (JSON_PATH.parent / "compare_quiet_one_thread.json", render_compare),
     "instructions": (JSON_PATH.parent / "instructions.json", render_instructions),
 }
 

@@ -20,7 +20,7 @@ def throughput():  # benchmarks/ is not a package
     return module
 
 
-@pytest.mark.parametrize("block", ["throughput", "compare", "instructions"])
+@pytest.mark.parametrize("block", ["throughput", "compare", "compare_quiet", "instructions"])
 def test_each_docs_block_is_what_the_benchmarks_render_from_their_json(throughput, block: str) -> None:
     assert throughput.docs_block(block) == throughput.rendered_block(block)
 
