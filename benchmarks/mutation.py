@@ -46,7 +46,7 @@ DESELECTED = (
 GROUPS: dict[str, tuple[list[str], list[str]]] = {
     "model": (["dwr_gym/model.py"],
               ["tests/test_model.py", "tests/test_paper_by_hand.py", "tests/test_golden.py", "tests/test_env.py"]),
-    "core": (["dwr_gym/core.py", "dwr_gym/core/*"],
+    "core": (["dwr_gym/core.py", "dwr_gym/state.py", "dwr_gym/observation.py"],
              ["tests/test_env.py", "tests/test_vector_env.py", "tests/test_golden.py", "tests/test_paper_by_hand.py",
               "tests/test_prescribed_time.py", "tests/test_goal_env.py"]),
     "disturbances": (["dwr_gym/disturbances.py"],

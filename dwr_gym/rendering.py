@@ -9,8 +9,8 @@ import numpy as np
 from gymnasium.error import DependencyNotInstalled
 from numpy.typing import NDArray
 
-from dwr_gym.core import TaskState
 from dwr_gym.params import EnvParams
+from dwr_gym.state import TaskState
 
 BODY_RADIUS = 0.05  # [m] drawn size of the robot
 WHEEL_LENGTH = 0.045  # [m]

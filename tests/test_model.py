@@ -308,3 +308,55 @@ def test_torch_backed_functions_equal_numpys_and_DWR_GYM_TORCH_0_keeps_torch_out
     assert result.pop("torch imported") is (switch == "1")
     assert result.pop("torch calls") == (["sin", "cos", "tanh", "asin", "atan2"] if switch == "1" else [])
     assert max(result.values()) <= (1e-15 if switch == "1" else 0.0), result  # 1 ulp of values up to pi
+
+
+@pytest.mark.parametrize("threads", [1, 2, 3])
+def test_torch_kernels_run_on_the_calling_thread_and_leave_the_users_thread_count(
+    threads: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """torch's thread pool would split each call across the cores, which collapses on a busy machine
+    (docs/throughput.md): the calls run with one thread, and the user's setting is back after each."""
+    torch = pytest.importorskip("torch")
+    monkeypatch.setattr(model, "TORCH_FUNCTIONS", frozenset(("sin", "cos", "tanh", "arcsin", "arctan2")))
+    seen: list[int] = []
+    original = torch.sin
+
+    def recording_sin(*args: object) -> object:
+        seen.append(torch.get_num_threads())
+        return original(*args)
+
+    before = torch.get_num_threads()
+    torch.set_num_threads(threads)
+    try:
+        monkeypatch.setattr(torch, "sin", recording_sin)
+        x = np.linspace(-3.0, 3.0, model.TORCH_MIN_SIZE)
+        np.testing.assert_allclose(model.ARRAY_MATH.sin(x), np.sin(x), rtol=0, atol=1e-15)
+        assert seen == [1] and torch.get_num_threads() == threads
+        for name in ("cos", "tanh", "arcsin", "arctan2"):
+            args = (x / 3.0, x + 4.0)[: 2 if name == "arctan2" else 1]
+            np.testing.assert_allclose(getattr(model.ARRAY_MATH, name)(*args), getattr(np, name)(*args), atol=1e-15)
+            assert torch.get_num_threads() == threads
+
+        def failing_sin(*args: object) -> object:
+            raise RuntimeError("kernel failed")
+
+        monkeypatch.setattr(torch, "sin", failing_sin)
+        with pytest.raises(RuntimeError, match="kernel failed"):
+            model.ARRAY_MATH.sin(x)
+        assert torch.get_num_threads() == threads  # restored on errors too
+    finally:
+        torch.set_num_threads(before)
+
+
+def test_torch_computes_only_the_functions_numpy_evaluates_one_element_at_a_time(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    torch = pytest.importorskip("torch")
+    calls: list[str] = []
+    for name in ("sin", "tanh"):
+        original = getattr(torch, name)
+        monkeypatch.setattr(torch, name, lambda *a, _f=original, _n=name: calls.append(_n) or _f(*a))
+    x = np.linspace(-1.0, 1.0, model.TORCH_MIN_SIZE)
+    monkeypatch.setattr(model, "TORCH_FUNCTIONS", frozenset(("sin",)))
+    model.ARRAY_MATH.sin(x), model.ARRAY_MATH.tanh(x), model.ARRAY_MATH.sin(x[:-1])  # the last: below the size
+    assert calls == ["sin"]
