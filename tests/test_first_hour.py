@@ -389,3 +389,38 @@ def test_a_model_zip_outside_a_run_is_named_itself(tmp_path: Path) -> None:
     result = dwr_gym("evaluate", "--agents", str(tmp_path / "model.zip"), cwd=tmp_path)
     assert result.returncode == 2
     assert f"agent {str(tmp_path / 'model.zip')!r} is invalid: no config.yaml beside it or above it" in result.stderr
+
+
+# 12-14. Extras, headless machines, what is registered.
+
+
+def run_python(code: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, cwd=ROOT,
+                          env=env if env is not None else dict(os.environ))  # fmt: skip
+
+
+def test_the_sb3_adapter_without_the_train_extra_says_what_to_install() -> None:
+    result = run_python("import sys; sys.modules['stable_baselines3'] = None; from dwr_gym.sb3 import make_sb3_vec_env")
+    assert result.returncode == 1
+    assert result.stderr.strip().splitlines()[-1].endswith('pip install "dwr-gym[train]"')
+
+
+def test_check_env_on_a_headless_machine_prints_nothing_from_sdl() -> None:
+    quiet = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY", "XDG_RUNTIME_DIR",
+                                                                "SDL_VIDEODRIVER", "SDL_AUDIODRIVER")}  # fmt: skip
+    code = ("import gymnasium as gym, dwr_gym\nfrom gymnasium.utils.env_checker import check_env\n"
+            "check_env(gym.make('DWRPointStabilization-v1').unwrapped)\n")  # fmt: skip
+    result = run_python(code, quiet)
+    assert result.returncode == 0, result.stderr
+    assert "XDG_RUNTIME_DIR" not in result.stderr + result.stdout and "pygame" not in result.stdout
+
+
+def test_info_lists_every_registered_env_and_the_unknown_keyword_error_lists_every_keyword() -> None:
+    result = dwr_gym("info")
+    assert result.returncode == 0, result.stderr
+    for env_id in ("DWRPointStabilization-v1", "DWRPointStabilization-v0", "DWRPointStabilizationGoal-v0"):
+        assert f"  {env_id}  " in result.stdout
+    assert "defaults of DWRPointStabilization-v1" in result.stdout and "T_con_range = (10.0, 60.0)" in result.stdout
+    wrong = dwr_gym("evaluate", "--env-kwargs", "T_conn=3")
+    allowed = wrong.stderr.split("allowed: ", 1)[1].strip().split(", ")
+    assert {"robot", "wheel_saturation", "disturbances", "T_con"} <= set(allowed)
