@@ -424,3 +424,13 @@ def test_info_lists_every_registered_env_and_the_unknown_keyword_error_lists_eve
     wrong = dwr_gym("evaluate", "--env-kwargs", "T_conn=3")
     allowed = wrong.stderr.split("allowed: ", 1)[1].strip().split(", ")
     assert {"robot", "wheel_saturation", "disturbances", "T_con"} <= set(allowed)
+
+
+# 15. A law that fails by design is explained once.
+
+
+def test_fabregas_is_explained_once(tmp_path: Path) -> None:
+    result = dwr_gym("evaluate", "--controllers", "fabregas", "ptc", "--scenarios", "paper-fig5", "random", "--n", "5",
+                     "--env", PAPER_ENV_ID, "--optimum", "none", "--no-progress", "--out", str(tmp_path))  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.count("slow law of ref. [9]") == 1
