@@ -203,7 +203,7 @@ class DWRPointStabilizationEnv(HorizonSpec, OneRobotRendering, gym.Env[NDArray[n
 
     >>> import gymnasium as gym
     >>> import dwr_gym
-    >>> env = gym.make("DWRPointStabilization-v0", T_con=20.0)
+    >>> env = gym.make("DWRPointStabilization-v1")
     >>> obs, info = env.reset(seed=0, options={"start": (0.0, 0.0, 0.0), "goal": (0.8, 0.0, 0.0)})
     >>> round(info["distance"], 3), obs.shape
     (0.8, (10,))
