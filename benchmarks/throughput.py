@@ -2,7 +2,7 @@
 
     python benchmarks/throughput.py            # everything (about 3 minutes on 2 cores)
     python benchmarks/throughput.py --quick    # fewer repeats and sizes
-    python benchmarks/throughput.py --readme   # everything, written into README.md's throughput section
+    python benchmarks/throughput.py --readme   # everything, written into docs/throughput.md
 
 Prints, as medians of several repeats: the cost of one step of our single env and of CartPole-v1
 (both through gym.make, and both unwrapped); env-steps per second of our vector env (float64, the
@@ -34,7 +34,7 @@ import dwr_gym  # noqa: F401
 from dwr_gym import model
 
 SIZES = (1, 64, 1024, 4096, 16384)
-README = Path(__file__).resolve().parents[1] / "README.md"
+README = Path(__file__).resolve().parents[1] / "docs" / "throughput.md"  # the page of the throughput block
 BEGIN, END = "<!-- throughput:begin -->", "<!-- throughput:end -->"
 
 
