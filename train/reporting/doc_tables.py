@@ -25,17 +25,17 @@ MARKER = re.compile(r"(<!-- table: (?P<name>[\w-]+) -->\n)(?P<body>.*?)(<!-- /ta
 
 #: How the tables name the policies: the controllers of baselines and the agents shipped in train/pretrained.
 POLICY_NAMES = {
-    "optimal": "**optimum** (`optimal`: least energy to the pose by T_con)",
-    "ptc": "PTC, the paper's law (16)-(19)",
-    "conventional-ptc": "conventional PTC (12)",
+    "optimal": "**optimum**",
+    "ptc": "PTC (16)-(19)",
+    "conventional-ptc": "conventional PTC",
     "fabregas": "Fabregas [9] (1)",
     "fixed-time": "fixed-time [23]",
     "astolfi": "Astolfi",
-    "pt-astolfi": "`pt-astolfi` (not from the paper)",
-    "residual-ppo": "shipped `residual_ppo` (trained on v0)",
-    "ppo": "shipped `ppo` (trained on v0)",
-    "dagger": "shipped `dagger` (v1, first recipe)",
-    "dagger-handover": "shipped `dagger-handover` (v1)",
+    "pt-astolfi": "`pt-astolfi` (2)",
+    "residual-ppo": "`residual_ppo` (v0)",
+    "ppo": "`ppo` (v0)",
+    "dagger": "`dagger` (v1)",
+    "dagger-handover": "`dagger-handover` (v1)",
 }
 
 
@@ -83,8 +83,12 @@ def compare_caption(rows: list[dict[str, Any]]) -> str:
         r = next(r for r in rows if r["scenario"] == name)
         T = "T_con drawn per episode" if r["T_con"] is None else f"T_con = {r['T_con']:g} s"
         sets.append(f"{name} ({r['n']:.0f} episodes, {T})")
-    note = ("; (1) Fabregas [9] is the slow law the paper compares at T_con = 70 s (paper-fig7): it is not designed "
-            "to arrive by a shorter T_con") if any(r["policy"] == "fabregas" for r in rows) else ""  # fmt: skip
+    notes = {"fabregas": "(1) Fabregas [9] is the slow law the paper compares at T_con = 70 s (paper-fig7): it is not "
+             "designed to arrive by a shorter T_con", "pt-astolfi": "(2) not from the paper: Astolfi's law on the time "
+             "scale of eq. (12)", "optimal": "optimum: the `optimal` controller, the least energy to the pose by T_con",
+             "ppo": "(v0), (v1): the shipped agent and the env id it was trained on"}  # fmt: skip
+    present = {r["policy"] for r in rows}
+    note = "".join(f"; {text}" for name, text in notes.items() if name in present)
     return (f"\n*{env}; {', '.join(sets)}; E/opt: energy / the optimum's on the same episode, over the episodes "
             f"that arrive in time, mean (worst){note}.*")  # fmt: skip
 
