@@ -82,7 +82,7 @@ def compare_caption(rows: list[dict[str, Any]]) -> str:
     for name in dict.fromkeys(r["scenario"] for r in rows):
         r = next(r for r in rows if r["scenario"] == name)
         T = "T_con drawn per episode" if r["T_con"] is None else f"T_con = {r['T_con']:g} s"
-        sets.append(f"{name} ({r['n']:.0f} episodes, {T})")
+        sets.append(f"{name} ({r['n']:.0f} episode{'s' if r['n'] != 1 else ''}, {T})")
     notes = {"fabregas": "(1) Fabregas [9] is the slow law the paper compares at T_con = 70 s (paper-fig7): it is not "
              "designed to arrive by a shorter T_con", "pt-astolfi": "(2) not from the paper: Astolfi's law on the time "
              "scale of eq. (12)", "optimal": "optimum: the `optimal` controller, the least energy to the pose by T_con",
