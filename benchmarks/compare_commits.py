@@ -2,18 +2,22 @@
 
     python benchmarks/compare_commits.py 279a9bf HEAD            # 6 rounds (about 40 seconds)
     python benchmarks/compare_commits.py 279a9bf HEAD --rounds 8 --num-envs 1024
+    python benchmarks/compare_commits.py 630ea6d HEAD --load 2    # with 2 busy background processes
 
 This machine has slow phases that last seconds to minutes, in which every step takes up to 1.5x as long:
 two timing runs made minutes apart can differ more than two versions of the code do. So the two commits
 run alternately, each in a fresh process (``git worktree`` checkouts, so the working tree is not touched),
 and each run times our float64 vector env and Gymnasium's CartPoleVectorEnv in interleaved repeats. What
-is compared is each run's median ratio to CartPole, and the median over the rounds. Instruction counts
-(``instructions.py``) compare two versions without noise but leave out memory stalls; this measures time.
+is compared is each run's median ratio to CartPole, and the median over the rounds. With ``--load N``, N
+busy background processes (those of ``throughput.py``) run throughout, as other work on a user's machine.
+Instruction counts (``instructions.py``) compare two versions without noise but leave out memory stalls and
+waiting for threads; this measures time.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import statistics
 import subprocess
@@ -68,6 +72,15 @@ def checkout(commit: str, into: Path) -> Path:
     return into
 
 
+def resolve(commit: str) -> str:
+    """The short hash of the git revision ``commit``."""
+    result = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", f"{commit}^{{commit}}"],
+                            capture_output=True, text=True)  # fmt: skip
+    if result.returncode:
+        sys.exit(f"commit {commit!r} is invalid: expected a git revision of {ROOT} ({result.stderr.strip()})")
+    return result.stdout.strip()
+
+
 def measure(tree: Path, num_envs: int) -> tuple[float, float, float]:
     """(our step [us], CartPole's step [us], CartPole's time / ours) of one run of the code in ``tree``."""
     result = subprocess.run(
@@ -87,6 +100,8 @@ def main() -> None:
     parser.add_argument("new", nargs="?", help="the second commit")
     parser.add_argument("--rounds", type=int, default=6, help="alternations of the two (default 6)")
     parser.add_argument("--num-envs", type=int, default=4096, help="robots in the vector env (default 4096)")
+    parser.add_argument("--load", type=int, default=0, help="busy background processes throughout (default 0)")
+    parser.add_argument("--json", type=Path, help="also write the rounds and medians to this JSON file")
     parser.add_argument("--child", type=int, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
@@ -96,9 +111,13 @@ def main() -> None:
         parser.error("give two commits, e.g. 279a9bf HEAD")
     if args.rounds < 1 or args.num_envs < 1:
         parser.error(f"--rounds={args.rounds} and --num-envs={args.num_envs} must be positive integers")
-    commits = (args.old, args.new)
+    if not 0 <= args.load <= 64:
+        parser.error(f"--load={args.load} is invalid: expected 0 to 64 background processes")
+    from throughput import background_load  # benchmarks/ is this script's directory
+
+    commits = (resolve(args.old), resolve(args.new))  # hashes: HEAD and branch names move, the record must not
     ratios: list[list[float]] = [[], []]
-    with tempfile.TemporaryDirectory() as tmp:
+    with tempfile.TemporaryDirectory() as tmp, background_load(args.load, 60.0 * args.rounds + 300.0):
         trees: list[Path] = []
         try:
             for i, commit in enumerate(commits):
@@ -113,7 +132,14 @@ def main() -> None:
             for tree in trees:
                 subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(tree)], check=False)
     old, new = map(statistics.median, ratios)
-    print(f"median ratio to CartPoleVectorEnv at N = {args.num_envs}: {args.old} {old:.3f}, {args.new} {new:.3f} "
+    if args.json:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        record = {"commits": list(commits), "num_envs": args.num_envs, "load_processes": args.load,
+                  "omp_num_threads": os.environ.get("OMP_NUM_THREADS"), "rounds": args.rounds, "ratios": ratios,
+                  "median_ratios": [old, new]}  # fmt: skip
+        args.json.write_text(json.dumps(record, indent=1) + "\n")
+    loaded = f", {args.load} busy background processes" if args.load else ""
+    print(f"median ratio to CartPoleVectorEnv at N = {args.num_envs}{loaded}: {commits[0]} {old:.3f}, {commits[1]} {new:.3f} "
           f"({new / old:.2f}x)")  # fmt: skip
 
 

@@ -2,6 +2,7 @@
 
     python benchmarks/instructions.py           # single envs and vector envs at N = 4096 (5-10 minutes)
     python benchmarks/instructions.py --single  # single envs only (about 1 minute)
+    python benchmarks/instructions.py --json docs/throughput/instructions.json   # also write the counts
 
 Time on a shared machine varies by tens of percent from one run to the next; the number of instructions a
 step executes does not (the same code, inputs and libraries give the same count). It is the measure to
@@ -15,6 +16,7 @@ is installed), with one OpenMP thread (its operations at N = 4096 run on one thr
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import re
 import shutil
@@ -83,6 +85,7 @@ def per_step(case: tuple[str, str, int, int]) -> float:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--single", action="store_true", help="single envs only")
+    parser.add_argument("--json", type=Path, help="also write the counts and ratios to this JSON file")
     parser.add_argument("--child", nargs=3, metavar=("ENV_ID", "NUM_ENVS", "STEPS"), help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
@@ -97,6 +100,14 @@ def main() -> None:
         print(f"{label:<40} {count:>14,.0f} instructions per step")
     for i in range(0, len(cases), 2):
         print(f"ratio, {cases[i][0].split(',')[0]}: {counts[i] / counts[i + 1]:.2f}x CartPole's")
+    if args.json:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        record = {
+            "instructions_per_step": {label: count for (label, *_), count in zip(cases, counts, strict=True)},
+            "ratios": {cases[i][0].split(",")[0]: counts[i] / counts[i + 1] for i in range(0, len(cases), 2)},
+        }
+        args.json.write_text(json.dumps(record, indent=1) + "\n")
+        print(f"wrote {args.json}")
 
 
 if __name__ == "__main__":

@@ -10,7 +10,7 @@ import numpy as np
 from gymnasium.envs.registration import EnvSpec
 from numpy.typing import NDArray
 
-from dwr_gym import core, model
+from dwr_gym import core, model, observation, state
 from dwr_gym.disturbances import make_perturbation, split_env_kwargs
 from dwr_gym.params import EnvParams
 
@@ -40,7 +40,7 @@ def parse_reset_options(options: dict[str, Any] | None) -> dict[str, tuple[float
     unknown = sorted(set(options) - set(RESET_OPTIONS))
     if unknown:
         raise ValueError(f"unknown reset option(s) {unknown}; allowed: 'start', 'goal', 'T_con'")
-    return {name: core.parse_pose(name, value) for name, value in options.items() if name != "T_con"}
+    return {name: state.parse_pose(name, value) for name, value in options.items() if name != "T_con"}
 
 
 def parse_T_con_option(value: Any, params: EnvParams) -> NDArray[np.float64]:
@@ -91,7 +91,7 @@ class OneRobotRendering:
     render_mode: str | None
     metadata: dict[str, Any]
     params: EnvParams
-    _state: core.TaskState | None
+    _state: state.TaskState | None
     _trail: list[tuple[float, float]]
     _renderer: Any = None
 
@@ -143,7 +143,7 @@ class DWRPointStabilizationEnv(HorizonSpec, OneRobotRendering, gym.Env[NDArray[n
     | 4   | sin(psi - psi_d)                                     | -1          | 1              |
     | 5   | orientation error e_psi, eq. (6) [rad]               | -7 pi / 6   | 7 pi / 6       |
     | 6   | elapsed fraction of the prescribed time t / T_con    | 0           | horizon_factor |
-    | 7   | T_con [s] (constant within an env)                   | 0           | T_con          |
+    | 7   | T_con [s] (constant within an episode)               | 0           | top of range   |
     | 8   | initial distance d_0 [m]                             | 0           | arena_radius   |
     | 9   | initial orientation error e_psi0 [rad]               | -7 pi / 6   | 7 pi / 6       |
 
@@ -175,7 +175,7 @@ class DWRPointStabilizationEnv(HorizonSpec, OneRobotRendering, gym.Env[NDArray[n
 
     ## Starting State
     Without options the goal is (0, 0, 0) and the start is drawn from ``self.np_random``: distance
-    uniform in ``start_distance``, bearing uniform in [-pi, pi), heading relative to the goal uniform
+    uniform in ``start_distance`` (0.3-3 m in v1, 0.3-1.5 m in v0), bearing uniform in [-pi, pi), heading relative to the goal uniform
     in ``start_heading``. ``reset(options={"start": (x, y, psi), "goal": (x_d, y_d, psi_d)})`` places
     either or both exactly (a random start is then drawn around the given goal). The prescribed time
     is ``T_con``, or with ``T_con_range`` drawn uniformly per episode (after the start);
@@ -184,10 +184,12 @@ class DWRPointStabilizationEnv(HorizonSpec, OneRobotRendering, gym.Env[NDArray[n
     ## Episode End
     Terminated on arrival (d <= ``goal_tolerance``, and |psi - psi_d| <= ``heading_tolerance`` when
     that is set) or on leaving the arena (d > ``arena_radius``). Truncated at the horizon
-    ``horizon_factor * T_con`` (30 s by default), past T_con so that late arrivals are observable.
+    ``horizon_factor * T_con`` (30 s in v0; in v1 1.5 times the episode's T_con), past T_con so that late
+    arrivals are observable.
     The env truncates itself, because the horizon depends on the keywords ``T_con``, ``dt`` and
-    ``horizon_factor``, and reports the number of steps in ``env.spec.max_episode_steps`` (600 by
-    default), where ``TimeLimit``-aware wrappers such as ``TimeAwareObservation`` look for it.
+    ``horizon_factor``, and reports the number of steps in ``env.spec.max_episode_steps`` (600 in v0;
+    1,800 in v1, the horizon of the largest T_con), where ``TimeLimit``-aware wrappers such as
+    ``TimeAwareObservation`` look for it.
 
     ## Arguments
     Every field of :class:`dwr_gym.params.EnvParams` is a keyword (``T_con``, ``dt``, ``u_max``,
@@ -203,7 +205,7 @@ class DWRPointStabilizationEnv(HorizonSpec, OneRobotRendering, gym.Env[NDArray[n
 
     >>> import gymnasium as gym
     >>> import dwr_gym
-    >>> env = gym.make("DWRPointStabilization-v0", T_con=20.0)
+    >>> env = gym.make("DWRPointStabilization-v1")
     >>> obs, info = env.reset(seed=0, options={"start": (0.0, 0.0, 0.0), "goal": (0.8, 0.0, 0.0)})
     >>> round(info["distance"], 3), obs.shape
     (0.8, (10,))
@@ -236,9 +238,9 @@ class DWRPointStabilizationEnv(HorizonSpec, OneRobotRendering, gym.Env[NDArray[n
         self.perturbation = make_perturbation(drive, disturbances, self.params, 1)
         check_render_mode(render_mode)
         self.render_mode = render_mode
-        self.observation_space = core.observation_space(self.params)
+        self.observation_space = observation.observation_space(self.params)
         self.action_space = core.action_space()
-        self._state: core.TaskState | None = None  # a state of Python floats: one robot
+        self._state: state.TaskState | None = None  # a state of Python floats: one robot
         self._trail: list[tuple[float, float]] = []
         self._renderer: Any = None
         self._spec: EnvSpec | None = None
@@ -255,7 +257,7 @@ class DWRPointStabilizationEnv(HorizonSpec, OneRobotRendering, gym.Env[NDArray[n
         start = (
             poses["start"]
             if "start" in poses
-            else model.from_goal_frame(*core.sample_start(self.np_random, self.params), *goal)
+            else model.from_goal_frame(*state.sample_start(self.np_random, self.params), *goal)
         )
         if options and "T_con" in options:
             T_con = parse_T_con_option(options["T_con"], self.params)
@@ -263,10 +265,10 @@ class DWRPointStabilizationEnv(HorizonSpec, OneRobotRendering, gym.Env[NDArray[n
                 raise ValueError(f"options['T_con'] of shape {T_con.shape} is invalid: expected one number")
             T_con = float(T_con)
         else:
-            T_con = core.sample_T_con(self.np_random, self.params)
-        self._state = core.new_state(tuple(map(float, start)), tuple(map(float, goal)), self.params, T_con)  # type: ignore[arg-type]
+            T_con = state.sample_T_con(self.np_random, self.params)
+        self._state = state.new_state(tuple(map(float, start)), tuple(map(float, goal)), self.params, T_con)  # type: ignore[arg-type]
         coords = self._state.coordinates(self.params.k)
-        obs = core.observe(
+        obs = observation.observe(
             self._state, coords, self.params, self.observation_space, self._noise(3, self.params.observation_noise)
         )
         info = core.infos(self._state, coords, self.params)
@@ -288,12 +290,13 @@ class DWRPointStabilizationEnv(HorizonSpec, OneRobotRendering, gym.Env[NDArray[n
         action = np.asarray(action)
         if action.shape != (2,):
             raise ValueError(f"action of shape {action.shape} is invalid: expected shape (2,)")
-        result = core.transition(
-            self._state, action, self.params, self.observation_space,
-            self._noise(2, self.params.actuation_noise), self._noise(3, self.params.observation_noise),
-            self.perturbation,
+        params = self.params
+        result = core.transition(  # the noise drawn only if there is any: the step is bound by the interpreter's calls
+            self._state, action, params, self.observation_space,
+            self._noise(2, params.actuation_noise) if params.actuation_noise > 0 else None,
+            self._noise(3, params.observation_noise) if params.observation_noise > 0 else None, self.perturbation,
         )  # fmt: skip
-        info = core.infos(self._state, result.coords, self.params, result)
+        info = core.infos(self._state, result.coords, params, result)
         if self.perturbation is not None:
             info["disturbance"] = self.perturbation.info(scalar=True)
         if self.render_mode is not None:

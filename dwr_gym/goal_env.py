@@ -17,7 +17,7 @@ import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
-from dwr_gym import core, model
+from dwr_gym import core, model, observation, state
 from dwr_gym.env import OneRobotRendering, check_render_mode, parse_reset_options
 from dwr_gym.params import EnvParams
 
@@ -140,7 +140,7 @@ class DWRPointStabilizationGoalEnv(OneRobotRendering, gym.Env[dict[str, NDArray[
         check_render_mode(render_mode)
         self.render_mode = render_mode
         self.reward_type = reward_type
-        self._core_space = core.observation_space(self.params)  # the v0 features core.transition computes
+        self._core_space = observation.observation_space(self.params)  # the v0 features core.transition computes
         reach = self.params.start_distance[1] + self.params.arena_radius  # goal disc plus the arena around it
         goal_low = np.array([-reach, -reach, -1, -1], dtype=np.float32)
         goal_high = np.array([reach, reach, 1, 1], dtype=np.float32)
@@ -154,7 +154,7 @@ class DWRPointStabilizationGoalEnv(OneRobotRendering, gym.Env[dict[str, NDArray[
             "desired_goal": goal_space,
         })  # fmt: skip
         self.action_space = core.action_space()
-        self._state: core.TaskState | None = None
+        self._state: state.TaskState | None = None
         self._renderer: Any = None
         self._trail: list[tuple[float, float]] = []
 
@@ -187,9 +187,9 @@ class DWRPointStabilizationGoalEnv(OneRobotRendering, gym.Env[dict[str, NDArray[
         start = (
             poses["start"]
             if "start" in poses
-            else model.from_goal_frame(*core.sample_start(self.np_random, self.params), *goal)
+            else model.from_goal_frame(*state.sample_start(self.np_random, self.params), *goal)
         )
-        self._state = core.new_state(tuple(map(float, start)), tuple(map(float, goal)), self.params)  # type: ignore[arg-type]
+        self._state = state.new_state(tuple(map(float, start)), tuple(map(float, goal)), self.params)  # type: ignore[arg-type]
         obs = self._observe()
         info = core.infos(self._state, self._state.coordinates(self.params.k), self.params)
         info["is_success"] = bool(goal_success(obs["achieved_goal"], obs["desired_goal"], self.params))

@@ -3,7 +3,8 @@
 Every function takes numpy arrays of matching, broadcastable shapes and returns arrays of the same
 shape: one call handles N robots. Given Python floats instead, the same code runs on the ``math``
 module (see :data:`SCALAR_MATH`), which is what keeps a single robot's step cheap; on large float64
-arrays, its sin, cos, tanh, arcsin and arctan2 are torch's SIMD kernels (see :data:`ARRAY_MATH`). Nothing here keeps state or knows about Gymnasium; the
+arrays, the transcendental functions numpy evaluates one element at a time are torch's SIMD kernels (see
+:data:`ARRAY_MATH` and :data:`TORCH_FUNCTIONS`). Nothing here keeps state or knows about Gymnasium; the
 single env, the vector env and the controllers in :mod:`baselines` all call these functions, so
 each equation of the paper is written exactly once.
 
@@ -54,8 +55,10 @@ class _ScalarMath:
 #: The namespace the functions use for Python floats; numpy (or :data:`ARRAY_MATH`) serves arrays.
 SCALAR_MATH: Any = _ScalarMath
 
-#: Below this many elements numpy's own float64 functions beat torch's (whose call costs a few microseconds).
-TORCH_MIN_SIZE = 512
+#: Below this many elements numpy computes the float64 functions too: a torch call costs a few microseconds
+#: more than its kernel, and the vector env's step, measured step by step against its numpy-only path, was
+#: slower with torch up to 1536 robots and faster from 2048 (on CPUs with and without AVX512).
+TORCH_MIN_SIZE = 2048
 _torch: Any = None  # the torch module once imported; False if it cannot be
 _FLOAT64 = np.dtype(np.float64)
 
@@ -75,18 +78,43 @@ def _torch_module() -> Any:
     return _torch
 
 
-def _vectorised(name: str) -> Any:
-    """numpy's float64 function ``name``, computed by torch for large contiguous float64 arrays.
+def _numpy_has_simd_float64() -> bool:
+    """Whether this numpy computes float64 tanh, arcsin and arctan2 with SIMD (Intel's SVML, on CPUs with
+    AVX512_SKX); elsewhere it computes them one element at a time, as it always does sin and cos."""
+    try:  # what numpy.show_runtime() reports (numpy._core since numpy 2)
+        from numpy._core._multiarray_umath import __cpu_features__
+    except ImportError:
+        try:
+            from numpy.core._multiarray_umath import __cpu_features__
+        except ImportError:
+            return False
+    return bool(__cpu_features__.get("AVX512_SKX"))
 
-    This numpy evaluates float64 sin, cos, tanh, arcsin and arctan2 one element at a time; torch's
-    kernels use SIMD (SLEEF, within 1 ulp), 2-3x faster here. Results agree with numpy's to about 1e-16.
+
+#: The float64 functions torch computes for large arrays: those this numpy evaluates one element at a time
+#: (numpy's SIMD tanh, arcsin and arctan2 beat torch's: docs/throughput.md).
+TORCH_FUNCTIONS: frozenset[str] = frozenset(
+    ("sin", "cos") if _numpy_has_simd_float64() else ("sin", "cos", "tanh", "arcsin", "arctan2")
+)
+
+
+def _vectorised(name: str) -> Any:
+    """numpy's float64 function ``name``, computed by torch for large contiguous float64 arrays when it is
+    one of :data:`TORCH_FUNCTIONS`.
+
+    numpy evaluates float64 sin and cos (and, without AVX512, tanh, arcsin and arctan2) one element at a
+    time; torch's kernels use SIMD (SLEEF, within 1 ulp), 2-3x faster. Results agree with numpy's to about
+    1e-16. torch computes them on the calling thread: its thread pool would split a call of a few
+    microseconds across the cores, and on a busy machine every such call waits for a thread the scheduler
+    has set aside (measured in docs/throughput.md). So torch's thread count is 1 for the call, and
+    restored right after it: the user's setting holds everywhere else.
     """
     numpy_fn = getattr(np, name)
     torch_name = {"arctan2": "atan2", "arcsin": "asin"}.get(name, name)
 
     def fn(*args: Any) -> Any:
         first = args[0]
-        if type(first) is np.ndarray and first.size >= TORCH_MIN_SIZE:
+        if type(first) is np.ndarray and first.size >= TORCH_MIN_SIZE and name in TORCH_FUNCTIONS:
             shape = first.shape
             for a in args:  # float64 dtypes are one object: compared by identity; flags: made once
                 if not (type(a) is np.ndarray and a.dtype is _FLOAT64 and a.shape == shape
@@ -94,7 +122,14 @@ def _vectorised(name: str) -> Any:
                     return numpy_fn(*args)
             torch = _torch_module()
             if torch:
-                return getattr(torch, torch_name)(*map(torch.from_numpy, args)).numpy()
+                threads = torch.get_num_threads()
+                if threads == 1:
+                    return getattr(torch, torch_name)(*map(torch.from_numpy, args)).numpy()
+                torch.set_num_threads(1)
+                try:
+                    return getattr(torch, torch_name)(*map(torch.from_numpy, args)).numpy()
+                finally:
+                    torch.set_num_threads(threads)
         return numpy_fn(*args)
 
     fn.__name__ = name
@@ -117,7 +152,12 @@ ARRAY_MATH: Any = _ArrayMath()
 
 
 def namespace(*values: Any) -> Any:
-    """:data:`ARRAY_MATH` (numpy) if any value is an array, else :data:`SCALAR_MATH`."""
+    """:data:`ARRAY_MATH` (numpy) if any value is an array, else :data:`SCALAR_MATH`.
+
+    The functions of the single env's step test ``type(x) is float`` inline first and call this only
+    for arrays: for one robot the call cost more than the function's arithmetic (8 calls were 8 % of
+    the step's instructions).
+    """
     for value in values:
         if type(value) is not float and isinstance(value, np.ndarray):  # float first: the single env's case
             return ARRAY_MATH
@@ -126,7 +166,8 @@ def namespace(*values: Any) -> Any:
 
 def wrap_angle(angle: ArrayLike) -> FloatArray:
     """Wrap angles to [-pi, pi) (to within one rounding error)."""
-    return angle - (2.0 * np.pi) * namespace(angle).floor((angle + np.pi) * (0.5 / np.pi))  # floor: ~5x np.mod's speed
+    xp = SCALAR_MATH if type(angle) is float else namespace(angle)
+    return angle - (2.0 * np.pi) * xp.floor((angle + np.pi) * (0.5 / np.pi))  # floor: ~5x np.mod's speed
 
 
 def rotate(x: ArrayLike, y: ArrayLike, cos_angle: ArrayLike, sin_angle: ArrayLike) -> tuple[FloatArray, FloatArray]:
@@ -173,7 +214,7 @@ def sinc(h: ArrayLike) -> FloatArray:
     sin(h) / h elsewhere."""
     h2 = h * h  # type: ignore[operator]
     series = 1.0 + h2 * (-1.0 / 6.0 + h2 * (1.0 / 120.0 + h2 * (-1.0 / 5040.0 + h2 * (1.0 / 362880.0))))
-    if namespace(h) is SCALAR_MATH:
+    if type(h) is float or namespace(h) is SCALAR_MATH:
         return series if abs(h) <= SINC_SERIES_LIMIT else math.sin(h) / h  # type: ignore[arg-type, operator, return-value]
     if h2.size and h2.max() > SINC_SERIES_LIMIT * SINC_SERIES_LIMIT:  # (np.max's initial= doubles its cost)
         large = np.abs(h) > SINC_SERIES_LIMIT
@@ -191,7 +232,7 @@ def unicycle_step_exact(
     ``u dt [sin(h) / h] [cos, sin](psi + h)`` with h = omega dt / 2, which needs no division by
     omega and is exactly the straight line when omega = 0.
     """
-    xp = namespace(psi, angular_velocity)
+    xp = SCALAR_MATH if type(psi) is float is type(angular_velocity) else namespace(psi, angular_velocity)
     half_turn = 0.5 * dt * angular_velocity  # type: ignore[operator]
     chord = linear_velocity * dt * sinc(half_turn)  # type: ignore[operator]
     mid_heading = psi + half_turn  # type: ignore[operator]
@@ -246,14 +287,14 @@ def integrate_unicycle(
 # ---------------------------------------------------------------------------------------------
 def distance(x: ArrayLike, y: ArrayLike) -> FloatArray:
     """Distance to the goal at the origin, eq. (2)."""
-    xp = namespace(x, y)
+    xp = SCALAR_MATH if type(x) is float is type(y) else namespace(x, y)
     return xp.sqrt(x * x + y * y)  # type: ignore[operator]  # positions are bounded: no overflow
 
 
 def azimuth(x: ArrayLike, y: ArrayLike) -> FloatArray:
     """Azimuth of the goal seen from the robot, eq. (3): atan2(y_d - y, x_d - x) with the goal at 0."""
     # 0.0 - v turns -0.0 into +0.0, so atan2 gives 0 rather than +-pi at d = 0 exactly.
-    xp = namespace(x, y)
+    xp = SCALAR_MATH if type(x) is float is type(y) else namespace(x, y)
     return xp.arctan2(0.0 - y, 0.0 - x)  # type: ignore[operator]
 
 
@@ -264,7 +305,7 @@ def bearing_error(alpha: ArrayLike, psi: ArrayLike) -> FloatArray:
 
 def arcsine_term(alpha: ArrayLike, dist: ArrayLike, k: float) -> FloatArray:
     """The auxiliary arcsine function zeta = asin(k alpha tanh d) of eq. (6)."""
-    xp = namespace(alpha, dist)
+    xp = SCALAR_MATH if type(alpha) is float is type(dist) else namespace(alpha, dist)
     return xp.arcsin(k * alpha * xp.tanh(dist))  # type: ignore[operator]
 
 
@@ -346,7 +387,7 @@ def improved_velocity_constraint_min(Ke: float) -> float:
 def conventional_scaling(t: ArrayLike, T: float, t0: float = 0.0, max_gain: float = 1e6) -> FloatArray:
     """mu_1(t, T) = T / (T + t0 - t), eq. (12); equal to 1 at t0 and unbounded toward t0 + T."""
     # Guard: eq. (12) is infinite at t = t0 + T and negative after; we cap it at max_gain.
-    xp = namespace(t, T)
+    xp = SCALAR_MATH if type(t) is float is type(T) else namespace(t, T)
     return T / xp.maximum(T + t0 - t, T / max_gain)  # type: ignore[operator]
 
 

@@ -11,7 +11,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
-from dwr_gym import core, model
+from dwr_gym import core, model, observation, state
 from dwr_gym.disturbances import make_perturbation, split_env_kwargs
 from dwr_gym.env import HorizonSpec, append_trail, check_render_mode, parse_reset_options, parse_T_con_option
 from dwr_gym.params import EnvParams
@@ -76,9 +76,9 @@ class DWRPointStabilizationVectorEnv(HorizonSpec, VectorEnv):
     match single envs draw for draw. ``render()`` returns a tuple of one frame per sub-env in
     "rgb_array" mode (as ``SyncVectorEnv``), and shows sub-env 0 in "human" mode.
 
-    ``dtype="float32"`` computes the whole batch in single precision: about 1.1-1.5x the throughput of
-    float64 at N = 4096 (see the README's throughput section), at a position resolution of about 5e-7 m
-    at 5 m; the default float64 matches the single env to 1e-9.
+    ``dtype="float32"`` computes the whole batch in single precision, faster than float64 (docs/throughput.md
+    measures by how much), at a position resolution of about 5e-7 m at 5 m; the default float64 matches the
+    single env to 1e-9.
     """
 
     metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 20, "autoreset_mode": AutoresetMode.NEXT_STEP}
@@ -101,11 +101,11 @@ class DWRPointStabilizationVectorEnv(HorizonSpec, VectorEnv):
         check_render_mode(render_mode)
         self.render_mode = render_mode
         self.num_envs = int(num_envs)
-        self.single_observation_space = core.observation_space(self.params)
+        self.single_observation_space = observation.observation_space(self.params)
         self.single_action_space = core.action_space()
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
-        self._state = core.TaskState.zeros(self.num_envs, np.dtype(dtype).type)
+        self._state = state.TaskState.zeros(self.num_envs, np.dtype(dtype).type)
         self._started = False  # step() before the first reset() is an error
         self._rngs: list[np.random.Generator] = []
         self._all = np.ones(self.num_envs, dtype=bool)
@@ -132,18 +132,18 @@ class DWRPointStabilizationVectorEnv(HorizonSpec, VectorEnv):
         start: tuple[NDArray[np.float64], ...] | None = None,
         goal: tuple[NDArray[np.float64], ...] | None = None,
         T_con: NDArray[np.float64] | None = None,
-    ) -> tuple[core.TaskState, core.ErrorCoordinates]:
+    ) -> tuple[state.TaskState, state.ErrorCoordinates]:
         """Reset the sub-envs in ``index``: given poses and T_con, else the default goal, and starts and
         prescribed times drawn per env (in the order a single env draws them). Returns the new state of
         these sub-envs and its error coordinates."""
         n = index.size
         goal = goal if goal is not None else (np.zeros(n), np.zeros(n), np.zeros(n))
         if start is None:
-            local = np.array([core.sample_start(self._rngs[i], self.params) for i in index.tolist()]).reshape(n, 3)
+            local = np.array([state.sample_start(self._rngs[i], self.params) for i in index.tolist()]).reshape(n, 3)
             start = model.from_goal_frame(local[:, 0], local[:, 1], local[:, 2], *goal)
         if T_con is None and self.params.T_con_range is not None:  # (else T_con is params.T_con: nothing is drawn)
-            T_con = np.array([core.sample_T_con(self._rngs[i], self.params) for i in index.tolist()], dtype=np.float64)
-        return core.reset_robots(self._state, index, start, goal, self.params, T_con)  # type: ignore[arg-type]
+            T_con = np.array([state.sample_T_con(self._rngs[i], self.params) for i in index.tolist()], dtype=np.float64)
+        return state.reset_robots(self._state, index, start, goal, self.params, T_con)  # type: ignore[arg-type]
 
     def _noise(self, size: int, sigma: float) -> NDArray[np.float64] | None:
         return self.np_random.standard_normal((self.num_envs, size)) if sigma > 0 else None
@@ -183,7 +183,7 @@ class DWRPointStabilizationVectorEnv(HorizonSpec, VectorEnv):
             )
         self._started = True
         coords = self._state.coordinates(self.params.k)
-        obs = core.observe(self._state, coords, self.params, self.single_observation_space,
+        obs = observation.observe(self._state, coords, self.params, self.single_observation_space,
                            self._noise(3, self.params.observation_noise))  # fmt: skip
         infos = self._with_masks(core.infos(self._state, coords, self.params), mask)
         if self.perturbation is not None:
@@ -215,7 +215,7 @@ class DWRPointStabilizationVectorEnv(HorizonSpec, VectorEnv):
     def _restart(self, index: NDArray[np.intp], obs: NDArray[np.float32], infos: dict[str, Any]) -> None:
         """Autoreset the robots at ``index``: new episodes, whose first observation and info replace the step's."""
         fresh, coords = self._reset_envs(index)
-        obs[index] = core.observe(fresh, coords, self.params, self.single_observation_space)
+        obs[index] = observation.observe(fresh, coords, self.params, self.single_observation_space)
         if self.perturbation is not None:  # in SAME_STEP mode final_info keeps the step's disturbance info
             self.perturbation.reset(index, obs[index])
             infos["disturbance"] = self.perturbation.info()

@@ -5,5 +5,8 @@ import tempfile
 
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
+# One thread per test process (torch reads this when first imported): pytest -n 2 then uses the two cores it is
+# given instead of oversubscribing them (a 10 s PPO test took 130 s with torch's default threads on a shared machine).
+os.environ.setdefault("OMP_NUM_THREADS", "1")
 # The tests never read or write the user's cache of optimal energies (~/.cache/dwr-gym).
 os.environ.setdefault("DWR_GYM_CACHE", tempfile.mkdtemp(prefix="dwr-gym-test-cache-"))

@@ -17,6 +17,9 @@ from dwr_gym import model
 from dwr_gym.env import DWRPointStabilizationEnv
 
 ENV_ID = "DWRPointStabilization-v0"
+#: This module pins the behaviour of DWRPointStabilization-v0 (fixed T_con, the paper's reward), which Gymnasium
+#: rightly calls out of date now that v1 exists; that warning is not what these tests test.
+pytestmark = pytest.mark.filterwarnings("ignore:.*DWRPointStabilization-v0 is out of date:DeprecationWarning")
 ENV_ID_V1 = "DWRPointStabilization-v1"
 
 
@@ -97,6 +100,17 @@ def test_reset_options_place_robot_and_goal_exactly() -> None:
     np.testing.assert_allclose(info["pose"], [0.0, 0.0, -math.pi], atol=1e-12)
     assert obs[0] == pytest.approx(0.8)
     assert obs[1] == pytest.approx(1.0) and obs[2] == pytest.approx(0.0, abs=1e-7)  # goal straight ahead in x
+
+
+@pytest.mark.parametrize("goal", [(0.0, 1.0, 0.0), (1.0, 0.0, 0.0), (0.0, 0.0, 0.5), (0.0, 0.0, 0.0)])
+def test_info_pose_is_the_world_pose_for_goals_off_the_origin_on_each_axis(goal: tuple[float, float, float]) -> None:
+    """The single env skips the frame change only when the goal is (0, 0, 0); any one coordinate off needs it."""
+    env = make()
+    _, info = env.reset(options={"start": (0.3, -0.2, 0.1), "goal": goal})
+    np.testing.assert_allclose(info["pose"], [0.3, -0.2, 0.1], atol=1e-12)
+    _, _, _, _, info = env.step(np.array([1.0, 0.0], dtype=np.float32))  # 0.025 m along the heading 0.1
+    np.testing.assert_allclose(info["pose"], [0.3 + 0.025 * math.cos(0.1), -0.2 + 0.025 * math.sin(0.1), 0.1],
+                               atol=1e-12)  # fmt: skip
 
 
 def test_any_goal_pose_is_the_paper_case_in_the_goal_frame() -> None:
@@ -318,3 +332,31 @@ def test_model_and_env_agree_on_the_paper_quantities() -> None:
     assert info["distance"] == pytest.approx(d)
     assert info["orientation_error"] == pytest.approx(model.orientation_error(alpha, psi, d, 1 / (2 * math.pi)))
     assert math.atan2(obs[2], obs[1]) == pytest.approx(alpha, abs=1e-6)
+
+
+def test_arrival_is_d_at_most_goal_tolerance_and_integer_actions_are_actions() -> None:
+    env = make(goal_tolerance=0.5)
+    env.reset(options={"start": (-0.5, 0.0, 0.0), "goal": (0.0, 0.0, 0.0)})  # d = 0.5 exactly
+    _, _, terminated, _, info = env.step(np.array([0, 0]))  # integers: no motion
+    assert info["distance"] == 0.5 and info["is_success"] and terminated
+    env.reset(options={"start": (-0.5, 0.0, 0.0), "goal": (1.0, 0.0, 0.0)})
+    as_int = env.step(np.array([1, -1]))[4]
+    env.reset(options={"start": (-0.5, 0.0, 0.0), "goal": (1.0, 0.0, 0.0)})
+    as_bool = env.step(np.array([True, False]))[4]
+    assert (as_int["linear_velocity"], as_int["angular_velocity"]) == (0.5, -2.0)
+    assert (as_bool["linear_velocity"], as_bool["angular_velocity"]) == (0.5, 0.0)
+
+
+def test_observation_space_bounds_are_the_documented_ones() -> None:
+    space = make(arena_radius=4.0, horizon_factor=2.0).observation_space
+    e_max = 7.0 * math.pi / 6.0
+    np.testing.assert_allclose(space.low, [0, -1, -1, -1, -1, -e_max, 0, 0, 0, -e_max], rtol=1e-7)
+    np.testing.assert_allclose(space.high, [8.0, 1, 1, 1, 1, e_max, 2.0, 20.0, 4.0, e_max], rtol=1e-7)
+
+
+def test_a_start_on_the_arena_border_is_allowed_and_beyond_it_is_refused() -> None:
+    env = make(arena_radius=2.0)
+    _, info = env.reset(options={"start": (-2.0, 0.0, 0.0), "goal": (0.0, 0.0, 0.0)})
+    assert info["distance"] == 2.0
+    with pytest.raises(ValueError, match=r"start pose is 2.001 m from the goal, outside the arena"):
+        env.reset(options={"start": (-2.001, 0.0, 0.0), "goal": (0.0, 0.0, 0.0)})

@@ -27,9 +27,25 @@ def test_passes_sb3_checker() -> None:
     sb3_check_env(DWRPointStabilizationGoalEnv(), warn=True)
 
 
+def reward_by_hand(pose: np.ndarray, goal: np.ndarray, reward_type: str) -> float:
+    """The documented reward of the env made in the test below (goal_tolerance 0.05, the other weights default:
+    time 0.5 [1/(m s)], dt 0.05 s, arrival 10, heading 5, arena 10 beyond 5 m) from the robot's true pose."""
+    d = math.hypot(pose[0] - goal[0], pose[1] - goal[1])
+    arrived = d <= 0.05
+    if reward_type == "sparse":
+        return 0.0 if arrived else -1.0
+    heading_error = pose[2] - math.atan2(goal[3], goal[2])
+    return (
+        -0.5 * 0.05 * d
+        + (10.0 + 5.0 * (math.cos(heading_error) - 1.0) if arrived else 0.0)
+        - (10.0 if d > 5.0 else 0.0)
+    )
+
+
 @pytest.mark.parametrize("reward_type", ["dense", "sparse"])
 def test_compute_reward_equals_rewards_paid(reward_type: str) -> None:
-    """Batched compute_reward on a rollout's goals (and on relabelled goals) equals what step() paid."""
+    """The rewards paid are the documented ones computed by hand; batched compute_reward on a rollout's goals (and on
+    relabelled goals) equals them."""
     env = DWRPointStabilizationGoalEnv(reward_type=reward_type, goal_tolerance=0.05, T_con=5.0)
     achieved, desired, rewards, infos = [], [], [], []
     rng = np.random.default_rng(0)
@@ -50,6 +66,8 @@ def test_compute_reward_equals_rewards_paid(reward_type: str) -> None:
             assert terminated and info["is_success"]
     achieved_arr, desired_arr = np.array(achieved), np.array(desired)
     paid = np.array(rewards)
+    np.testing.assert_allclose(paid, [reward_by_hand(i["pose"], g, reward_type) for i, g in zip(infos, desired, strict=True)],
+                               rtol=0, atol=1e-5)  # fmt: skip
     np.testing.assert_array_equal(env.compute_reward(achieved_arr, desired_arr, np.array(infos)), paid)
     assert len(set(paid.tolist())) > (1 if reward_type == "sparse" else 2)  # varied rewards, arrival included
     # HER's relabelling: the achieved goal as the desired one is an arrival with the heading matched

@@ -22,13 +22,20 @@ def load_script():  # benchmarks/ is not a package
 
 @pytest.mark.filterwarnings("ignore:.*out of date")
 @pytest.mark.parametrize(
-    ("num_envs", "torch"), [(16, True), (1024, True), (1024, False)]
-)  # numpy's functions below dwr_gym.model.TORCH_MIN_SIZE, torch's above unless torch is off (DWR_GYM_TORCH=0)
-def test_seeded_rollouts_equal_the_record_to_1e_12(num_envs: int, torch: bool, monkeypatch: pytest.MonkeyPatch) -> None:
+    ("num_envs", "torch"), [(16, "auto"), (2048, "auto"), (1024, "all"), (1024, "off")]
+)  # numpy's functions below dwr_gym.model.TORCH_MIN_SIZE (2048); from it torch's for model.TORCH_FUNCTIONS ("auto": sin
+# and cos on CPUs where numpy has SIMD tanh, arcsin and arctan2; "all": all five, as on other CPUs, here from 1024 robots),
+# or none (DWR_GYM_TORCH=0)
+def test_seeded_rollouts_equal_the_record_to_1e_12(num_envs: int, torch: str, monkeypatch: pytest.MonkeyPatch) -> None:
     from dwr_gym import model
 
-    if not torch:
+    if torch == "off":
         monkeypatch.setattr(model, "_torch", False)
+    elif torch == "all":
+        pytest.importorskip("torch")
+        monkeypatch.setattr(model, "TORCH_FUNCTIONS", frozenset(("sin", "cos", "tanh", "arcsin", "arctan2")))
+        monkeypatch.setattr(model, "TORCH_MIN_SIZE", num_envs)
+    assert (num_envs >= model.TORCH_MIN_SIZE) == (torch != "off" and num_envs > 16)  # each case takes its path
     script = load_script()
     golden = np.load(script.PATH)
     arrays = script.rollouts(num_envs)

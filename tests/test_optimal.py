@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import re
 import sys
 
 import gymnasium as gym
@@ -48,7 +49,7 @@ def test_plan_replayed_through_the_env_arrives_with_the_heading_within_the_limit
     local = tuple(float(v) for v in model.to_goal_frame(*start, *goal))
     plan = solve_minimum_energy(local, 20.0, **LIMITS)  # type: ignore[arg-type]
     assert plan.intervals == 400
-    env = gym.make("DWRPointStabilization-v0", T_con=20.0, heading_tolerance=0.01)
+    env = gym.make("DWRPointStabilization-v1", T_con=20.0, heading_tolerance=0.01)
     env.reset(seed=0, options={"start": start, "goal": goal})
     played = 0.0
     for u, omega in plan.commands:
@@ -92,6 +93,10 @@ def test_position_only_optimum_is_cheaper_than_the_pose() -> None:
 def test_an_infeasible_T_con_names_T_con_and_the_smallest_feasible_value() -> None:
     with pytest.raises(InfeasibleArrivalTimeError, match=r"T_con=3 s is infeasible.*expected T_con >= 4"):
         solve_minimum_energy((-2.0, 0.0, 0.0), 3.0, **LIMITS, heading=False)  # type: ignore[arg-type]
+    with pytest.raises(
+        InfeasibleArrivalTimeError, match=r"T_con=9 s is infeasible: from d_0=5 m .* expected T_con >= 10"
+    ):
+        solve_minimum_energy((-3.0, 4.0, 0.0), 9.0, **LIMITS, heading=False)  # type: ignore[arg-type]
 
 
 def test_a_failed_scenario_is_a_failure_in_the_table_not_a_crash(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -173,8 +178,29 @@ def test_bad_parameters_and_a_missing_casadi_give_clear_errors(monkeypatch: pyte
     with pytest.raises(ValueError, match=r"unknown parameter\(s\) 'horizon'"):
         make_controller("optimal", horizon=3)
     monkeypatch.setitem(sys.modules, "casadi", None)
-    with pytest.raises(ImportError, match=r'pip install "dwr-gym\[optimal\]"'):
+    with pytest.raises(ImportError, match=r'the optimal controller needs CasADi: pip install "dwr-gym\[optimal\]"'):
         make_controller("optimal")
+
+
+@pytest.mark.parametrize(
+    ("field", "low", "high", "low_excluded"),
+    [("T_con", 0.0, 1e6, True), ("dt", 0.0, 1e6, True), ("u_max", 0.0, 1e6, True), ("omega_max", 0.0, 1e6, True),
+     ("arrival_time", 0.0, 1e6, True), ("arrival_fraction", 0.0, 1.0, True)],
+)  # fmt: skip
+def test_each_optimal_parameter_takes_its_range_and_names_itself_outside(
+    field: str, low: float, high: float, low_excluded: bool
+) -> None:
+    from baselines.nmpc import OptimalParams
+
+    assert getattr(OptimalParams.from_kwargs(**{field: high}), field) == high
+    assert getattr(OptimalParams.from_kwargs(**{field: 0.5 * high}), field) == 0.5 * high
+    for bad in (low if low_excluded else low - 1e-9, high * (1 + 1e-6)):
+        with pytest.raises(ValueError, match=re.escape(f"{field}={float(bad)!r} is invalid")):
+            OptimalParams.from_kwargs(**{field: bad})
+    for name, good, bad in (("workers", 256, 257), ("hold_steps", 10_000, 0)):
+        assert getattr(OptimalParams.from_kwargs(**{name: good, "replan_every": 0}), name) == good
+        with pytest.raises(ValueError, match=re.escape(f"{name}={bad!r} is invalid")):
+            OptimalParams.from_kwargs(**{name: bad, "replan_every": 0})
 
 
 def test_cli_with_an_infeasible_T_con_reports_it_and_still_writes_the_table(tmp_path: object) -> None:
@@ -210,3 +236,18 @@ def test_a_second_reset_without_a_step_gets_a_new_plan_and_a_finished_robot_no_m
     for _ in range(5):
         expert.predict(clipped)
     assert controller.solves <= solves + 1  # no re-planning on every call
+
+
+def test_each_episode_is_measured_against_the_optimum_of_its_own_T_con() -> None:
+    """A set with T_con drawn per episode (as v1 draws it): every episode's optimum equals a single solve at
+    that episode's T_con, and not the one at the env's nominal T_con."""
+    kwargs = {**dwr_gym.V1_DEFAULTS, "T_con_range": (3.0, 12.0), "start_distance": (0.3, 1.0), "dt": 0.25}
+    scenario = make_scenario("random", n=4, seed=2, env_kwargs=kwargs)
+    assert scenario.T_cons is not None and np.ptp(scenario.T_cons) > 2.0
+    result = evaluate({"ptc": "ptc"}, scenario, optimum="position")["ptc"]
+    limits = {"dt": 0.25, "u_max": 0.5, "omega_max": 2.0, "heading": False}
+    for i, (start, T_con) in enumerate(zip(scenario.starts, scenario.T_cons, strict=True)):  # goals at the origin
+        own = solve_minimum_energy(tuple(start), float(T_con), **limits).energy  # type: ignore[arg-type]
+        nominal = solve_minimum_energy(tuple(start), 20.0, **limits).energy  # type: ignore[arg-type]
+        assert result.optimal_energy[i] == pytest.approx(own, rel=1e-6)  # type: ignore[index]
+        assert abs(own - nominal) > 0.2 * own  # so that using the nominal T_con would be seen

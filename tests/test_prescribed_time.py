@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 
@@ -9,7 +10,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-import dwr_gym
+import dwr_gym  # noqa: F401  (registers the envs)
 from train.evaluation.evaluate import evaluate
 from train.evaluation.scenarios import make_scenario
 
@@ -141,10 +142,15 @@ def test_v1_pays_the_cheaper_of_two_timely_arrivals_with_the_heading_more() -> N
 
 
 def test_v1_defaults_are_registered() -> None:
-    env = make(V1)
-    params = env.unwrapped.params  # type: ignore[attr-defined]
-    for key, value in dwr_gym.V1_DEFAULTS.items():
-        assert getattr(params, key) == value
+    """v1 is v0 with the values its docstring's Version History and the README state, written out here."""
+    stated = {"T_con_range": (10.0, 60.0), "start_distance": (0.3, 3.0), "time_weight": 0.0, "effort_weight": 0.0,
+              "energy_weight": 2.0, "shaping_discount": 1.0, "zero_terminal_potential": True}  # fmt: skip
+    v1 = make(V1).unwrapped.params  # type: ignore[attr-defined]
+    v0 = make(V0).unwrapped.params  # type: ignore[attr-defined]
+    for field in dataclasses.fields(v1):
+        expected = stated.get(field.name, getattr(v0, field.name))
+        assert getattr(v1, field.name) == expected, field.name
+    assert v0.T_con_range is None and v0.time_weight == 0.5 and v0.energy_weight == 0.0  # v0 differs where stated
 
 
 def test_imitate_clones_the_optimal_planner_into_a_loadable_agent(tmp_path: object) -> None:

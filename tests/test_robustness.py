@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from pathlib import Path
 from typing import Any
 
@@ -27,6 +28,9 @@ from dwr_gym.robots import ROBOTS, DifferentialDrive, wheel_speeds
 from tests.test_cli import dwr_gym as run_cli
 
 ENV_ID = "DWRPointStabilization-v0"
+#: This module pins the behaviour of DWRPointStabilization-v0 (fixed T_con, the paper's reward), which Gymnasium
+#: rightly calls out of date now that v1 exists; that warning is not what these tests test.
+pytestmark = pytest.mark.filterwarnings("ignore:.*DWRPointStabilization-v0 is out of date:DeprecationWarning")
 GEOMETRY = DifferentialDrive(0.033, 0.16)  # TurtleBot3 Burger's wheels without a speed limit
 
 
@@ -172,7 +176,11 @@ def test_preset_wheel_limits_are_never_exceeded(robot: str, saturation: str) -> 
         ({"robot": "e_puck", "wheel_saturation": "bend"}, "wheel_saturation='bend' is invalid"),
         ({"disturbances": [InputDelay(600)]}, "InputDelay.steps=600 is invalid: expected an integer in [0, 599]"),
         ({"disturbances": ["bias"]}, "disturbances item 'bias' is invalid"),
-        ({"disturbances": [WheelSlip(0.5, 1.0)]}, "WheelSlip acts on the wheels: pass robot="),
+        (
+            {"disturbances": [WheelSlip(0.5, 1.0)]},
+            "WheelSlip acts on the wheels: pass robot=... (a preset or a DifferentialDrive) with it",
+        ),
+        ({"wheel_saturation": "clip"}, "wheel_saturation='clip' is invalid without a robot: pass robot=... too"),
         ({"robot": GEOMETRY, "disturbances": [ActuatorFault(start_time=31.0)]}, "ActuatorFault.start_time=31.0"),
     ],
 )
@@ -251,3 +259,64 @@ def test_tolerance_table_reads_the_largest_magnitude_held_without_a_dip() -> Non
             row("c", 0, 1.0), row("c", 4, 1.0), row("c", 8, 0.95), row("c", 16, 0.95)]  # fmt: skip
     assert tolerated(rows) == {("delay", "a"): 4, ("delay", "b"): None, ("delay", "c"): 16}
     assert "| 4 | - | 16+ |" in tolerance_markdown(rows)
+
+
+# (class, field, lowest allowed, highest allowed, whether the highest is excluded)
+DISTURBANCE_RANGES = [
+    (VelocityBias, "linear", -100.0, 100.0, False), (VelocityBias, "angular", -100.0, 100.0, False),
+    (VelocitySinusoid, "linear_amplitude", 0.0, 100.0, False), (VelocitySinusoid, "angular_amplitude", 0.0, 100.0, False),
+    (VelocitySinusoid, "phase", -1e6, 1e6, False),
+    (VelocityRandomWalk, "linear_intensity", 0.0, 100.0, False),
+    (VelocityRandomWalk, "angular_intensity", 0.0, 100.0, False),
+    (WheelSlip, "left", 0.0, 1.0, False), (WheelSlip, "right", 0.0, 1.0, False),
+    (ActuatorFault, "fraction", 0.0, 1.0, False), (ActuatorFault, "start_time", 0.0, 1e6, False),
+    (MeasurementDropout, "probability", 0.0, 1.0, True),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("cls", "field", "low", "high", "high_excluded"), DISTURBANCE_RANGES,
+                         ids=[f"{c.__name__}.{f}" for c, f, *_ in DISTURBANCE_RANGES])  # fmt: skip
+def test_each_disturbance_field_takes_its_range_as_a_float_and_names_itself_outside(
+    cls: type, field: str, low: float, high: float, high_excluded: bool
+) -> None:
+    for inside in (low, np.float32(0.5 * (low + high)), high - 1e-9 if high_excluded else high):
+        value = getattr(cls(**{field: inside}), field)
+        assert type(value) is float and value == float(inside), (inside, value)  # numpy numbers become floats
+    step = 1e-6 * max(1.0, abs(high))
+    for outside in (low - step, high if high_excluded else high + step, math.nan):
+        with pytest.raises(ValueError, match=re.escape(f"{cls.__name__}.{field}={outside!r} is invalid")):
+            cls(**{field: outside})
+
+
+def test_disturbance_integers_are_validated_and_kept_as_ints() -> None:
+    assert InputDelay(np.int64(3)).steps == 3 and type(InputDelay(np.int64(3)).steps) is int
+    for cls in (VelocityRandomWalk, MeasurementDropout):
+        assert type(cls(seed=np.int64(7)).seed) is int and cls(seed=np.int64(7)).seed == 7
+        for bad in (-1, 1.5, True):
+            with pytest.raises(ValueError, match=re.escape(f"seed={bad!r} is invalid")):
+                cls(seed=bad)
+    assert type(VelocitySinusoid(period=np.int64(3)).period) is float and VelocitySinusoid(period=1e6).period == 1e6
+    with pytest.raises(ValueError, match=r"VelocitySinusoid.period=0.0 is invalid: expected a finite number in \(0, "):
+        VelocitySinusoid(period=0.0)
+
+
+def test_random_disturbances_without_a_seed_draw_fresh_entropy() -> None:
+    kwargs = {"disturbances": [VelocityRandomWalk(0.05, 0.2), MeasurementDropout(0.3)]}
+    first, second = gym.make(ENV_ID, **kwargs), gym.make(ENV_ID, **kwargs)
+    for env in (first, second):
+        env.reset(options={"start": (0.0, 0.0, 0.0), "goal": (1.0, 0.0, 0.0)})  # no seed
+    walks = [[env.step(np.zeros(2, np.float32))[4]["linear_velocity"] for _ in range(5)] for env in (first, second)]
+    assert walks[0] != walks[1] and all(np.isfinite(walks).ravel())
+
+
+def test_the_disturbance_flags_are_booleans_from_the_reset_on_and_float32_stays_float32() -> None:
+    kwargs = {"robot": "turtlebot3_burger", "disturbances": [VelocityBias(0.01, 0.0), MeasurementDropout(0.2)]}
+    _, info = gym.make(ENV_ID, **kwargs).reset(seed=0)
+    for key in ("wheel_saturated", "fault_active", "measurement_held"):
+        assert info["disturbance"][key] is False, key
+    vec = gym.make_vec(ENV_ID, num_envs=3, dtype="float32", **kwargs)
+    _, infos = vec.reset(seed=0)
+    assert all(infos["disturbance"][key].dtype == np.bool_ for key in ("wheel_saturated", "measurement_held"))
+    _, _, _, _, infos = vec.step(np.full((3, 2), 0.5, np.float32))
+    assert infos["linear_velocity"].dtype == np.float32 and infos["angular_velocity"].dtype == np.float32
+    np.testing.assert_allclose(infos["linear_velocity"], 0.5 * 0.22 + 0.01, rtol=1e-6)

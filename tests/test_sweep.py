@@ -57,7 +57,8 @@ def test_best_yaml_reads_back_as_the_same_configuration(tmp_path: Path, algo: st
 def test_two_trial_sweep_on_local_ray_then_resume(tmp_path: Path) -> None:
     """Two configurations x one seed with a tiny budget on a local Ray, as a user runs it; --resume reuses them.
 
-    Marked slow: two local Ray start-ups and two trainings took 64 s on 2 shared cores."""
+    Marked slow (two local Ray start-ups and two trainings: 52-64 s on 2 shared cores); .ci/run runs it as its
+    second step, `pytest -m slow`."""
     pytest.importorskip("ray")
     from train.cli import main
 

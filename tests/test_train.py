@@ -64,7 +64,7 @@ def test_residual_action_arithmetic_and_clipping() -> None:
 
 
 def test_residual_wrapper_logs_expert_and_residual_parts() -> None:
-    base = gym.make("DWRPointStabilization-v0")
+    base = gym.make("DWRPointStabilization-v1")
     expert = ExpertPolicy.from_env(base, PTCController())
     env = ResidualActionWrapper(base, expert, scale=0.5)
     obs, _ = env.reset(seed=0)
@@ -104,9 +104,34 @@ def test_residual_training_starts_from_the_expert(tmp_path: Path) -> None:
     model = PPO(env=make_training_env(config), seed=0, **build_algo_kwargs(config.algo_kwargs))
     zero_init_last_layer(model)
     expert = ExpertPolicy(PTCController(), 0.5, 2.0)
-    obs, _ = gym.make_vec("DWRPointStabilization-v0", num_envs=64).reset(seed=0)
+    obs, _ = gym.make_vec("DWRPointStabilization-v1", num_envs=64).reset(seed=0)
     combined, _ = ResidualPolicy(model, expert, 0.5).predict(obs)
-    np.testing.assert_allclose(combined, expert.predict(obs)[0], atol=1e-2)
+    np.testing.assert_allclose(combined, expert.predict(obs)[0], atol=1e-4)  # 1e-3 of a residual in [-1, 1], halved
+
+
+@pytest.mark.parametrize("algo", ["ppo", "sac", "td3"])
+def test_zero_init_scales_the_last_layer_to_gain_and_zeroes_its_bias(algo: str) -> None:
+    """The layer that outputs the action: its weights become exactly gain x their initial values, its bias 0."""
+    import torch
+    from stable_baselines3 import PPO, SAC, TD3
+
+    from train.learning.residual import zero_init_last_layer
+
+    cls = {"ppo": PPO, "sac": SAC, "td3": TD3}[algo]
+    model = cls("MlpPolicy", gym.make("DWRPointStabilization-v0"), seed=0, device="cpu")
+
+    # found by its shape, not by the name the function uses: the first Linear with 2 outputs (PPO's action_net,
+    # SAC's and TD3's mu; SAC's log_std comes after it)
+    actor = model.policy if algo == "ppo" else model.actor
+    layer = next(m for m in actor.modules() if isinstance(m, torch.nn.Linear) and m.out_features == 2)
+    initial = layer.weight.detach().clone()
+    assert torch.count_nonzero(initial) == initial.numel()  # so that scaling it shows
+    zero_init_last_layer(model, gain=1e-3)
+    assert torch.equal(layer.weight.detach(), initial * 1e-3)
+    assert torch.count_nonzero(layer.bias.detach()) == 0
+    if algo == "td3":  # the target actor starts as the actor
+        for a, b in zip(model.actor.parameters(), model.actor_target.parameters(), strict=True):
+            assert torch.equal(a, b)
 
 
 def test_save_load_and_resume_round_trip(tmp_path: Path) -> None:

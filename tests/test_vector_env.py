@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 import gymnasium as gym
@@ -9,11 +10,14 @@ import numpy as np
 import pytest
 from gymnasium.vector import AutoresetMode, SyncVectorEnv
 
-import dwr_gym  # noqa: F401
+import dwr_gym
 from dwr_gym import core
 from dwr_gym.vector_env import DWRPointStabilizationVectorEnv
 
 ENV_ID = "DWRPointStabilization-v0"
+#: This module pins the behaviour of DWRPointStabilization-v0 (fixed T_con, the paper's reward), which Gymnasium
+#: rightly calls out of date now that v1 exists; that warning is not what these tests test.
+pytestmark = pytest.mark.filterwarnings("ignore:.*DWRPointStabilization-v0 is out of date:DeprecationWarning")
 # Short episodes with many arrivals, so autoreset is exercised by both termination and truncation.
 KWARGS: dict[str, Any] = {"T_con": 2.0, "dt": 0.1, "goal_tolerance": 0.15, "start_distance": (0.2, 0.5),
                           "heading_weight": 1.0}  # fmt: skip
@@ -222,15 +226,44 @@ def test_sb3_adapter_conventions_and_ppo_learns_on_the_native_batch() -> None:
     assert venv.get_attr("params")[0].T_con == 2.0
 
     model = PPO("MlpPolicy", make_sb3_vec_env(num_envs=8, seed=1, **KWARGS), n_steps=32, batch_size=64, seed=0)
-    before = [p.detach().clone() for p in model.policy.parameters()]
     model.learn(total_timesteps=512)
     assert model.num_timesteps >= 512
     # episode statistics without a VecMonitor: SB3 logs rollout/ep_rew_mean and ep_len_mean from them
     assert len(model.ep_info_buffer) > 0 and all(0 < e["l"] <= 30 for e in model.ep_info_buffer)
     assert len(model.ep_success_buffer) == len(model.ep_info_buffer)
-    assert any(
-        not np.allclose(a.numpy(), b.detach().numpy()) for a, b in zip(before, model.policy.parameters(), strict=True)
-    )
+
+
+def evaluation(model: Any, episodes: int = 64, seed: int = 100) -> tuple[float, float]:
+    """(mean return, success rate) of the deterministic policy on a fixed seeded set of episodes."""
+    env = gym.make_vec(ENV_ID, num_envs=episodes, **KWARGS)
+    obs, _ = env.reset(seed=seed)
+    returns, done, success = np.zeros(episodes), np.zeros(episodes, bool), np.zeros(episodes, bool)
+    while not done.all():
+        obs, rewards, terminated, truncated, info = env.step(model.predict(obs, deterministic=True)[0])
+        returns += np.where(done, 0.0, rewards)
+        success |= ~done & info["is_success"]
+        done |= terminated | truncated
+    return float(returns.mean()), float(success.mean())
+
+
+def test_ppo_learns_on_the_native_batch() -> None:
+    """4096 steps of PPO on the short task raise the evaluation return and success, for each of three seeds.
+
+    Measured (seeds 0, 1, 2): return -5.72 -> 7.30, -5.76 -> -3.68, -5.79 -> -3.86; success 0 -> 0.86, 0.31, 0.16."""
+    from stable_baselines3 import PPO
+
+    from dwr_gym.sb3 import make_sb3_vec_env
+
+    rises = []
+    for seed in range(3):
+        model = PPO("MlpPolicy", make_sb3_vec_env(num_envs=8, seed=1, **KWARGS), n_steps=32, batch_size=64,
+                    seed=seed, device="cpu")  # fmt: skip
+        before, success_before = evaluation(model)
+        model.learn(total_timesteps=4096)
+        after, success_after = evaluation(model)
+        assert success_before == 0.0 and success_after > 0.05, (seed, success_after)
+        rises.append(after - before)
+    assert min(rises) > 1.0 and np.mean(rises) > 3.0, rises
 
 
 def test_float32_mode_tracks_float64_and_keeps_its_dtype() -> None:
@@ -274,3 +307,40 @@ def test_an_autoreset_episode_starts_as_a_reset_at_its_start_pose_does(dtype: st
             np.testing.assert_array_equal(info[key][ended], expected_info[key][ended])
         assert not rewards[ended].any()
     assert restarted >= 16
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_a_fresh_state_is_n_robots_at_the_goal_in_its_dtype_with_integer_counters(dtype: type) -> None:
+    state = core.TaskState.zeros(3, dtype)
+    for name in ("step_count", "prescribed_steps", "max_steps"):
+        value = getattr(state, name)
+        assert value.dtype == np.int64 and value.shape == (3,) and not value.any(), name
+    for name in ("x", "y", "psi", "goal_x", "goal_y", "goal_psi", "energy", "initial_distance",
+                 "initial_orientation_error", "lyapunov", "goal_sin", "T_con"):  # fmt: skip
+        value = getattr(state, name)
+        assert value.dtype == dtype and value.shape == (3,) and not value.any(), name
+    np.testing.assert_array_equal(state.goal_cos, np.ones(3, dtype))  # the goal heading 0: cos 1, sin 0
+    np.testing.assert_array_equal(np.array(state.world_pose()), np.zeros((3, 3)))
+
+
+def test_a_robot_on_its_goal_observes_the_azimuth_as_1_0_without_warnings() -> None:
+    """At d = 0, eq. (3)'s (cos, sin) of the azimuth are 0 / 0; the observation holds (1, 0) there."""
+    envs = gym.make_vec(ENV_ID, num_envs=3)
+    starts = np.array([[0.5, 0.5, 0.0], [1.0, 0.0, 0.3], [0.2, -0.1, 0.0]])
+    goals = np.array([[0.5, 0.5, 0.0], [0.0, 0.0, 0.0], [0.2, -0.1, 1.0]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        obs, _ = envs.reset(seed=0, options={"start": starts, "goal": goals})
+    np.testing.assert_array_equal(obs[[0, 2], 0], 0.0)
+    np.testing.assert_array_equal(obs[[0, 2], 1:3], [[1.0, 0.0], [1.0, 0.0]])
+    np.testing.assert_allclose(obs[1, 1:3], [-1.0, 0.0], atol=1e-7)  # the goal lies behind robot 1
+
+
+def test_new_states_keep_integer_counters() -> None:
+    params = dwr_gym.EnvParams()
+    state = core.new_state((np.array([1.0, 2.0]), np.zeros(2), np.zeros(2)), (np.zeros(2),) * 3, params,
+                           T_con=np.array([10.0, 20.0]))  # fmt: skip
+    for name in ("step_count", "prescribed_steps", "max_steps"):
+        assert getattr(state, name).dtype == np.int64, name
+    np.testing.assert_array_equal(state.prescribed_steps, [200, 400])
+    np.testing.assert_array_equal(state.max_steps, [300, 600])

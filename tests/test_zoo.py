@@ -7,29 +7,55 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
-import yaml
 
 from train.learning.config import TrainConfig
-from train.learning.hyperparams import HYPERPARAMS_DIR, default_hyperparams, resolve_hyperparams
+from train.learning.hyperparams import HYPERPARAMS_DIR, resolve_hyperparams
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.mark.parametrize("env_id", ["DWRPointStabilization-v1", "DWRPointStabilization-v0"])
 @pytest.mark.parametrize("name", ["ppo", "sac", "td3", "residual_ppo", "residual_sac", "residual_td3"])
-def test_shipped_yaml_is_rl_zoo3_format_and_matches_train_defaults(name: str, env_id: str) -> None:
-    section = yaml.safe_load((HYPERPARAMS_DIR / f"{name}.yml").read_text())[env_id]
-    assert isinstance(section["policy_kwargs"], str) and section["policy_kwargs"].startswith("dict(")
+def test_shipped_yaml_is_rl_zoo3_format_and_matches_train_defaults(name: str, env_id: str, tmp_path: Path) -> None:
+    """rl-zoo3's own loader reads each shipped file, and the model `dwr-gym train` builds by default has exactly
+    the hyperparameters rl-zoo3 read (n_envs and n_timesteps are the trainer's defaults)."""
+    pytest.importorskip("rl_zoo3")
+    import argparse
+
+    from rl_zoo3.exp_manager import ExperimentManager
+    from stable_baselines3 import PPO, SAC, TD3
+
+    from train.learning.training import train
+
+    algo, residual = name.removeprefix("residual_"), name.startswith("residual_")
+    manager = ExperimentManager(argparse.Namespace(), algo, env_id, str(tmp_path / "zoo"),
+                                config=str(HYPERPARAMS_DIR / f"{name}.yml"), verbose=0)  # fmt: skip
+    zoo, _, _, _ = manager._preprocess_hyperparams(manager.read_hyperparameters()[0])
     defaults = TrainConfig()
-    assert (section["n_envs"], int(section["n_timesteps"])) == (defaults.num_envs, defaults.total_timesteps)
-    algo = name.removeprefix("residual_")
-    params = default_hyperparams(algo, name.startswith("residual_"), env_id)
-    assert params["policy"] == section["policy"] and params["learning_rate"] == section["learning_rate"]
+    assert (manager.n_envs, manager.n_timesteps) == (defaults.num_envs, defaults.total_timesteps)
+
+    config = TrainConfig(algo=algo, residual=residual, env_id=env_id, total_timesteps=1, eval_freq=10**9, eval_episodes=1,
+                         checkpoint_freq=10**9, run_dir=str(tmp_path / "run"), progress=False)  # fmt: skip
+    resolve_hyperparams(config, set())
+    cls = {"ppo": PPO, "sac": SAC, "td3": TD3}[algo]
+    model = cls.load(train(config) / "model.zip", device="cpu")
+    assert model.n_envs == manager.n_envs
+    assert model.policy_class is cls.policy_aliases[zoo.pop("policy")]
+    schedule = zoo.pop("learning_rate")
+    assert [model.lr_schedule(p) for p in (1.0, 0.5, 0.0)] == [schedule(p) for p in (1.0, 0.5, 0.0)]
+    for key, value in zoo.pop("policy_kwargs").items():
+        assert model.policy_kwargs[key] == value, key
+    if zoo.pop("noise_type", None) is not None:  # rl-zoo3's normal noise of noise_std on each action
+        noise = getattr(model.action_noise, "base_noise", model.action_noise)  # SB3 vectorises it over the envs
+        np.testing.assert_array_equal(noise._sigma, np.full(2, zoo.pop("noise_std")))
+    if "train_freq" in zoo:
+        assert model.train_freq.frequency == zoo.pop("train_freq")
+    for key, value in zoo.items():
+        assert getattr(model, key) == value, key
     # v1 charges energy over episodes of up to 90 s: its discount is the README's 0.999, v0 keeps its tuned 0.99
-    assert params["gamma"] == (0.999 if env_id.endswith("v1") else 0.99)
-    if algo == "td3":  # rl-zoo3's noise_type/noise_std is our action-noise sigma
-        assert params["action_noise_sigma"] == section["noise_std"]
+    assert model.gamma == (0.999 if env_id.endswith("v1") else 0.99)
 
 
 def test_dwr_gym_train_reads_an_rl_zoo3_yaml_with_noise(tmp_path: Path) -> None:

@@ -1,0 +1,104 @@
+"""Plant each bug of issue 26's audit in a copy of the tree, run the test suite there, and record what fails.
+
+    python benchmarks/planted_bugs.py              # every bug, one suite run each (~5 min each on 2 cores)
+    python benchmarks/planted_bugs.py --bugs sinc_1_over_24
+
+A golden or pinned record (tests/test_golden.py, the pinned v0 returns and trajectories) detects a change,
+not a bug that was there when it was recorded; so each bug must also fail another test. The source tree
+is never touched: each bug is planted in ``git archive HEAD`` unpacked under ``--work``. Results go to
+``docs/testing/planted_bugs.json``, from which ``benchmarks/mutation.py --docs`` writes the table of
+docs/testing.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "docs" / "testing" / "planted_bugs.json"
+#: Tests that compare with a recorded output rather than with an independent reference.
+PINNED = re.compile(r"test_golden\.py|test_v0_returns_|test_v0_defaults_are_bit_for_bit")
+ADDITIVE = "        for i, item in enumerate(self.disturbances):\n            if isinstance(item, VelocityBias):"
+WHEELS = "        if self.drive is not None:\n            left, right = robots.wheel_speeds"
+
+#: bug -> (what it does, the file, the text replaced, its replacement)
+BUGS: dict[str, tuple[str, str, str, str]] = {
+    "ptc_u_without_p_star": (
+        "PTC's u of eq. (16) without p*", "baselines/controllers.py",
+        "u = p.K1 * mu * p_star * d ** (2.0 * p.beta - 1.0)  # eq. (16)",
+        "u = p.K1 * mu * d ** (2.0 * p.beta - 1.0)  # eq. (16)"),
+    "ptc_omega_exponent_beta": (
+        "PTC's omega of eq. (18) with exponent beta instead of 2 beta - 1", "baselines/controllers.py",
+        "signed_power(orientation_err, 2.0 * p.beta - 1.0)  # eq. (18)", "signed_power(orientation_err, p.beta)  # eq. (18)"),
+    "sinc_1_over_24": (
+        "sin(h)/h series coefficient 1/120 -> 1/24", "dwr_gym/model.py", "h2 * (1.0 / 120.0 +", "h2 * (1.0 / 24.0 +"),
+    "additive_before_saturation": (
+        "additive disturbances applied before the wheel saturation", "dwr_gym/disturbances.py", ADDITIVE, WHEELS),
+    "optimum_ignores_episode_T_con": (
+        "the reference optimum ignores each episode's own T_con", "train/evaluation.py",
+        "optimal_energies(params, scenario.starts, scenario.goals, scenario.T_cons,",
+        "optimal_energies(params, scenario.starts, scenario.goals, None,"),
+    "zero_init_does_nothing": (
+        "zero_init_last_layer does nothing", "train/residual.py",
+        '    policy = model.policy\n    if hasattr(policy, "action_net"):',
+        '    return\n    policy = model.policy\n    if hasattr(policy, "action_net"):'),
+}  # fmt: skip
+
+
+def plant(bug: str, work: Path) -> Path:
+    """A copy of HEAD with ``bug`` planted."""
+    _, path, old, new = BUGS[bug]
+    root = work / bug
+    if root.exists():
+        shutil.rmtree(root)
+    root.mkdir(parents=True)
+    archive = subprocess.run(["git", "-C", str(ROOT), "archive", "HEAD"], capture_output=True, check=True).stdout
+    subprocess.run(["tar", "-x", "-C", str(root)], input=archive, check=True)
+    text = (root / path).read_text()
+    if bug == "additive_before_saturation":  # move the additive disturbances' loop in front of the wheels' block
+        start, add = text.index(WHEELS), text.index(ADDITIVE)
+        end = text.index("        self.last.update(commanded_linear_velocity")
+        text = text[:start] + text[add:end] + text[start:add] + text[end:]
+    else:
+        if text.count(old) != 1:
+            raise SystemExit(f"{bug}: the code to change is not in {path} (or not once): update BUGS")
+        text = text.replace(old, new)
+    (root / path).write_text(text)
+    return root
+
+
+def run_suite(root: Path) -> tuple[list[str], str]:
+    """The failing tests and pytest's last line, running the default suite in ``root`` (which imports from there)."""
+    env = {**os.environ, "SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy", "MPLBACKEND": "Agg",
+           "OMP_NUM_THREADS": "1"}  # fmt: skip
+    command = ["nice", "-n", "10", sys.executable, "-m", "pytest", "-n", "2", "-q", "-rf", "-p", "no:cacheprovider"]
+    output = subprocess.run(command, cwd=root, env=env, capture_output=True, text=True, check=False).stdout
+    failed = sorted({line.split()[1] for line in output.splitlines() if line.startswith("FAILED ")})
+    return failed, output.strip().splitlines()[-1] if output.strip() else ""
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--bugs", nargs="+", choices=list(BUGS), default=list(BUGS))
+    parser.add_argument("--work", type=Path, default=Path("/tmp/dwr-gym-planted"))
+    args = parser.parse_args()
+    results = json.loads(RESULTS.read_text()) if RESULTS.is_file() else {}
+    for bug in args.bugs:
+        failed, last = run_suite(plant(bug, args.work))
+        independent = [test for test in failed if not PINNED.search(test)]
+        results[bug] = {"description": BUGS[bug][0], "file": BUGS[bug][1], "failed": failed,
+                        "failed_not_pinned": independent, "summary": last}  # fmt: skip
+        print(f"{bug}: {len(failed)} failed, {len(independent)} of them not a golden/pinned record ({last})")
+        RESULTS.parent.mkdir(parents=True, exist_ok=True)
+        RESULTS.write_text(json.dumps(results, indent=1) + "\n")
+
+
+if __name__ == "__main__":
+    main()
