@@ -148,6 +148,7 @@ def solve_minimum_energy(
     guesses: int = 2,
     response: tuple[float, float, float, float] | None = None,
     pad_to: int = 1,
+    max_iter: int = 1000,
 ) -> Plan:
     """The minimum-energy plan from ``start`` (goal frame: goal at the origin, heading 0) to the goal.
 
@@ -165,6 +166,7 @@ def solve_minimum_energy(
     commands (u, omega), which stay within the limits; the plan's energy is that of the robot's velocities.
     ``pad_to`` solves a problem of the next multiple of ``pad_to`` intervals whose last ones hold the robot still
     at the goal, and returns the plan without them: the same plan from fewer solvers to build and cache.
+    ``max_iter`` bounds IPOPT's iterations per guess (a re-plan in a control loop must not take seconds).
     """
     h = dt * hold_steps
     if intervals is None:
@@ -184,7 +186,7 @@ def solve_minimum_energy(
         )
     planned = intervals
     intervals = -(-intervals // pad_to) * pad_to  # the next multiple of pad_to
-    solver = minimum_energy_solver(intervals, response=response is not None)
+    solver = minimum_energy_solver(intervals, max_iter=max_iter, response=response is not None)
     parameters = h if response is None else [h, *response]
     n_states = 3 * (intervals + 1)
     lower, upper = np.full(n_states + 2 * intervals, -np.inf), np.full(n_states + 2 * intervals, np.inf)

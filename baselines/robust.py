@@ -55,6 +55,8 @@ FINISH_LAWS: tuple[str, ...] = ("pt-astolfi", "ptc")
 MIN_PLAN_INTERVALS = 4
 #: Plans are solved on problems of a multiple of this many intervals (fewer solvers to build; see solve_minimum_energy).
 PAD_TO = 8
+#: IPOPT's iterations per guess of a plan (a converging plan takes 10-60; one that takes more rarely converges).
+MAX_ITERATIONS = 150
 #: Tries of a plan, each with 1.3 times the time of the one before, before the finish law takes over.
 PLAN_ATTEMPTS = 3
 
@@ -269,7 +271,12 @@ class RobustPTController(Controller):
         return self._command[:, 0].copy(), self._command[:, 1].copy()
 
     def _learned_cruise(
-        self, index: NDArray[np.intp], estimate: ControllerInput, T_con: NDArray[np.float64], u: FloatArray, omega: FloatArray
+        self,
+        index: NDArray[np.intp],
+        estimate: ControllerInput,
+        T_con: NDArray[np.float64],
+        u: FloatArray,
+        omega: FloatArray,
     ) -> None:
         """The learned cruise's velocities for the robots ``index`` (into ``u``, ``omega``), until the planner takes over
         (past handover_time * T_con, or behind schedule)."""
@@ -311,7 +318,7 @@ class RobustPTController(Controller):
             left = max(p.plan_arrival * T_con[i] - step[i] * p.dt, 1.1 * least, MIN_PLAN_INTERVALS * h)
             jobs[i] = {"start": start, "arrival_time": left, "dt": p.dt, "u_max": p.u_max, "omega_max": p.omega_max,
                        "heading": not near, "hold_steps": p.hold_steps, "response": tuple(float(v) for v in response),
-                       "pad_to": PAD_TO}  # fmt: skip
+                       "pad_to": PAD_TO, "max_iter": MAX_ITERATIONS}  # fmt: skip
         for attempt in range(PLAN_ATTEMPTS):
             if not jobs:
                 break

@@ -106,7 +106,9 @@ def main(argv: list[str] | None = None) -> None:
     with ProcessPoolExecutor(args.workers) as pool:
         for result in tqdm(pool.map(job, jobs), total=len(jobs), desc="(T_con, set)", unit="job", file=sys.stderr):
             rows.extend(result)
-    print(f"{'T_con':>5} {'set':9} {'policy':22} {'in time':>8} {'|psi|':>6} {'energy':>7} {'E/opt':>6} {'cmd rate':>8}")
+    print(
+        f"{'T_con':>5} {'set':9} {'policy':22} {'in time':>8} {'|psi|':>6} {'energy':>7} {'E/opt':>6} {'cmd rate':>8}"
+    )
     for r in rows:
         print(f"{r['T_con']:5g} {r['set']:9} {r['policy']:22} {100 * r['success_rate']:7.1f}% "
               f"{r['final_heading_error_mean']:6.3f} {r['energy_mean']:7.3f} {r['energy_ratio_mean']:6.2f} "
@@ -118,7 +120,10 @@ def main(argv: list[str] | None = None) -> None:
         print(f"\n{agent}: {sum(c['met'] for c in checks)}/{len(checks)} criteria met")
         for c in checks:
             if not c["met"]:
-                print(f"  not met: {c['criterion']}: {c['measured']:.3f}" + (f" (bar {c['bar']:.3f})" if "bar" in c else ""))
+                print(
+                    f"  not met: {c['criterion']}: {c['measured']:.3f}"
+                    + (f" (bar {c['bar']:.3f})" if "bar" in c else "")
+                )
     if args.json:
         args.json.parent.mkdir(parents=True, exist_ok=True)
         from train.reporting.results import json_safe

@@ -33,7 +33,7 @@ from dwr_gym.robots import DifferentialDrive
 from dwr_gym.validation import reject_unknown
 
 #: The env keywords that are not fields of EnvParams: the robot's wheels and the disturbances.
-ROBOT_KEYWORDS = ("robot", "wheel_saturation", "disturbances")
+ROBOT_KEYWORDS = ("robot", "wheel_saturation", "disturbances", "disturbance_distribution")
 
 #: Number of pose features at the start of the observation (distance ... orientation error).
 POSE_FEATURES = 6

@@ -166,8 +166,9 @@ def checked_selection(args: argparse.Namespace) -> list[str]:
     return list(names)
 
 
-def add_scenario_arguments(p: argparse.ArgumentParser, out: str) -> None:
-    """The options shared by ``evaluate`` and ``compare``: the env, the controllers and the scenario sets."""
+def add_scenario_arguments(p: argparse.ArgumentParser, out: str, sets: Sequence[str] | None = None) -> None:
+    """The options shared by ``evaluate`` and ``compare``: the env, the controllers and the scenario sets (by default
+    ``sets``, else the scenario sets without disturbances)."""
     from baselines.registry import CONTROLLER_NAMES
     from train.evaluation.disturbance_sets import ROBUSTNESS_SETS
     from train.evaluation.optimum import OPTIMA
@@ -195,10 +196,10 @@ def add_scenario_arguments(p: argparse.ArgumentParser, out: str) -> None:
     p.add_argument(
         "--scenarios",
         nargs="+",
-        default=list(SCENARIO_SETS),
+        default=list(sets or SCENARIO_SETS),
         metavar="SET",
-        help=f"scenario sets: any of {', '.join(SCENARIO_SETS)} (default: these), or the imperfect robots' "
-        f"{', '.join(ROBUSTNESS_SETS)} (see 'Robustness' in the README)",
+        help=f"scenario sets: any of {', '.join(SCENARIO_SETS)}, or the imperfect robots' "
+        f"{', '.join(ROBUSTNESS_SETS)} (see the robustness page of the docs) (default: {' '.join(sets or SCENARIO_SETS)})",
     )
     p.add_argument("--n", type=count, default=1000, help="number of random start poses for 'random' (default: 1000)")
     p.add_argument("--seed", type=count, default=0, help="seed of the random scenario set (default: 0)")

@@ -42,7 +42,9 @@ class RolloutResult:
     energy: NDArray[np.float64]  # integral of u^2 + omega^2
     path_length: NDArray[np.float64]
     command_rate_rms: NDArray[np.float64]  # RMS of the change of the commanded (u, omega) per second: lower is smoother
-    velocity_rate_rms: NDArray[np.float64]  # the same of the velocities the robot had (with actuation noise, delay, ...)
+    velocity_rate_rms: NDArray[
+        np.float64
+    ]  # the same of the velocities the robot had (with actuation noise, delay, ...)
     episode_return: NDArray[np.float64]
     left_arena: NDArray[np.bool_]
     trajectory: dict[str, NDArray[np.float64]] | None = None

@@ -55,7 +55,7 @@ def load_agent(path: str | Path) -> tuple[str, Any]:
             raise AgentLoadError(f"agent {str(path)!r} has an invalid handover section: {error}") from error
     robust = load_extra(run_dir).get("robust_agent")
     if robust is not None:  # robust-pt whose cruise is the network (train.learning.robust_dagger)
-        from train.learning.robust_dagger import agent
+        from train.learning.robust_agent import agent
 
         try:
             policy = agent(policy, config.env_params(), **robust)

@@ -93,16 +93,6 @@ def student(model: Any, params: EnvParams) -> Any:
     return FilteredPolicy(model, params.u_max, params.omega_max, params.dt, k=params.k)
 
 
-def agent(model: Any, params: EnvParams, **robust_kwargs: Any) -> Any:
-    """The whole agent: ``robust-pt`` (with ``robust_kwargs``) whose cruise is the network."""
-    from baselines.expert import ExpertPolicy
-    from baselines.robust import RobustPTController, RobustPTParams
-
-    controller_params = RobustPTParams.from_kwargs(dt=params.dt, u_max=params.u_max, omega_max=params.omega_max,
-                                                   k=params.k, **robust_kwargs)  # fmt: skip
-    return ExpertPolicy(RobustPTController(controller_params, cruise=model), params.u_max, params.omega_max)
-
-
 def rollouts(policy: Any, params: EnvParams, config: RobustDaggerConfig, n: int, rng: np.random.Generator,
              disturbed: bool, record: bool = False) -> tuple[Any, np.ndarray, np.ndarray]:  # fmt: skip
     """Run ``policy`` from n random starts and T_con of the env, on the nominal or a randomly disturbed robot."""
