@@ -10,7 +10,11 @@ PTC (the paper's law: the energy bar) and `robust-pt` (the expert), and prints e
   episode with CasADi and cached);
 - under `noise`, a command-rate RMS <= 2 times its nominal one.
 
-    python benchmarks/robust_goal.py train/pretrained/robust --n 500 --json docs/robust/goal.json
+    python benchmarks/robust_goal.py --n 500 --json docs/robust/goal.json
+
+An agent is a run directory, optionally with ``#network`` (the network alone) or ``#no-plan`` (the network with
+``robust-pt``'s analytic finish but no planner); the default is the shipped ``train/pretrained/robust`` whole, its
+network alone and its network without the planner, so that each part is reported beside the whole.
 
 Each (T_con, set) is one job; ``--workers`` jobs run at once in separate processes.
 """
@@ -40,8 +44,9 @@ def job(args: tuple[float, str, list[str], list[str], int, int]) -> list[dict[st
     from train.learning.agents import load_agent
 
     policies: dict[str, Any] = {c: c for c in controllers}
-    for path in agents:
-        label, policy = load_agent(path)
+    for spec in agents:
+        path, _, part = spec.partition("#")
+        label, policy = load_agent(path, part or "whole")
         policies[label] = policy
     scenario = make_scenario(name, n=n, seed=seed, env_kwargs={"T_con": T_con, "start_distance": START_DISTANCE})
     optimum = "pose" if name == "random" else "none"
@@ -97,7 +102,7 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
     if args.n < 1 or args.workers < 1:
         parser.error(f"--n {args.n} and --workers {args.workers} are invalid: expected integers >= 1")
-    agents = args.agents or ["train/pretrained/robust"]
+    agents = args.agents or [f"train/pretrained/robust{part}" for part in ("", "#no-plan", "#network")]
     jobs = [(T, name, agents, args.controllers, args.n, args.seed) for T in args.T_con for name in args.sets]
     from tqdm.auto import tqdm
 
@@ -114,7 +119,7 @@ def main(argv: list[str] | None = None) -> None:
               f"{r['final_heading_error_mean']:6.3f} {r['energy_mean']:7.3f} {r['energy_ratio_mean']:6.2f} "
               f"{r['command_rate_rms_mean']:8.2f}")  # fmt: skip
     report: dict[str, Any] = {"rows": rows, "seed": args.seed, "n": args.n, "seconds": round(time.time() - began)}
-    for agent in {r["policy"] for r in rows} - set(args.controllers):
+    for agent in dict.fromkeys(r["policy"] for r in rows if r["policy"] != "ptc"):
         checks = verdicts(rows, agent)
         report[f"verdicts:{agent}"] = checks
         print(f"\n{agent}: {sum(c['met'] for c in checks)}/{len(checks)} criteria met")

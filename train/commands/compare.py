@@ -59,7 +59,8 @@ def run(args: argparse.Namespace) -> int:
         except AgentLoadError:
             pass
     rows, recorded, labels = compare(agents, controllers, args.scenarios, args.n, args.seed, env_kwargs,
-                                     progress=not args.no_progress, optimum=checked_optimum(args), T_cons=args.T_con)  # fmt: skip
+                                     progress=not args.no_progress, optimum=checked_optimum(args), T_cons=args.T_con,
+                                     n_optimal=args.n_optimal)  # fmt: skip
     rows = [{**row, "env_id": env_id} for row in rows]
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

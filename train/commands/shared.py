@@ -160,6 +160,8 @@ def checked_selection(args: argparse.Namespace) -> list[str]:
             )
     if not 1 <= args.n <= 10**7:
         raise UsageError(f"--n {args.n} is invalid: expected an integer in [1, 1e7]")
+    if not 1 <= args.n_optimal <= 10**7:
+        raise UsageError(f"--n-optimal {args.n_optimal} is invalid: expected an integer in [1, 1e7]")
     if not 0 <= args.seed < 2**32:
         raise UsageError(f"--seed {args.seed} is invalid: expected an integer in [0, 2**32 - 1]")
     check_writable_dir("--out", args.out)
@@ -202,6 +204,9 @@ def add_scenario_arguments(p: argparse.ArgumentParser, out: str, sets: Sequence[
         f"{', '.join(ROBUSTNESS_SETS)} (see the robustness page of the docs) (default: {' '.join(sets or SCENARIO_SETS)})",
     )
     p.add_argument("--n", type=count, default=1000, help="number of random start poses for 'random' (default: 1000)")
+    p.add_argument("--n-optimal", type=count, default=100,
+                   help="episodes of each disturbed set (disturbed, fault, delay, noise) that the 'optimal' controller "
+                   "runs, the first of the n: it re-plans with CasADi whenever pushed off its plan (default: 100)")  # fmt: skip
     p.add_argument("--seed", type=count, default=0, help="seed of the random scenario set (default: 0)")
     p.add_argument("--out", default=out, help=f"output directory (default: {out})")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")  # fmt: skip

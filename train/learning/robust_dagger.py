@@ -180,12 +180,10 @@ def evaluate(policy: Any, params: EnvParams, config: RobustDaggerConfig) -> dict
 
 def run(config: RobustDaggerConfig, run_dir: Path, command: list[str]) -> Path:
     """Warm start, DAgger rounds under disturbances, the hand-over; save model.zip, config.yaml, evaluations.csv."""
-    import csv
-
     import torch
     from stable_baselines3 import PPO
 
-    from train.learning.runs import EVAL_FILE, MODEL_FILE, save_config
+    from train.learning.runs import MODEL_FILE
 
     if (run_dir / MODEL_FILE).exists():
         raise SystemExit(f"--run-dir {str(run_dir)!r} already holds a trained model: choose another")
@@ -208,12 +206,26 @@ def run(config: RobustDaggerConfig, run_dir: Path, command: list[str]) -> Path:
     curve = [{"round": 0, "samples": len(data[0]), "wall_time": round(time.time() - began, 1), "loss": math.nan,
               **evaluate(student(model, params), params, config)}]  # fmt: skip
     print(curve[-1], flush=True)
+    save(model, curve, config, run_dir, command)
     for round_ in range(1, config.dagger_rounds + 1):
         data = concatenate([data, dagger_samples(model, config, params, rng)])
         loss = fit(model, data, plain, rng)
         curve.append({"round": round_, "samples": len(data[0]), "wall_time": round(time.time() - began, 1),
                       "loss": loss, **evaluate(student(model, params), params, config)})  # fmt: skip
         print(curve[-1], flush=True)
+        save(model, curve, config, run_dir, command)  # after every round: an interrupted run keeps its last model
+    print(f"trained in {time.time() - began:.0f} s on {len(data[0])} samples; saved {run_dir / MODEL_FILE}")
+    return run_dir
+
+
+def save(
+    model: Any, curve: list[dict[str, Any]], config: RobustDaggerConfig, run_dir: Path, command: list[str]
+) -> None:
+    """The run directory as a loadable agent: model.zip, config.yaml (with the robust_agent section), evaluations.csv."""
+    import csv
+
+    from train.learning.runs import EVAL_FILE, MODEL_FILE, save_config
+
     model.save(run_dir / MODEL_FILE)
     extra: dict[str, Any] = {"robust_dagger": dataclasses.asdict(config), "command": command,
                              "robust_agent": {"plan_arrival": config.plan_arrival}}  # fmt: skip
@@ -224,8 +236,6 @@ def run(config: RobustDaggerConfig, run_dir: Path, command: list[str]) -> Path:
         writer = csv.DictWriter(handle, fieldnames=list(curve[-1]))
         writer.writeheader()
         writer.writerows(curve)
-    print(f"trained in {time.time() - began:.0f} s on {len(data[0])} samples; saved {run_dir / MODEL_FILE}")
-    return run_dir
 
 
 def main(argv: list[str] | None = None) -> None:
