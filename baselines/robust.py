@@ -59,6 +59,8 @@ PAD_TO = 8
 MAX_ITERATIONS = 150
 #: Tries of a plan, each with 1.3 times the time of the one before, before the finish law takes over.
 PLAN_ATTEMPTS = 3
+#: A plan longer than this many intervals (T_con 60 s at the defaults needs 192) is not solved: the finish law drives.
+MAX_PLAN_INTERVALS = 1000
 
 
 @dataclass(frozen=True)
@@ -316,6 +318,9 @@ class RobustPTController(Controller):
             near = math.hypot(start[0], start[1]) < p.near_goal  # the last centimetres: the position alone
             least = least_arrival_time(start, max(reach[0], 1e-3), max(reach[1], 1e-3), not near)
             left = max(p.plan_arrival * T_con[i] - step[i] * p.dt, 1.1 * least, MIN_PLAN_INTERVALS * h)
+            if left * 1.3 ** (PLAN_ATTEMPTS - 1) > MAX_PLAN_INTERVALS * h:  # Guard: far away, a solve would not end
+                self._phase[i] = FINISH
+                continue
             jobs[i] = {"start": start, "arrival_time": left, "dt": p.dt, "u_max": p.u_max, "omega_max": p.omega_max,
                        "heading": not near, "hold_steps": p.hold_steps, "response": tuple(float(v) for v in response),
                        "pad_to": PAD_TO, "max_iter": MAX_ITERATIONS}  # fmt: skip
