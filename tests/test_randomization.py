@@ -87,5 +87,6 @@ def test_with_nothing_present_the_robot_is_the_nominal_one() -> None:
         (obs_a, r_a, t_a, *_), (obs_b, r_b, t_b, *_) = nominal.step(action), drawn.step(action)
         np.testing.assert_allclose(obs_b, obs_a, atol=1e-6)  # the wheels' round trip rounds in the last bits
         assert r_b == pytest.approx(r_a, abs=1e-9)
+        assert t_b == t_a
         if t_a:
             break
