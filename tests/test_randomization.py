@@ -38,7 +38,9 @@ def test_sub_env_i_draws_what_a_single_env_reset_with_seed_plus_i_draws() -> Non
     obs, _ = envs.reset(seed=7)
     for i, env in enumerate(singles):
         single_obs, _ = env.reset(seed=7 + i)
-        np.testing.assert_allclose(obs[i], single_obs, rtol=0, atol=1e-6)  # float32 trigonometry: numpy's, or math's for one robot
+        np.testing.assert_allclose(
+            obs[i], single_obs, rtol=0, atol=1e-6
+        )  # float32 trigonometry: numpy's, or math's for one robot
     drawn = envs.unwrapped.perturbation.episode()
     for i, env in enumerate(singles):
         mine = env.unwrapped.perturbation.episode()
@@ -52,10 +54,12 @@ def test_sub_env_i_draws_what_a_single_env_reset_with_seed_plus_i_draws() -> Non
             if getattr(env, "_done", False):
                 single_obs, _ = env.reset()
                 env._done = False
-                np.testing.assert_allclose(obs[i], single_obs, rtol=0, atol=1e-6)  # float32 trigonometry: numpy's, or math's for one robot
+                np.testing.assert_allclose(
+                    obs[i], single_obs, rtol=0, atol=1e-6
+                )  # float32: numpy's or math's trigonometry
                 continue
             single_obs, reward, term, trunc, _ = env.step(actions[i])
-            np.testing.assert_allclose(obs[i], single_obs, rtol=0, atol=1e-6)  # float32 trigonometry: numpy's, or math's for one robot
+            np.testing.assert_allclose(obs[i], single_obs, rtol=0, atol=1e-6)  # float32: numpy's or math's trigonometry
             assert rewards[i] == pytest.approx(reward, abs=1e-9) and terminated[i] == term and truncated[i] == trunc
             env._done = term or trunc
 

@@ -327,7 +327,9 @@ def test_the_disturbance_flags_are_booleans_from_the_reset_on_and_float32_stays_
 class StandStill:
     """A policy that never moves: it fails at every magnitude."""
 
-    def predict(self, observation: Any, state: Any = None, episode_start: Any = None, deterministic: bool = True) -> Any:
+    def predict(
+        self, observation: Any, state: Any = None, episode_start: Any = None, deterministic: bool = True
+    ) -> Any:
         return np.zeros((np.shape(observation)[0], 2), dtype=np.float32), None
 
 
