@@ -116,3 +116,19 @@ def test_the_optimal_controller_runs_on_the_first_n_optimal_episodes_of_a_distur
                  "--n-optimal", "2", "--optimum", "none", "--no-progress", "--out", str(tmp_path)]) == 0  # fmt: skip
     rows = {(r["scenario"], r["policy"]): r["n"] for r in json.loads((tmp_path / "evaluation.json").read_text())}
     assert rows == {("delay", "optimal"): 2, ("delay", "ptc"): 4, ("random", "optimal"): 4, ("random", "ptc"): 4}
+
+
+@pytest.mark.parametrize("name", ["random", "disturbed", "fault", "delay", "noise"])
+def test_the_shipped_robust_agent_keeps_the_deadline_for_less_energy_than_ptc(name: str) -> None:
+    """The claim of docs/robust.md on a small set (24 starts 0.3-3 m, T_con 20 s, a seed the benchmark does not use)."""
+    from train.evaluation.evaluate import evaluate
+    from train.evaluation.scenarios import make_scenario
+    from train.learning.agents import PRETRAINED, load_agent
+
+    _, agent = load_agent(PRETRAINED["robust"])
+    scenario = make_scenario(name, n=24, seed=31, env_kwargs={"T_con": T_CON, "start_distance": START_DISTANCE})
+    results = evaluate({"agent": agent, "ptc": "ptc"}, scenario, seed=31)
+    robust, ptc = results["agent"], results["ptc"]
+    assert robust.success.mean() >= 23 / 24
+    assert np.mean(robust.final_heading_error) <= (0.1 if name == "random" else 0.2)
+    assert robust.energy.mean() < ptc.energy.mean()

@@ -236,6 +236,18 @@ def save(
         writer = csv.DictWriter(handle, fieldnames=list(curve[-1]))
         writer.writeheader()
         writer.writerows(curve)
+    plot_curves(curve, config.eval_T_con, run_dir)
+
+
+def plot_curves(curve: list[dict[str, Any]], T_cons: Any, run_dir: Path) -> None:
+    """The learning curves (the network alone, as the DAgger rounds evaluate it), nominal and disturbed."""
+    from train.reporting.learning_curves import plot_dagger_curve
+
+    T_cons = tuple(float(T) for T in T_cons)
+    plot_dagger_curve(curve, T_cons, run_dir / "learning_curve.png",
+                      title="Robust DAgger, the network alone: fixed evaluation starts 0.3-3 m away, nominal")  # fmt: skip
+    plot_dagger_curve(curve, T_cons, run_dir / "learning_curve_disturbed.png", prefix="disturbed_",
+                      title="Robust DAgger, the network alone: the same starts under randomised disturbances")  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> None:
