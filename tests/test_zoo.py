@@ -3,6 +3,7 @@ defaults."""
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -10,10 +11,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from train.learning.config import TrainConfig
+from train.learning.config import BUDGET_HELP, TrainConfig
 from train.learning.hyperparams import HYPERPARAMS_DIR, resolve_hyperparams
 
 ROOT = Path(__file__).resolve().parents[1]
+
+
+def stated_defaults(text: str) -> dict[str, int]:
+    """{"PPO": 256, "SAC": 64, "TD3": 64} from "...: 256 for PPO, 64 for SAC and TD3"."""
+    return {algo: int(number) for number, algos in re.findall(r"(\d+) for ([A-Z0-9 and]+)", text)
+            for algo in algos.split(" and ")}  # fmt: skip
 
 
 @pytest.mark.parametrize("env_id", ["DWRPointStabilization-v1", "DWRPointStabilization-v0"])
@@ -33,8 +40,10 @@ def test_shipped_yaml_is_rl_zoo3_format_and_matches_train_defaults(name: str, en
     manager = ExperimentManager(argparse.Namespace(), algo, env_id, str(tmp_path / "zoo"),
                                 config=str(HYPERPARAMS_DIR / f"{name}.yml"), verbose=0)  # fmt: skip
     zoo, _, _, _ = manager._preprocess_hyperparams(manager.read_hyperparameters()[0])
-    defaults = TrainConfig()
+    defaults = resolve_hyperparams(TrainConfig(algo=algo, residual=residual, env_id=env_id), set())
     assert (manager.n_envs, manager.n_timesteps) == (defaults.num_envs, defaults.total_timesteps)
+    assert stated_defaults(BUDGET_HELP["n_envs"])[algo.upper()] == manager.n_envs  # as the CLI's help says
+    assert stated_defaults(BUDGET_HELP["n_timesteps"])[algo.upper()] == manager.n_timesteps
 
     config = TrainConfig(algo=algo, residual=residual, env_id=env_id, total_timesteps=1, eval_freq=10**9, eval_episodes=1,
                          checkpoint_freq=10**9, run_dir=str(tmp_path / "run"), progress=False)  # fmt: skip
