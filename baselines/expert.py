@@ -51,7 +51,7 @@ class ExpertPolicy:
 
     >>> import gymnasium as gym, dwr_gym
     >>> from baselines import ExpertPolicy, PTCController
-    >>> env = gym.make("DWRPointStabilization-v0")
+    >>> env = gym.make("DWRPointStabilization-v1")
     >>> expert = ExpertPolicy.from_env(env, PTCController())
     >>> obs, _ = env.reset(seed=1)
     >>> action, _ = expert.predict(obs)

@@ -1,7 +1,8 @@
 """Seconds per episode of the optimum: the cached reference plans and the NMPC controller ``optimal``.
 
-    python benchmarks/optimal.py            # paper-fig5, paper-fig7 and random --n 1000
-    python benchmarks/optimal.py --n 200    # a quicker look
+    python benchmarks/optimal.py                                        # paper-fig5, paper-fig7 and random --n 1000
+    python benchmarks/optimal.py --n 200                                # a quicker look
+    python benchmarks/optimal.py --out docs/benchmarks/optimal.json     # the rows of the docs' table
 
 For each scenario set it times (1) solving the reference optimum of every episode on the env's grid
 (what ``evaluate``/``compare`` cache for the E/opt columns; the cache is bypassed here) and (2) a
@@ -13,10 +14,12 @@ machine and its load; the table says how many worker processes were used.
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import platform
 import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -31,6 +34,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=int, default=1000, help="random episodes (default: 1000)")
     parser.add_argument("--workers", type=int, default=0, help="solver processes (default: every core)")
+    parser.add_argument("--out", help="also write the rows as JSON to this file")
     args = parser.parse_args()
     os.environ["DWR_GYM_CACHE"] = tempfile.mkdtemp(prefix="dwr-gym-bench-")  # time the solves, not the cache
     workers = args.workers or min(os.cpu_count() or 1, 8)
@@ -38,6 +42,7 @@ def main() -> None:
     header = f"{'scenario':<11} {'n':>5} {'ref s/ep':>9} {'nmpc s/ep':>9} {'solves/ep':>9} {'success':>7} {'|psi_end|':>9} {'E/opt':>6}"
     print(header)
     print("-" * len(header))
+    rows = []
     for name in ("paper-fig5", "paper-fig7", "random"):
         scenario = make_scenario(name, n=args.n, seed=0)
         params = EnvParams.from_kwargs(**scenario.env_kwargs)
@@ -56,6 +61,16 @@ def main() -> None:
         print(f"{name:<11} {n:>5} {reference_time / n:>9.3f} {nmpc_time / n:>9.3f} {controller.solves / n:>9.2f} "
               f"{result.success.mean():>7.3f} {result.final_heading_error.mean():>9.4f} {np.nanmean(ratio):>6.3f}"
               + (f"  ({len(failures)} episodes without optimum)" if failures else ""))  # fmt: skip
+        rows.append({"scenario": name, "n": n, "reference_seconds_per_episode": reference_time / n,
+                     "controller_seconds_per_episode": nmpc_time / n, "solves_per_episode": controller.solves / n,
+                     "success_rate": float(result.success.mean()),
+                     "final_heading_error_mean": float(result.final_heading_error.mean()),
+                     "energy_ratio_mean": float(np.nanmean(ratio)), "episodes_without_optimum": len(failures),
+                     "workers": workers, "cores": os.cpu_count()})  # fmt: skip
+    if args.out:
+        Path(args.out).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.out).write_text(json.dumps(rows, indent=2) + "\n")
+        print(f"wrote {args.out}")
 
 
 if __name__ == "__main__":

@@ -2,10 +2,11 @@
 
     python benchmarks/prescribed_time_goal.py train/pretrained/dagger_handover
     python benchmarks/prescribed_time_goal.py runs/dagger_handover_s0 runs/dagger_handover_s1 runs/dagger_handover_s2
+    python benchmarks/prescribed_time_goal.py train/pretrained/dagger_handover --out docs/prescribed_time/goal.json
 
 On random starts 0.3-3 m away (500 per T_con, seed 0), at each T_con in {10, 20, 40, 60} s, it
 evaluates the given agents (several run directories are treated as training seeds of one agent:
-mean +- sd), PTC and Astolfi, states the optimum of the same episodes (its plans reach the pose exactly,
+mean +- sd), PTC, pt-astolfi and Astolfi, states the optimum of the same episodes (its plans reach the pose exactly,
 heading 0, at T_con), and checks the goal for the agents: arrival by T_con in
 >= 99 % of episodes, mean final heading error <= 0.1 rad, energy no more than PTC's on the same starts
 (stretch: mean energy / optimum <= 1.5). It prints one table and one verdict line per criterion.
@@ -14,7 +15,9 @@ heading 0, at T_con), and checks the goal for the agents: arrival by T_con in
 from __future__ import annotations
 
 import argparse
+import json
 from collections import defaultdict
+from pathlib import Path
 
 import numpy as np
 
@@ -30,9 +33,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("agents", nargs="+", help="run directories: the training seeds of one agent")
     parser.add_argument("--n", type=int, default=500)
+    parser.add_argument("--out", help="also write the rows and the verdicts as JSON to this file")
     args = parser.parse_args()
     policies = {f"seed{i}": load_agent(path)[1] for i, path in enumerate(args.agents)}
-    policies.update({name: name for name in ("ptc", "astolfi")})
+    policies.update({name: name for name in ("ptc", "pt-astolfi", "astolfi")})
     rows = evaluate_sets(policies, ["random"], args.n, 0, ENV_KWARGS, progress=True, optimum="pose", T_cons=T_CONS)
     table: dict[tuple[str, float], dict[str, list[float]]] = defaultdict(lambda: defaultdict(list))
     for row in rows:
@@ -60,10 +64,19 @@ def main() -> None:
         "stretch: energy / optimum <= 1.5": lambda a, p: max(a["energy_ratio_mean"]) <= 1.5,
     }
     print()
+    found = {}
     for text, check in checks.items():
         verdicts = [check(table[("agent", T)], table[("ptc", T)]) for T in T_CONS]
         detail = ", ".join(f"T_con {T:.0f}: {'yes' if ok else 'no'}" for T, ok in zip(T_CONS, verdicts, strict=True))
         print(f"[{'met' if all(verdicts) else 'not met':>7}] {text} (every seed): {detail}")
+        found[text] = dict(zip((f"{T:g}" for T in T_CONS), verdicts, strict=True))
+    if args.out:
+        from train.reporting.results import json_safe
+
+        Path(args.out).parent.mkdir(parents=True, exist_ok=True)
+        data = {"agents": args.agents, "n": args.n, "rows": rows, "verdicts": found}
+        Path(args.out).write_text(json.dumps(json_safe(data), indent=2) + "\n")
+        print(f"wrote {args.out}")
 
 
 if __name__ == "__main__":

@@ -30,6 +30,10 @@ from dwr_gym import robots
 from dwr_gym.model import FloatArray
 from dwr_gym.params import EnvParams, check_range
 from dwr_gym.robots import DifferentialDrive
+from dwr_gym.validation import reject_unknown
+
+#: The env keywords that are not fields of EnvParams: the robot's wheels and the disturbances.
+ROBOT_KEYWORDS = ("robot", "wheel_saturation", "disturbances")
 
 #: Number of pose features at the start of the observation (distance ... orientation error).
 POSE_FEATURES = 6
@@ -162,6 +166,7 @@ def split_env_kwargs(kwargs: dict[str, Any]) -> tuple[dict[str, Any], Differenti
     they are given. Returns (the remaining keywords for :class:`EnvParams`, the drive or None, the
     disturbances).
     """
+    reject_unknown(EnvParams, kwargs, also=ROBOT_KEYWORDS)  # the error lists these too, not only EnvParams' fields
     kwargs = dict(kwargs)
     robot = kwargs.pop("robot", None)
     saturation = kwargs.pop("wheel_saturation", None)

@@ -143,7 +143,7 @@ class DWRPointStabilizationEnv(HorizonSpec, OneRobotRendering, gym.Env[NDArray[n
     | 4   | sin(psi - psi_d)                                     | -1          | 1              |
     | 5   | orientation error e_psi, eq. (6) [rad]               | -7 pi / 6   | 7 pi / 6       |
     | 6   | elapsed fraction of the prescribed time t / T_con    | 0           | horizon_factor |
-    | 7   | T_con [s] (constant within an env)                   | 0           | T_con          |
+    | 7   | T_con [s] (constant within an episode)               | 0           | top of range   |
     | 8   | initial distance d_0 [m]                             | 0           | arena_radius   |
     | 9   | initial orientation error e_psi0 [rad]               | -7 pi / 6   | 7 pi / 6       |
 
@@ -175,7 +175,7 @@ class DWRPointStabilizationEnv(HorizonSpec, OneRobotRendering, gym.Env[NDArray[n
 
     ## Starting State
     Without options the goal is (0, 0, 0) and the start is drawn from ``self.np_random``: distance
-    uniform in ``start_distance``, bearing uniform in [-pi, pi), heading relative to the goal uniform
+    uniform in ``start_distance`` (0.3-3 m in v1, 0.3-1.5 m in v0), bearing uniform in [-pi, pi), heading relative to the goal uniform
     in ``start_heading``. ``reset(options={"start": (x, y, psi), "goal": (x_d, y_d, psi_d)})`` places
     either or both exactly (a random start is then drawn around the given goal). The prescribed time
     is ``T_con``, or with ``T_con_range`` drawn uniformly per episode (after the start);
@@ -184,10 +184,12 @@ class DWRPointStabilizationEnv(HorizonSpec, OneRobotRendering, gym.Env[NDArray[n
     ## Episode End
     Terminated on arrival (d <= ``goal_tolerance``, and |psi - psi_d| <= ``heading_tolerance`` when
     that is set) or on leaving the arena (d > ``arena_radius``). Truncated at the horizon
-    ``horizon_factor * T_con`` (30 s by default), past T_con so that late arrivals are observable.
+    ``horizon_factor * T_con`` (30 s in v0; in v1 1.5 times the episode's T_con), past T_con so that late
+    arrivals are observable.
     The env truncates itself, because the horizon depends on the keywords ``T_con``, ``dt`` and
-    ``horizon_factor``, and reports the number of steps in ``env.spec.max_episode_steps`` (600 by
-    default), where ``TimeLimit``-aware wrappers such as ``TimeAwareObservation`` look for it.
+    ``horizon_factor``, and reports the number of steps in ``env.spec.max_episode_steps`` (600 in v0;
+    1,800 in v1, the horizon of the largest T_con), where ``TimeLimit``-aware wrappers such as
+    ``TimeAwareObservation`` look for it.
 
     ## Arguments
     Every field of :class:`dwr_gym.params.EnvParams` is a keyword (``T_con``, ``dt``, ``u_max``,
@@ -203,7 +205,7 @@ class DWRPointStabilizationEnv(HorizonSpec, OneRobotRendering, gym.Env[NDArray[n
 
     >>> import gymnasium as gym
     >>> import dwr_gym
-    >>> env = gym.make("DWRPointStabilization-v0", T_con=20.0)
+    >>> env = gym.make("DWRPointStabilization-v1")
     >>> obs, info = env.reset(seed=0, options={"start": (0.0, 0.0, 0.0), "goal": (0.8, 0.0, 0.0)})
     >>> round(info["distance"], 3), obs.shape
     (0.8, (10,))

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import math
+import os
+import sys
 from typing import Any
 
 import numpy as np
@@ -17,10 +19,21 @@ WHEEL_LENGTH = 0.045  # [m]
 WHEEL_WIDTH = 0.016  # [m]
 
 
+def headless() -> bool:
+    """Whether there is no display a window could open on (Linux and BSD without X11 or Wayland)."""
+    unix = sys.platform.startswith(("linux", "freebsd", "openbsd", "netbsd"))
+    return unix and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
 class Renderer:
     """Draws frames for ``render_mode`` 'rgb_array' or 'human' (a window). Pygame is imported lazily."""
 
     def __init__(self, render_mode: str, fps: int, size: int = 480) -> None:
+        os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
+        if render_mode == "human" and headless():
+            # No display to open a window on: SDL would probe its video drivers and print alarming errors
+            # ("XDG_RUNTIME_DIR is invalid or not set"), as when Gymnasium's check_env tries every render mode.
+            os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
         try:
             import pygame
         except ImportError as error:
@@ -34,7 +47,7 @@ class Renderer:
         pygame.font.init()
         if render_mode == "human":
             pygame.display.init()
-            pygame.display.set_caption("DWRPointStabilization-v0")
+            pygame.display.set_caption("dwr-gym")
             self._window = pygame.display.set_mode((size, size))
             self._clock = pygame.time.Clock()
         self._canvas = pygame.Surface((size, size))

@@ -23,8 +23,14 @@ import gymnasium as gym
 import numpy as np
 from gymnasium.vector import AutoresetMode
 from numpy.typing import NDArray
-from stable_baselines3.common.monitor import Monitor
-from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices, VecEnvStepReturn
+
+try:
+    from stable_baselines3.common.monitor import Monitor
+    from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices, VecEnvStepReturn
+except ImportError as error:  # the train extra is optional; say how to get it, as every other extra does
+    raise ImportError(
+        f'dwr_gym.sb3 needs stable-baselines3 ({error.name} is missing): pip install "dwr-gym[train]"'
+    ) from error
 
 from dwr_gym.vector_env import DWRPointStabilizationVectorEnv
 

@@ -152,9 +152,9 @@ def as_pose(name: str, value: Any) -> tuple[float, float, float]:
         raise ValueError(f"{_show(name, _describe(value))} is invalid: expected {expected}") from None
 
 
-def reject_unknown(cls: type, kwargs: dict[str, Any]) -> None:
-    """Raise a ValueError for keywords that are not fields of the dataclass ``cls``."""
-    allowed = {f.name for f in dataclasses.fields(cls)}
+def reject_unknown(cls: type, kwargs: dict[str, Any], also: tuple[str, ...] = ()) -> None:
+    """Raise a ValueError for keywords that are neither fields of the dataclass ``cls`` nor in ``also``."""
+    allowed = {f.name for f in dataclasses.fields(cls)} | set(also)
     unknown = sorted(set(kwargs) - allowed)
     if unknown:
         raise ValueError(

@@ -90,14 +90,13 @@ def test_every_command_that_makes_an_env_takes_env_and_refuses_an_abbreviation(c
 # 3. One spelling for one concept: --agents in every command, --agent (repeatable) meaning the same.
 
 
-def test_evaluate_takes_agents_and_agent_alike(tmp_path: Path) -> None:
+def test_evaluate_takes_agent_as_agents(tmp_path: Path) -> None:
     ppo, dagger = str(ROOT / "train/pretrained/ppo"), str(ROOT / "train/pretrained/dagger")
-    for i, flags in enumerate((["--agents", ppo, dagger], ["--agent", ppo, "--agent", dagger])):
-        result = dwr_gym("evaluate", "--controllers", "ptc", "--scenarios", "paper-fig5", "--optimum", "none",
-                         "--no-progress", "--out", str(tmp_path / str(i)), *flags)  # fmt: skip
-        assert result.returncode == 0, result.stderr
-        rows = json.loads((tmp_path / str(i) / "evaluation.json").read_text())
-        assert [row["policy"] for row in rows] == ["ptc", "ppo", "dagger"]
+    result = dwr_gym("evaluate", "--controllers", "ptc", "--scenarios", "paper-fig5", "--optimum", "none",
+                     "--no-progress", "--out", str(tmp_path), "--agent", ppo, "--agent", dagger)  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    rows = json.loads((tmp_path / "evaluation.json").read_text())
+    assert [row["policy"] for row in rows] == ["ptc", "ppo", "dagger"]
 
 
 @pytest.mark.parametrize("command", ["evaluate", "compare", "robustness"])
@@ -150,15 +149,15 @@ def bar_states(stderr: str) -> list[str]:
 
 
 def test_the_training_bar_counts_to_the_steps_that_run_also_on_resume(tmp_path: Path) -> None:
-    args = ["train", "--num-envs", "4", "--hyperparams", "n_steps=512", "--eval-freq", "1e6", "--eval-episodes", "4",
+    args = ["train", "--num-envs", "4", "--hyperparams", "n_steps=128", "--eval-freq", "1e6", "--eval-episodes", "4",
             "--run-dir", "run"]  # fmt: skip
-    first = dwr_gym(*args, "--total-timesteps", "5000", cwd=tmp_path)
+    first = dwr_gym(*args, "--total-timesteps", "1000", cwd=tmp_path)  # rollouts of 512 steps: 1024 run
     assert first.returncode == 0, first.stderr
-    assert "runs 6144 steps" in first.stderr and bar_states(first.stderr)[-1].count("6144/6144") == 1
-    assert not any("/5000" in state for state in bar_states(first.stderr))
-    resumed = dwr_gym("train", "--resume", "run", "--total-timesteps", "9000", cwd=tmp_path)
+    assert "runs 1024 steps" in first.stderr and bar_states(first.stderr)[-1].count("1024/1024") == 1
+    assert not any("/1000 " in state for state in bar_states(first.stderr))
+    resumed = dwr_gym("train", "--resume", "run", "--total-timesteps", "1500", cwd=tmp_path)
     assert resumed.returncode == 0, resumed.stderr
-    assert "4096/4096" in bar_states(resumed.stderr)[-1]  # 6144 + 4096 = 10240 >= 9000, in whole rollouts
+    assert "512/512" in bar_states(resumed.stderr)[-1]  # 1024 + 512 = 1536 >= 1500, in whole rollouts
 
 
 # 16. Ctrl-C: the first saves at the end of the rollout, a second stops after the current step and saves what it
@@ -259,9 +258,9 @@ def check_figure(fig: object, path: Path) -> None:
 
     from PIL import Image
 
-    image = Image.open(path)
-    dpi = round(image.info["dpi"][0])
-    assert image.size == tuple(round(inches * dpi) for inches in fig.get_size_inches()), path.name  # type: ignore[attr-defined]
+    with Image.open(path) as image:
+        dpi, size = round(image.info["dpi"][0]), image.size
+    assert size == tuple(round(inches * dpi) for inches in fig.get_size_inches()), path.name  # type: ignore[attr-defined]
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
     canvas = FigureCanvasAgg(fig)  # a saved figure is closed: draw it again, laid out as it was saved
@@ -389,3 +388,63 @@ def test_a_model_zip_outside_a_run_is_named_itself(tmp_path: Path) -> None:
     result = dwr_gym("evaluate", "--agents", str(tmp_path / "model.zip"), cwd=tmp_path)
     assert result.returncode == 2
     assert f"agent {str(tmp_path / 'model.zip')!r} is invalid: no config.yaml beside it or above it" in result.stderr
+
+
+# 12-14. Extras, headless machines, what is registered.
+
+
+def run_python(code: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, cwd=ROOT,
+                          env=env if env is not None else dict(os.environ))  # fmt: skip
+
+
+def test_the_sb3_adapter_without_the_train_extra_says_what_to_install() -> None:
+    result = run_python("import sys; sys.modules['stable_baselines3'] = None; from dwr_gym.sb3 import make_sb3_vec_env")
+    assert result.returncode == 1
+    assert result.stderr.strip().splitlines()[-1].endswith('pip install "dwr-gym[train]"')
+
+
+def test_check_env_on_a_headless_machine_prints_nothing_from_sdl() -> None:
+    quiet = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY", "XDG_RUNTIME_DIR",
+                                                                "SDL_VIDEODRIVER", "SDL_AUDIODRIVER")}  # fmt: skip
+    code = ("import gymnasium as gym, dwr_gym\nfrom gymnasium.utils.env_checker import check_env\n"
+            "check_env(gym.make('DWRPointStabilization-v1').unwrapped)\n")  # fmt: skip
+    result = run_python(code, quiet)
+    assert result.returncode == 0, result.stderr
+    assert "XDG_RUNTIME_DIR" not in result.stderr + result.stdout and "pygame" not in result.stdout
+
+
+def test_info_lists_every_registered_env_and_the_unknown_keyword_error_lists_every_keyword() -> None:
+    result = dwr_gym("info")
+    assert result.returncode == 0, result.stderr
+    for env_id in ("DWRPointStabilization-v1", "DWRPointStabilization-v0", "DWRPointStabilizationGoal-v0"):
+        assert f"  {env_id}  " in result.stdout
+    assert "defaults of DWRPointStabilization-v1" in result.stdout and "T_con_range = (10.0, 60.0)" in result.stdout
+    wrong = dwr_gym("evaluate", "--env-kwargs", "T_conn=3")
+    allowed = wrong.stderr.split("allowed: ", 1)[1].strip().split(", ")
+    assert {"robot", "wheel_saturation", "disturbances", "T_con"} <= set(allowed)
+
+
+# 15. A law that fails by design is explained once.
+
+
+def test_fabregas_is_explained_once(tmp_path: Path) -> None:
+    result = dwr_gym("evaluate", "--controllers", "fabregas", "ptc", "--scenarios", "paper-fig5", "random", "--n", "5",
+                     "--env", PAPER_ENV_ID, "--optimum", "none", "--no-progress", "--out", str(tmp_path))  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.count("slow law of ref. [9]") == 1
+
+
+# 18. The test run warns only where a warning is what a test tests: here, v0's.
+
+
+def test_v0_warns_that_it_is_out_of_date_and_v1_does_not() -> None:
+    import warnings
+
+    import gymnasium as gym
+
+    with pytest.warns(DeprecationWarning, match="DWRPointStabilization-v0 is out of date"):
+        gym.make(PAPER_ENV_ID)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        gym.make(TASK_ENV_ID)

@@ -6,6 +6,7 @@ import math
 
 import gymnasium as gym
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -14,6 +15,9 @@ from baselines.base import ControllerInput
 from baselines.registry import CONTROLLERS, make_controller
 
 ENV_ID = "DWRPointStabilization-v0"
+#: This module pins the behaviour of DWRPointStabilization-v0 (fixed T_con, the paper's reward), which Gymnasium
+#: rightly calls out of date now that v1 exists; that warning is not what these tests test.
+pytestmark = pytest.mark.filterwarnings("ignore:.*DWRPointStabilization-v0 is out of date:DeprecationWarning")
 EDGE_DISTANCES = [0.0, 1e-12, 1e-6, 0.01, 1.0, 1e3, 9.99e5]
 EDGE_ANGLES = [-math.pi, math.pi, 0.0, math.pi / 2, -math.pi / 2, math.nextafter(math.pi, 0.0)]
 distance = st.one_of(st.sampled_from(EDGE_DISTANCES), st.floats(0.0, 9.99e5))
@@ -52,6 +56,9 @@ def test_env_is_finite_at_edge_states(d, bearing, heading, T_con, dt_is_T_con, a
     T_con=t_con,
     dtype=st.sampled_from(["float64", "float32"]),
 )
+# In float32 at these edge states, intermediates overflow (h^2 of the exact arc, a Box bound cast to float32);
+# numpy says so, and what this test checks is that none of it reaches an observation or a reward.
+@pytest.mark.filterwarnings("ignore:overflow encountered:RuntimeWarning")
 def test_vector_env_is_finite_at_edge_states(d, heading, T_con, dtype) -> None:
     venv = gym.make_vec(ENV_ID, num_envs=4, vectorization_mode="vector_entry_point", dtype=dtype, T_con=T_con,
                         dt=T_con, arena_radius=1e6)  # fmt: skip

@@ -49,7 +49,7 @@ def test_plan_replayed_through_the_env_arrives_with_the_heading_within_the_limit
     local = tuple(float(v) for v in model.to_goal_frame(*start, *goal))
     plan = solve_minimum_energy(local, 20.0, **LIMITS)  # type: ignore[arg-type]
     assert plan.intervals == 400
-    env = gym.make("DWRPointStabilization-v0", T_con=20.0, heading_tolerance=0.01)
+    env = gym.make("DWRPointStabilization-v1", T_con=20.0, heading_tolerance=0.01)
     env.reset(seed=0, options={"start": start, "goal": goal})
     played = 0.0
     for u, omega in plan.commands:

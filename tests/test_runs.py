@@ -59,7 +59,7 @@ def test_same_seed_same_agent_and_resume_equals_the_uninterrupted_run(tmp_path: 
     )  # the best score survives the resume
     steps = [int(row[0]) for row in evaluations(split)[1:]]
     assert steps == sorted(steps) and steps[-1] == 400
-    wall = [float(row[1]) for row in list(csv.reader((split / "evaluations.csv").open()))[1:]]
+    wall = [float(row[1]) for row in list(csv.reader((split / "evaluations.csv").read_text().splitlines()))[1:]]
     assert wall == sorted(wall)  # wall time continues across the resume
 
 

@@ -64,7 +64,7 @@ def test_residual_action_arithmetic_and_clipping() -> None:
 
 
 def test_residual_wrapper_logs_expert_and_residual_parts() -> None:
-    base = gym.make("DWRPointStabilization-v0")
+    base = gym.make("DWRPointStabilization-v1")
     expert = ExpertPolicy.from_env(base, PTCController())
     env = ResidualActionWrapper(base, expert, scale=0.5)
     obs, _ = env.reset(seed=0)
@@ -104,7 +104,7 @@ def test_residual_training_starts_from_the_expert(tmp_path: Path) -> None:
     model = PPO(env=make_training_env(config), seed=0, **build_algo_kwargs(config.algo_kwargs))
     zero_init_last_layer(model)
     expert = ExpertPolicy(PTCController(), 0.5, 2.0)
-    obs, _ = gym.make_vec("DWRPointStabilization-v0", num_envs=64).reset(seed=0)
+    obs, _ = gym.make_vec("DWRPointStabilization-v1", num_envs=64).reset(seed=0)
     combined, _ = ResidualPolicy(model, expert, 0.5).predict(obs)
     np.testing.assert_allclose(combined, expert.predict(obs)[0], atol=1e-4)  # 1e-3 of a residual in [-1, 1], halved
 

@@ -29,7 +29,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError('matplotlib is not installed: pip install "dwr-gym[plots]"') from error
     check_writable_dir("--out", args.out)
     from train.evaluation.reproduce import claims, measure, optimum_lines
-    from train.reporting.paper import plot_paper_figures, write_report
+    from train.reporting.paper import plot_paper_figures, write_claims, write_report
 
     out = Path(args.out)
     runs = measure(args.dt, log=lambda stage: print(f"running {stage} ...", flush=True))
@@ -37,9 +37,10 @@ def run(args: argparse.Namespace) -> int:
     print("drawing the figures" + (" and the animation" if not args.no_gif else "") + " ...", flush=True)
     plot_paper_figures(runs, out, gif=not args.no_gif)
     write_report(found, out / "report.md", args.dt, optimum_lines(runs))
+    write_claims(found, out / "claims.json", args.dt, optimum_lines(runs))
     print()
     width = max(len(c.verdict) for c in found)
     for claim in found:
         print(f"[{claim.verdict:<{width}}] {claim.claim}\n    {claim.measured}")
-    print(f"wrote figures and report.md to {args.out}")
+    print(f"wrote figures, report.md and claims.json to {args.out}")
     return 0

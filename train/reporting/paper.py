@@ -194,6 +194,17 @@ def animate_fig5(runs: PaperRuns, path: Path, fps: int = 12) -> Path:
     return path
 
 
+def write_claims(claims: list[Claim], path: Path, dt: float, optimum_lines: list[str] | None = None) -> None:
+    """The claims as JSON (what the docs' table of verdicts is generated from): the number, the claim, what was
+    measured, the verdict; with the control period and the lines on the optimum."""
+    import json
+
+    rows = [{"number": i, "claim": c.claim, "measured": c.measured, "verdict": c.verdict, "holds": c.holds}
+            for i, c in enumerate(claims, 1)]  # fmt: skip
+    data = {"dt": dt, "claims": rows, "optimum": list(optimum_lines or [])}
+    path.write_text(json.dumps(data, indent=2) + "\n")
+
+
 def write_report(claims: list[Claim], path: Path, dt: float, optimum_lines: list[str] | None = None) -> None:
     """The Markdown report: each claim, the number measured here and the verdict."""
     lines = [

@@ -1,0 +1,213 @@
+"""The results tables of the README and the docs, generated from the JSON that the commands and benchmarks write.
+
+A table in a Markdown file sits between ``<!-- table: NAME -->`` and ``<!-- /table -->``; :data:`TABLES` says
+which JSON file and which function make table NAME. ::
+
+    python -m train.reporting.doc_tables            # rewrite every table from its JSON
+    python -m train.reporting.doc_tables --check    # exit 1, naming the tables, if one disagrees with its JSON
+
+``tests/test_docs.py`` runs the check, so a table can not drift from the numbers it states.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import re
+import sys
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[2]
+MARKER = re.compile(r"(<!-- table: (?P<name>[\w-]+) -->\n)(?P<body>.*?)(<!-- /table -->)", re.DOTALL)
+
+#: How the tables name the policies: the controllers of baselines and the agents shipped in train/pretrained.
+POLICY_NAMES = {
+    "optimal": "**optimum**",
+    "ptc": "PTC (16)-(19)",
+    "conventional-ptc": "conventional PTC",
+    "fabregas": "Fabregas [9] (1)",
+    "fixed-time": "fixed-time [23]",
+    "astolfi": "Astolfi",
+    "pt-astolfi": "`pt-astolfi` (2)",
+    "residual-ppo": "`residual_ppo` (v0)",
+    "ppo": "`ppo` (v0)",
+    "dagger": "`dagger` (v1)",
+    "dagger-handover": "`dagger-handover` (v1)",
+}
+
+
+def number(value: Any, fmt: str) -> str:
+    """``value`` formatted, or "-" where it is missing (null in the JSON, NaN in a run)."""
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return "-"
+    return format(value, fmt)
+
+
+def percent(value: Any) -> str:
+    return "-" if value is None else f"{100 * value:.3g} %"
+
+
+def compare_table(rows: list[dict[str, Any]], sets: tuple[str, ...] = ("paper-fig5", "random")) -> str:
+    """Every policy on scenario ``sets``: success, final heading error, energy, E/opt mean (worst)."""
+    scenarios = [name for name in sets if any(r["scenario"] == name for r in rows)]
+    rows = [r for r in rows if r["scenario"] in scenarios]
+    by = {(r["scenario"], r["policy"]): r for r in rows}
+    policies = list(dict.fromkeys(r["policy"] for r in rows))
+    header = ["policy"]
+    for name in scenarios:
+        header += [f"{name}: success", "\\|psi_end\\| [rad]", "energy", "E/opt mean (worst)"]
+    lines = ["| " + " | ".join(header) + " |", "|---" * len(header) + "|"]
+    for policy in policies:
+        cells = [POLICY_NAMES.get(policy, f"`{policy}`")]
+        for name in scenarios:
+            r = by.get((name, policy))
+            if r is None:
+                cells += ["", "", "", ""]
+                continue
+            ratio = number(r["energy_ratio_mean"], ".2f")
+            ratio = f"**{ratio}** ({number(r['energy_ratio_max'], '.1f')})" if ratio != "-" else "-"
+            cells += [percent(r["success_rate"]), number(r["final_heading_error_mean"], ".3f"),
+                      number(r["energy_mean"], ".3f"), ratio]  # fmt: skip
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n" + compare_caption(rows) + "\n"
+
+
+def compare_caption(rows: list[dict[str, Any]]) -> str:
+    """Where the table's numbers come from: the env, the sets and their sizes, the prescribed times."""
+    env = rows[0].get("env_id", "DWRPointStabilization-v0")
+    sets = []
+    for name in dict.fromkeys(r["scenario"] for r in rows):
+        r = next(r for r in rows if r["scenario"] == name)
+        T = "T_con drawn per episode" if r["T_con"] is None else f"T_con = {r['T_con']:g} s"
+        sets.append(f"{name} ({r['n']:.0f} episode{'s' if r['n'] != 1 else ''}, {T})")
+    notes = {"fabregas": "(1) Fabregas [9] is the slow law the paper compares at T_con = 70 s (paper-fig7): it is not "
+             "designed to arrive by a shorter T_con", "pt-astolfi": "(2) not from the paper: Astolfi's law on the time "
+             "scale of eq. (12)", "optimal": "optimum: the `optimal` controller, the least energy to the pose by T_con",
+             "ppo": "(v0), (v1): the shipped agent and the env id it was trained on"}  # fmt: skip
+    present = {r["policy"] for r in rows}
+    note = "".join(f"; {text}" for name, text in notes.items() if name in present)
+    return (f"\n*{env}; {', '.join(sets)}; E/opt: energy / the optimum's on the same episode, over the episodes "
+            f"that arrive in time, mean (worst){note}.*")  # fmt: skip
+
+
+def claims_table(data: dict[str, Any]) -> str:
+    """The paper's claims, each with what was measured here and the verdict."""
+    lines = ["| # | claim | measured here | verdict |", "|---|---|---|---|"]
+    for c in data["claims"]:
+        lines.append(f"| {c['number']} | {c['claim']} | {c['measured']} | **{c['verdict']}** |")
+    return "\n".join(lines) + f"\n\n*`dwr-gym reproduce`, control period dt = {data['dt']} s.*\n"
+
+
+def tolerance_table(rows: list[dict[str, Any]]) -> str:
+    """The robustness sweep: the largest magnitude of each disturbance up to which each policy still arrives."""
+    from train.reporting.tables import tolerance_markdown
+
+    return tolerance_markdown(rows)
+
+
+def goal_table(data: dict[str, Any]) -> str:
+    """The prescribed-time goal benchmark: the agent, PTC, pt-astolfi, Astolfi and the optimum at each T_con."""
+    rows = data["rows"]
+    T_cons = list(dict.fromkeys(r["T_con"] for r in rows))
+    lines = ["| T_con [s] | agent: success / \\|psi_end\\| [rad] / energy / E/opt | PTC | pt-astolfi (the law alone) | "
+             "Astolfi | optimum: energy |", "|---|---|---|---|---|---|"]  # fmt: skip
+    for T in T_cons:
+        at = {("agent" if r["policy"].startswith("seed") else r["policy"]): r for r in rows if r["T_con"] == T}
+        optimum = number(at["ptc"]["optimal_energy_mean"], ".3f") if "ptc" in at else ""
+        cells = [goal_cell(at.get(name)) for name in ("agent", "ptc", "pt-astolfi", "astolfi")]
+        lines.append(f"| {T:g} | " + " | ".join(cells) + f" | {optimum} |")
+    verdicts = "; ".join(f"{text}: {verdict(by_T_con)}" for text, by_T_con in data["verdicts"].items())
+    caption = f"{data['n']} random starts 0.3-3 m per T_con; agent: {', '.join(data['agents'])}. Verdicts: {verdicts}."
+    return "\n".join(lines) + f"\n\n*{caption}*\n"
+
+
+def goal_cell(row: dict[str, Any] | None) -> str:
+    """success / final heading error / energy / E/opt of one policy at one T_con."""
+    if row is None:
+        return ""
+    return (f"{percent(row['success_rate'])} / {number(row['final_heading_error_mean'], '.3f')} / "
+            f"{number(row['energy_mean'], '.3f')} / {number(row['energy_ratio_mean'], '.2f')}")  # fmt: skip
+
+
+def verdict(by_T_con: dict[str, bool]) -> str:
+    """'met', or 'not met at T_con ...' naming where it was missed."""
+    missed = [T for T, ok in by_T_con.items() if not ok]
+    return "**met**" if not missed else f"**not met** at T_con = {', '.join(missed)} s"
+
+
+def optimal_timing_table(rows: list[dict[str, Any]]) -> str:
+    """Seconds per episode of the reference optimum and of the ``optimal`` controller."""
+    lines = ["| set | n | reference optimum (env grid) [s/episode] | `optimal` controller rollout [s/episode] | "
+             "solves per episode | success | E/opt |", "|---|---|---|---|---|---|---|"]  # fmt: skip
+    for r in rows:
+        lines.append(f"| {r['scenario']} | {r['n']} | {r['reference_seconds_per_episode']:.3f} | "
+                     f"{r['controller_seconds_per_episode']:.3f} | {r['solves_per_episode']:.2f} | "
+                     f"{percent(r['success_rate'])} | {number(r['energy_ratio_mean'], '.3f')} |")  # fmt: skip
+    first = rows[0]
+    return "\n".join(lines) + f"\n\n*{first['workers']} worker processes on {first['cores']} cores.*\n"
+
+
+#: Table name -> (its JSON file, relative to the repository, and the function that makes its Markdown).
+TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
+    "compare": ("docs/compare/comparison.json", compare_table),
+    "compare-fig7": ("docs/compare/comparison.json", lambda rows: compare_table(rows, ("paper-fig7",))),
+    "claims": ("docs/reproduce/claims.json", claims_table),
+    "robustness": ("docs/robustness/robustness.json", tolerance_table),
+    "robustness-issue10": ("docs/robustness/issue10/robustness.json", tolerance_table),
+    "prescribed-time-goal": ("docs/prescribed_time/goal.json", goal_table),
+    "optimal-timing": ("docs/benchmarks/optimal.json", optimal_timing_table),
+}
+
+
+def markdown_files(root: Path = ROOT) -> list[Path]:
+    """The README and every page of the docs."""
+    return [root / "README.md", *sorted((root / "docs").rglob("*.md"))]
+
+
+def render(name: str, root: Path = ROOT) -> str:
+    """Table ``name`` from its JSON file."""
+    if name not in TABLES:
+        raise KeyError(f"table {name!r} is unknown: expected any of {', '.join(TABLES)}")
+    path, make = TABLES[name]
+    return make(json.loads((root / path).read_text()))
+
+
+def regenerate(text: str, root: Path = ROOT) -> str:
+    """``text`` with every marked table made anew from its JSON."""
+    return MARKER.sub(lambda m: m.group(1) + render(m.group("name"), root) + m.group(4), text)
+
+
+def stale(root: Path = ROOT) -> list[str]:
+    """The marked tables (as 'file: name') that differ from what their JSON gives."""
+    found = []
+    for path in markdown_files(root):
+        text = path.read_text()
+        for match in MARKER.finditer(text):
+            if match.group("body") != render(match.group("name"), root):
+                found.append(f"{path.relative_to(root)}: {match.group('name')}")
+    return found
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--check", action="store_true", help="change nothing; exit 1 if a table disagrees")
+    args = parser.parse_args(argv)
+    if args.check:
+        found = stale()
+        for item in found:
+            print(f"stale table: {item} (run python -m train.reporting.doc_tables)", file=sys.stderr)
+        return 1 if found else 0
+    for path in markdown_files():
+        text = path.read_text()
+        new = regenerate(text)
+        if new != text:
+            path.write_text(new)
+            print(f"regenerated the tables of {path.relative_to(ROOT)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
