@@ -24,6 +24,7 @@ import signal
 import statistics
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 from typing import Any
@@ -72,6 +73,7 @@ def one_run(agent: str, setting: str, seed: int, out: Path, cap: float) -> dict[
     run_dir = out / f"{agent}_{setting}_s{seed}"
     process = subprocess.Popen(command(agent, setting, seed, run_dir), cwd=ROOT, stdout=subprocess.DEVNULL,
                                stderr=subprocess.PIPE, text=True)  # fmt: skip
+    stalls = watch_stalls(process)
     try:
         process.wait(timeout=cap)
     except subprocess.TimeoutExpired:
@@ -85,7 +87,25 @@ def one_run(agent: str, setting: str, seed: int, out: Path, cap: float) -> dict[
     final = evaluate_saved(run_dir)
     if final["timesteps"] > rows[-1]["timesteps"]:
         rows.append(final)
-    return {"seed": seed, "curve": rows, "fps": final["timesteps"] / final["wall_time"]}
+    return {"seed": seed, "curve": rows, "fps": final["timesteps"] / final["wall_time"], "stalled_seconds": sum(stalls)}
+
+
+def watch_stalls(process: subprocess.Popen[str], gap: float = 2.0) -> list[float]:
+    """The stalls of the machine while ``process`` runs: gaps of more than ``gap`` s between wake-ups of a thread
+    that sleeps 0.25 s (this shared virtual machine is sometimes paused for minutes, which no load explains)."""
+    stalls: list[float] = []
+
+    def watch() -> None:
+        last = time.monotonic()
+        while process.poll() is None:
+            time.sleep(0.25)
+            now = time.monotonic()
+            if now - last > gap:
+                stalls.append(round(now - last, 1))
+            last = now
+
+    threading.Thread(target=watch, daemon=True).start()
+    return stalls
 
 
 def run(cap: float, seeds: list[int], out: Path) -> dict[str, Any]:
@@ -126,6 +146,15 @@ def render(results: dict[str, Any]) -> list[str]:
                          f"{mean_sd([x['timesteps'] for x in last], '{:,.0f}'):>22}"
                          f"{mean_sd([x['success_rate'] for x in last], '{:.2f}'):>18}"
                          f"{mean_sd([x['return_mean'] for x in last], '{:.1f}'):>20}")  # fmt: skip
+    for agent, settings in results["runs"].items():
+        for setting, runs in settings.items():
+            for r in runs:
+                if r.get("stalled_seconds", 0) > 0:
+                    lines.append(
+                        f"{agent} {setting} seed {r['seed']}: the machine stalled {r['stalled_seconds']:.0f} s"
+                    )
+    for redo in results.get("redone", []):
+        lines.append(f"run again: {redo['agent']} seed {redo['seed']}, old and new ({redo['why']})")
     return lines
 
 
@@ -188,19 +217,38 @@ def main() -> None:
     parser.add_argument("--out", default="runs/old_vs_new", help="where the runs go (default: runs/old_vs_new)")
     parser.add_argument("--docs", action="store_true", help="write the JSON, the figure and the docs block")
     parser.add_argument("--render", action="store_true", help="only the figure and the docs block, from the JSON")
+    parser.add_argument(
+        "--redo",
+        nargs=2,
+        metavar=("AGENT", "SEED"),
+        help="run both settings of one agent and seed again and replace them in the JSON, with the "
+        "reason given by --why (e.g. a run starved of CPU by another process)",
+    )
+    parser.add_argument("--why", default="", help="the reason for --redo, recorded in the JSON and the docs block")
     args = parser.parse_args()
     if not args.cap > 0:
         parser.error(f"--cap={args.cap} is invalid: expected a positive number of seconds")
-    if args.render:
+    if args.redo:
+        agent, seed = args.redo[0], int(args.redo[1])
+        if agent not in AGENTS or not args.why:
+            parser.error(f"--redo {agent} {seed} is invalid: expected an agent of {sorted(AGENTS)} and a --why")
+        results = json.loads(JSON_PATH.read_text())
+        for setting in ("old", "new"):
+            runs = results["runs"][agent][setting]
+            index = [r["seed"] for r in runs].index(seed)
+            runs[index] = one_run(agent, setting, seed, Path(args.out).resolve(), results["cap_seconds"])
+        results.setdefault("redone", []).append({"agent": agent, "seed": seed, "why": args.why})
+        JSON_PATH.write_text(json.dumps(results, indent=1) + "\n")
+    elif args.render:
         results = json.loads(JSON_PATH.read_text())
     else:
         began = time.time()
         results = run(args.cap, args.seeds, Path(args.out).resolve())
         results["total_seconds"] = round(time.time() - began, 1)
     print("\n".join(render(results)))
-    if args.docs or args.render:
+    if args.docs or args.render or args.redo:
         JSON_PATH.parent.mkdir(parents=True, exist_ok=True)
-        if not args.render:
+        if args.docs:
             JSON_PATH.write_text(json.dumps(results, indent=1) + "\n")
             print(f"wrote {JSON_PATH}")
         plot(results, FIGURE)

@@ -112,7 +112,9 @@ def render(results: dict[str, Any]) -> list[str]:
         ratio = statistics.median(r[key] / r["cartpole_sb3_ppo"] for r in results["rounds"])
         lines.append(f"{name:<62}{steps[key]:>11,}{fps[key]:>10,.0f}{ratio:>11.1f}x")
     verdict = "met" if results["met"] else "NOT met"
-    lines += ["", f"new defaults / old defaults: {results['ratio_new_to_old_defaults']:.1f}x",
+    per_round = ", ".join(f"{r['train_defaults'] / r['cartpole_sb3_ppo']:.1f}x" for r in results["rounds"])
+    lines += ["", f"dwr-gym train defaults / CartPole, per round: {per_round}",
+              f"new defaults / old defaults: {results['ratio_new_to_old_defaults']:.1f}x",
               f"issue 23 goal, dwr-gym train defaults >= {results['goal']:.0f}x SB3 PPO on CartPole-v1: "
               f"{results['ratio_train_defaults_to_cartpole']:.1f}x, {verdict}"]  # fmt: skip
     return lines

@@ -89,3 +89,29 @@ def test_rl_zoo3_trains_the_env(tmp_path: Path) -> None:
     assert len(saved) == 1
     config = next(tmp_path.glob("ppo/*/DWRPointStabilization-v1/config.yml")).read_text()
     assert "dict(net_arch=[64, 64])" in config and "0.999" in config  # our YAML's v1 section was the one used
+
+
+def test_rl_zoo3_steps_our_ids_on_one_native_vector_env(tmp_path: Path) -> None:
+    """rl-zoo3's n_envs robots are those of one native vector env (not n_envs single envs in a DummyVecEnv), with
+    the env kwargs it was given; other env ids keep rl-zoo3's own env."""
+    pytest.importorskip("rl_zoo3")
+    import argparse
+
+    from rl_zoo3.exp_manager import ExperimentManager
+    from stable_baselines3.common.vec_env import DummyVecEnv
+
+    from dwr_gym.sb3 import SB3VecEnv
+    from dwr_gym.zoo import use_our_hyperparameters
+
+    use_our_hyperparameters()
+    ours = ExperimentManager(argparse.Namespace(), "ppo", "DWRPointStabilization-v1", str(tmp_path / "a"),
+                             env_kwargs={"T_con": 30.0}, verbose=0)  # fmt: skip
+    ours.read_hyperparameters()
+    env = ours.create_envs(8)
+    assert isinstance(env, SB3VecEnv) and env.num_envs == 8 and env.params.T_con == 30.0
+    env.close()
+    other = ExperimentManager(argparse.Namespace(), "ppo", "CartPole-v1", str(tmp_path / "b"), verbose=0)
+    other.read_hyperparameters()
+    env = other.create_envs(2)
+    assert isinstance(env, DummyVecEnv)
+    env.close()
