@@ -197,16 +197,16 @@ def render(results: dict[str, Any]) -> list[str]:
     lines = [f"{results['machine']}; load average {results['load_average_1min_at_end']} (1 min, at the end)",
              f"{seeds}, {budget}, {results['jobs']} recipes at once; evaluation: {results['n']} "
              "random starts (seed 0) in each agent's env", "",
-             f"{'agent':<34}" + "".join(f"{title:>22}" for _, title, _ in METRICS) + f"{'train [min]':>16}"]  # fmt: skip
+             f"{'agent':<40}" + "".join(f"{title:>22}" for _, title, _ in METRICS) + f"{'train [min]':>16}"]  # fmt: skip
     for name, entry in results["agents"].items():
         runs = entry["runs"]
         minutes = mean_sd([r["seconds"] / 60 for r in runs], "{:.1f}")
         label = name + ("" if entry["budget"] == 1.0 else f" x{entry['budget']:g} budget") + f" ({len(runs)} seeds)"
-        lines.append(f"{label:<34}"
+        lines.append(f"{label:<40}"
                      + "".join(f"{mean_sd([r['metrics'][k] for r in runs], fmt):>22}" for k, _, fmt in METRICS)
                      + f"{minutes:>16}")  # fmt: skip
         shipped = entry["shipped"]
-        lines.append(f"{name + ' (shipped)':<34}" + "".join(
+        lines.append(f"{name + ' (shipped)':<40}" + "".join(
             f"{(fmt.format(shipped[k]) if shipped[k] is not None else 'n/a'):>22}" for k, _, fmt in METRICS))  # fmt: skip
     minutes = results["wall_seconds"] / 60
     agents_everyone = results.get("all_agents", True) and every_seed
