@@ -3,6 +3,7 @@ defaults."""
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -10,10 +11,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from train.learning.config import TrainConfig
+from train.learning.config import BUDGET_HELP, TrainConfig
 from train.learning.hyperparams import HYPERPARAMS_DIR, resolve_hyperparams
 
 ROOT = Path(__file__).resolve().parents[1]
+
+
+def stated_defaults(text: str) -> dict[str, int]:
+    """{"PPO": 256, "SAC": 64, "TD3": 64} from "...: 256 for PPO, 64 for SAC and TD3"."""
+    return {algo: int(number) for number, algos in re.findall(r"(\d+) for ([A-Z0-9 and]+)", text)
+            for algo in algos.split(" and ")}  # fmt: skip
 
 
 @pytest.mark.parametrize("env_id", ["DWRPointStabilization-v1", "DWRPointStabilization-v0"])
@@ -33,8 +40,10 @@ def test_shipped_yaml_is_rl_zoo3_format_and_matches_train_defaults(name: str, en
     manager = ExperimentManager(argparse.Namespace(), algo, env_id, str(tmp_path / "zoo"),
                                 config=str(HYPERPARAMS_DIR / f"{name}.yml"), verbose=0)  # fmt: skip
     zoo, _, _, _ = manager._preprocess_hyperparams(manager.read_hyperparameters()[0])
-    defaults = TrainConfig()
+    defaults = resolve_hyperparams(TrainConfig(algo=algo, residual=residual, env_id=env_id), set())
     assert (manager.n_envs, manager.n_timesteps) == (defaults.num_envs, defaults.total_timesteps)
+    assert stated_defaults(BUDGET_HELP["n_envs"])[algo.upper()] == manager.n_envs  # as the CLI's help says
+    assert stated_defaults(BUDGET_HELP["n_timesteps"])[algo.upper()] == manager.n_timesteps
 
     config = TrainConfig(algo=algo, residual=residual, env_id=env_id, total_timesteps=1, eval_freq=10**9, eval_episodes=1,
                          checkpoint_freq=10**9, run_dir=str(tmp_path / "run"), progress=False)  # fmt: skip
@@ -80,3 +89,29 @@ def test_rl_zoo3_trains_the_env(tmp_path: Path) -> None:
     assert len(saved) == 1
     config = next(tmp_path.glob("ppo/*/DWRPointStabilization-v1/config.yml")).read_text()
     assert "dict(net_arch=[64, 64])" in config and "0.999" in config  # our YAML's v1 section was the one used
+
+
+def test_rl_zoo3_steps_our_ids_on_one_native_vector_env(tmp_path: Path) -> None:
+    """rl-zoo3's n_envs robots are those of one native vector env (not n_envs single envs in a DummyVecEnv), with
+    the env kwargs it was given; other env ids keep rl-zoo3's own env."""
+    pytest.importorskip("rl_zoo3")
+    import argparse
+
+    from rl_zoo3.exp_manager import ExperimentManager
+    from stable_baselines3.common.vec_env import DummyVecEnv
+
+    from dwr_gym.sb3 import SB3VecEnv
+    from dwr_gym.zoo import use_our_hyperparameters
+
+    use_our_hyperparameters()
+    ours = ExperimentManager(argparse.Namespace(), "ppo", "DWRPointStabilization-v1", str(tmp_path / "a"),
+                             env_kwargs={"T_con": 30.0}, verbose=0)  # fmt: skip
+    ours.read_hyperparameters()
+    env = ours.create_envs(8)
+    assert isinstance(env, SB3VecEnv) and env.num_envs == 8 and env.params.T_con == 30.0
+    env.close()
+    other = ExperimentManager(argparse.Namespace(), "ppo", "CartPole-v1", str(tmp_path / "b"), verbose=0)
+    other.read_hyperparameters()
+    env = other.create_envs(2)
+    assert isinstance(env, DummyVecEnv)
+    env.close()

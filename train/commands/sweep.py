@@ -10,7 +10,10 @@ from pathlib import Path
 from typing import Any
 
 from train.commands.shared import UsageError, add_env_arguments, count, parse_env_kwargs
+from train.learning.config import BUDGET_HELP, TrainConfig
 from train.learning.sweep import METRICS, SEARCHES
+
+EVAL_FREQ = TrainConfig.eval_freq
 
 
 def add_parser(sub: Any) -> None:
@@ -19,13 +22,12 @@ def add_parser(sub: Any) -> None:
                        description="Each trial runs the training of `dwr-gym train`; needs the extra [sweep].")  # fmt: skip
     p.add_argument("--algo", default="ppo", help="algorithm: ppo, sac or td3 (default: ppo)")
     p.add_argument("--residual", action="store_true", help="residual agents on the PTC expert")
-    p.add_argument("--total-timesteps", type=count, default=200_000, help="env steps per run (default: 200000)")
-    p.add_argument("--num-envs", type=count, default=16, help="robots per vector env (default: 16)")
+    p.add_argument("--total-timesteps", type=count, help=f"env steps per run (default: {BUDGET_HELP['n_timesteps']})")
+    p.add_argument("--num-envs", type=count, help=f"robots per vector env (default: {BUDGET_HELP['n_envs']})")
     add_env_arguments(p, "heading_weight=5")
     p.add_argument("--hyperparams", help="rl-zoo3 YAML the configurations start from (default: train/hyperparams/)")
-    p.add_argument(
-        "--eval-freq", type=count, default=20_000, help="evaluate every this many env steps (default: 20000)"
-    )
+    p.add_argument("--eval-freq", type=count, default=EVAL_FREQ,
+                   help=f"evaluate every this many env steps (default: {EVAL_FREQ})")  # fmt: skip
     p.add_argument("--eval-episodes", type=count, default=100, help="scenarios per evaluation (default: 100)")
     p.add_argument("--seeds", type=count, default=3, help="seeds per configuration: 0 .. N-1 (default: 3)")
     p.add_argument(
@@ -83,6 +85,7 @@ def run(args: argparse.Namespace) -> int:
     base = {"algo": args.algo, "residual": args.residual, "total_timesteps": args.total_timesteps,
             "num_envs": args.num_envs, "env_id": args.env, "env_kwargs": parse_env_kwargs(args.env_kwargs),
             "eval_freq": args.eval_freq, "eval_episodes": args.eval_episodes}  # fmt: skip
+    base = {key: value for key, value in base.items() if value is not None}  # unset: the YAML's, else the defaults
     if args.hyperparams:
         base["hyperparams"] = str(Path(args.hyperparams).resolve())
     try:

@@ -18,6 +18,12 @@ ALGORITHMS: tuple[str, ...] = ("ppo", "sac", "td3")
 MAX_TIMESTEPS = 10**10
 MAX_TRAIN_ENVS = 4096
 """More training envs than this give rollouts of little use and risk exhausting memory; larger values are refused."""
+BUDGET_HELP = {
+    "n_envs": "n_envs of train/hyperparams/<algo>.yml: 256 for PPO, 64 for SAC and TD3",
+    "n_timesteps": "n_timesteps of train/hyperparams/<algo>.yml: 2048000 for PPO, 1000000 for SAC and TD3",
+}
+"""The defaults of --num-envs and --total-timesteps as the CLI shows them; they live in the shipped YAML files
+(tests/test_zoo.py holds the two together)."""
 
 
 class ConfigError(ValueError):
@@ -35,8 +41,12 @@ class TrainConfig:
 
     algo: str = option("ppo", "algorithm: ppo, sac or td3")
     env_id: str = option(TASK_ENV_ID, ENV_HELP, flag="--env", metavar="ID")
-    total_timesteps: int = option(200_000, "total environment steps over all envs")
-    num_envs: int = option(16, "robots simulated in one native vector env")
+    total_timesteps: int | None = option(
+        None, "total environment steps over all envs", shown_default=BUDGET_HELP["n_timesteps"], metavar="N"
+    )
+    num_envs: int | None = option(
+        None, "robots simulated in one native vector env", shown_default=BUDGET_HELP["n_envs"], metavar="N"
+    )
     seed: int = option(0, "seed of the env, the network initialisation and the sampling")
     residual: bool = option(False, "learn a residual on the expert: action = clip(expert + scale * residual)")
     residual_scale: float = option(0.5, "scale of the residual action, in (0, 2]")
@@ -50,10 +60,10 @@ class TrainConfig:
     hyperparam_overrides: dict[str, Any] = field(
         default_factory=dict, metadata={"help": "hyperparameters given as KEY=VALUE on the command line", "cli": False}
     )
-    eval_freq: int = option(20_000, "evaluate every this many env steps on a fixed seeded scenario set")
+    eval_freq: int = option(200_000, "evaluate every this many env steps on a fixed seeded scenario set")
     eval_episodes: int = option(100, "size of the fixed random scenario set used for evaluation")
     eval_seed: int = option(12345, "seed of the evaluation scenario set (kept apart from the training seed)")
-    checkpoint_freq: int = option(50_000, "save a checkpoint every this many env steps")
+    checkpoint_freq: int = option(500_000, "save a checkpoint every this many env steps")
     run_dir: str | None = option(
         None, "output directory", shown_default="runs/<algo>[-residual]-seed<seed>", metavar="DIR"
     )
@@ -93,8 +103,10 @@ class TrainConfig:
     def _coerce(self) -> None:
         self.algo = as_choice("--algo", self.algo, ALGORITHMS)
         self.env_id = check_env_id(self.env_id)
-        self.total_timesteps = as_int("--total-timesteps", self.total_timesteps, 1, MAX_TIMESTEPS, text=True)
-        self.num_envs = as_int("--num-envs", self.num_envs, 1, MAX_TRAIN_ENVS, text=True)
+        if self.total_timesteps is not None:  # None: the algorithm's default, set by resolve_hyperparams
+            self.total_timesteps = as_int("--total-timesteps", self.total_timesteps, 1, MAX_TIMESTEPS, text=True)
+        if self.num_envs is not None:
+            self.num_envs = as_int("--num-envs", self.num_envs, 1, MAX_TRAIN_ENVS, text=True)
         self.seed = as_int("--seed", self.seed, 0, 2**32 - 1, text=True)
         self.eval_seed = as_int("--eval-seed", self.eval_seed, 0, 2**32 - 1, text=True)
         self.eval_freq = as_int("--eval-freq", self.eval_freq, 1, MAX_TIMESTEPS, text=True)

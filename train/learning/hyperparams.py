@@ -26,12 +26,27 @@ def hyperparams_file(algo: str, residual: bool) -> Path:
 
 def default_hyperparams(algo: str, residual: bool, env_id: str) -> dict[str, Any]:
     """Defaults that train well on ``env_id`` on 2 CPU cores, read from its section of the shipped rl-zoo3 YAML
-    (the residual variants explore less); n_envs and n_timesteps there equal the defaults of TrainConfig."""
+    (the residual variants explore less); its n_envs and n_timesteps are those of :func:`default_budget`."""
     path = str(hyperparams_file(algo, residual))
     params = zoo_to_sb3(load_zoo_yaml(path, env_id), path)
     params.pop("n_timesteps", None)
     params.pop("n_envs", None)
     return params
+
+
+def default_budget(algo: str, residual: bool, env_id: str) -> tuple[int, int]:
+    """(n_envs, n_timesteps) of the shipped YAML: the defaults of --num-envs and --total-timesteps."""
+    section = load_zoo_yaml(str(hyperparams_file(algo, residual)), env_id)
+    return int(section["n_envs"]), int(float(section["n_timesteps"]))
+
+
+def fill_budget(config: TrainConfig) -> TrainConfig:
+    """Give --num-envs and --total-timesteps, when left unset (None), the algorithm's defaults."""
+    if config.num_envs is None or config.total_timesteps is None:
+        envs, steps = default_budget(config.algo, config.residual, config.env_id)
+        config.num_envs = envs if config.num_envs is None else config.num_envs
+        config.total_timesteps = steps if config.total_timesteps is None else config.total_timesteps
+    return config
 
 
 def zoo_to_sb3(zoo: dict[str, Any], path: str) -> dict[str, Any]:
@@ -146,7 +161,7 @@ def resolve_hyperparams(config: TrainConfig, explicit: set[str]) -> TrainConfig:
             raise ConfigError(str(error)) from None
         params.update(zoo_to_sb3(layer, config.hyperparams if source == "YAML" else "--hyperparams"))
     config.algo_kwargs = check_algo_kwargs(config.algo, params)
-    return config
+    return fill_budget(config)
 
 
 ACTIVATIONS = ("nn.Tanh", "nn.ReLU", "nn.ELU", "nn.LeakyReLU", "nn.SiLU", "nn.GELU", "nn.Sigmoid")

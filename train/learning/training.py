@@ -16,7 +16,13 @@ from typing import Any
 import numpy as np
 
 from train.learning.config import ConfigError, TrainConfig
-from train.learning.hyperparams import algorithm_class, build_algo_kwargs, rollout_rounding, steps_to_run
+from train.learning.hyperparams import (
+    algorithm_class,
+    build_algo_kwargs,
+    fill_budget,
+    rollout_rounding,
+    steps_to_run,
+)
 from train.learning.runs import (
     EVAL_FILE,
     MODEL_FILE,
@@ -244,6 +250,7 @@ def train(
     import torch
 
     config.validate()
+    fill_budget(config)
     run_dir, lock = prepare_run_dir(config)
     try:
         config.run_dir = str(run_dir)

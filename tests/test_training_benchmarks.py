@@ -1,0 +1,73 @@
+"""benchmarks/training_speed.py, training_old_vs_new.py and retrain_pretrained.py: the blocks of docs/training.md
+are what they render from their JSON, and the retraining replays each shipped agent's recorded recipe."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+from pathlib import Path
+from types import ModuleType
+
+import pytest
+
+BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
+
+
+def load(name: str) -> ModuleType:  # benchmarks/ is not a package
+    spec = importlib.util.spec_from_file_location(name, BENCHMARKS / f"{name}.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.mark.parametrize("name", ["training_speed", "training_old_vs_new", "retrain_pretrained"])
+def test_each_docs_block_is_what_its_benchmark_renders_from_its_json(name: str) -> None:
+    module = load(name)
+    results = json.loads(module.JSON_PATH.read_text())
+    assert module.docs_block() == module.rendered_block(results)
+
+
+def test_the_speed_verdict_follows_the_measured_ratio() -> None:
+    module = load("training_speed")
+    results = json.loads(module.JSON_PATH.read_text())
+    assert results["met"] == (results["ratio_train_defaults_to_cartpole"] >= 20)
+    assert ("20x SB3 PPO on CartPole-v1" in module.render(results)[-1]) and module.render(results)[-1].endswith(
+        ", met" if results["met"] else "NOT met"
+    )
+
+
+def test_a_recipe_is_replayed_with_only_seed_run_dir_env_and_budget_changed(tmp_path: Path) -> None:
+    module = load("retrain_pretrained")
+    recorded = ["dwr-gym", "train", "--seed", "0", "--run-dir", "runs/ppo_s0", "--total-timesteps", "1500000",
+                "--env-kwargs", "heading_weight=5", "--no-progress"]  # fmt: skip
+    args = module.runnable(recorded, 2, tmp_path / "r", "DWRPointStabilization-v0", 0.5)[1:]
+    assert args == ["-m", "train.cli", "train", "--seed", "2", "--run-dir", str(tmp_path / "r"), "--total-timesteps",
+                    "750000", "--env-kwargs", "heading_weight=5", "--no-progress", "--env", "DWRPointStabilization-v0"]  # fmt: skip
+    moved = module.runnable(["python", "-m", "train.dagger", "--run-dir", "x", "--seed", "0", "--episodes", "250"], 1,
+                            tmp_path / "d", "DWRPointStabilization-v1", 1.0)[1:]  # fmt: skip
+    assert moved == [
+        "-m",
+        "train.learning.dagger",
+        "--run-dir",
+        str(tmp_path / "d"),
+        "--seed",
+        "1",
+        "--episodes",
+        "250",
+    ]
+    with pytest.raises(ValueError, match="not dwr-gym or python"):
+        module.runnable(["bash", "train.sh"], 0, tmp_path, "DWRPointStabilization-v1", 1.0)
+
+
+def test_every_shipped_agent_has_a_recipe_this_checkout_can_run(tmp_path: Path) -> None:
+    module = load("retrain_pretrained")
+    agents = sorted(path.parent for path in module.PRETRAINED.glob("*/config.yaml"))
+    assert {"ppo", "residual_ppo", "dagger", "dagger_handover"} <= {agent.name for agent in agents}
+    for agent in agents:
+        for step in module.recipe(agent):
+            command = module.runnable(step, 1, tmp_path / agent.name, "DWRPointStabilization-v1", 1.0)
+            assert importlib.util.find_spec(command[command.index("-m") + 1]) is not None
+            assert command[command.index("--run-dir") + 1] == str(tmp_path / agent.name)
+    steps = module.recipe(module.PRETRAINED / "dagger_handover")
+    assert len(steps) == 2 and "--handover-only" in steps[1]  # the recorded "then: ..." runs after the training
