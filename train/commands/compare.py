@@ -16,9 +16,9 @@ from train.commands.shared import (
     load_agents,
 )
 
-#: compare's default sets: Figure 5's starts, the random starts nominal, and the four disturbed sets (the robust
+#: compare's default sets: the paper's Figures 5 and 7, the random starts nominal, and the four disturbed sets (the robust
 #: headline); ``--scenarios`` chooses others.
-COMPARE_SETS = ("paper-fig5", "random", "disturbed", "fault", "delay", "noise")
+COMPARE_SETS = ("paper-fig5", "paper-fig7", "random", "disturbed", "fault", "delay", "noise")
 
 
 def add_parser(sub: Any) -> None:

@@ -140,7 +140,7 @@ def checked_selection(args: argparse.Namespace) -> list[str]:
     from train.evaluation.scenarios import SCENARIO_SETS
 
     if "all" in args.controllers:
-        names = [*CONTROLLERS, *(["optimal"] if casadi_available() else [])]
+        names = [*CONTROLLERS, *(["optimal", "robust-pt"] if casadi_available() else [])]  # both plan with CasADi
     else:
         names = args.controllers
     for name in names:
@@ -204,9 +204,9 @@ def add_scenario_arguments(p: argparse.ArgumentParser, out: str, sets: Sequence[
         f"{', '.join(ROBUSTNESS_SETS)} (see the robustness page of the docs) (default: {' '.join(sets or SCENARIO_SETS)})",
     )
     p.add_argument("--n", type=count, default=1000, help="number of random start poses for 'random' (default: 1000)")
-    p.add_argument("--n-optimal", type=count, default=100,
+    p.add_argument("--n-optimal", type=count, default=50,
                    help="episodes of each disturbed set (disturbed, fault, delay, noise) that the 'optimal' controller "
-                   "runs, the first of the n: it re-plans with CasADi whenever pushed off its plan (default: 100)")  # fmt: skip
+                   "runs, the first of the n: it re-plans with CasADi whenever pushed off its plan (default: 50)")  # fmt: skip
     p.add_argument("--seed", type=count, default=0, help="seed of the random scenario set (default: 0)")
     p.add_argument("--out", default=out, help=f"output directory (default: {out})")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")  # fmt: skip

@@ -158,7 +158,7 @@ def robust_goal_table(data: dict[str, Any]) -> str:
     lines += ["", "| policy | criteria met | not met (measured, bar) |", "|---|---|---|"]
     for key, checks in data.items():
         if key.startswith("verdicts:"):
-            missed = "; ".join(f"{c['criterion']}: {c['measured']:.3g}" + (f" (bar {c['bar']:.3g})" if "bar" in c else "")
+            missed = "; ".join(f"{c['criterion']}: {c['measured']:.3f}" + (f" (bar {c['bar']:.3f})" if "bar" in c else "")
                                for c in checks if not c["met"])  # fmt: skip
             lines.append(f"| {POLICY_NAMES.get(key[9:], f'`{key[9:]}`')} | {sum(c['met'] for c in checks)} / "
                          f"{len(checks)} | {missed or 'none'} |")  # fmt: skip
@@ -203,7 +203,6 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "compare-fig7": ("docs/compare/comparison.json", lambda rows: compare_table(rows, ("paper-fig7",))),
     "claims": ("docs/reproduce/claims.json", claims_table),
     "robustness": ("docs/robustness/robustness.json", tolerance_table),
-    "robustness-issue10": ("docs/robustness/issue10/robustness.json", tolerance_table),
     "prescribed-time-goal": ("docs/prescribed_time/goal.json", goal_table),
     "optimal-timing": ("docs/benchmarks/optimal.json", optimal_timing_table),
     "robust-goal": ("docs/robust/goal.json", robust_goal_table),
