@@ -101,6 +101,34 @@ def _solve(job: dict[str, Any]) -> Plan | Exception:
         return error
 
 
+class PlanPool:
+    """Solves batches of plans, in worker processes when a batch is large enough; errors are returned, not raised."""
+
+    def __init__(self, workers: int = 0) -> None:
+        self.workers = workers or min(os.cpu_count() or 1, 8)
+        self._executor: Executor | None = None
+
+    def map(self, jobs: list[dict[str, Any]]) -> list[Plan | Exception]:
+        """:func:`baselines.optimal.solve_minimum_energy` of each job's keywords, in order."""
+        if self.workers <= 1 or len(jobs) < PARALLEL_THRESHOLD:
+            return [_solve(job) for job in jobs]
+        if self._executor is None:
+            # fork on Linux: works from any script (spawn re-imports __main__, which needs an `if __name__` guard)
+            method = "fork" if sys.platform.startswith("linux") else "spawn"
+            self._executor = ProcessPoolExecutor(self.workers, mp_context=multiprocessing.get_context(method))
+        chunk = max(1, len(jobs) // (4 * self.workers))
+        return list(self._executor.map(_solve, jobs, chunksize=chunk))
+
+    def close(self) -> None:
+        """Stop the worker processes."""
+        if self._executor is not None:
+            self._executor.shutdown(cancel_futures=True)
+            self._executor = None
+
+    def __del__(self) -> None:
+        self.close()
+
+
 class OptimalController(Controller):
     """Minimum-energy NMPC to the prescribed deadline (``make_controller("optimal")``)."""
 
@@ -110,7 +138,7 @@ class OptimalController(Controller):
         require_casadi()
         self.params: OptimalParams = params if params is not None else OptimalParams.from_kwargs(**kwargs)
         self._size = 0
-        self._executor: Executor | None = None
+        self._pool = PlanPool(self.params.workers)
         self.failures: list[str] = []
         """One message per plan IPOPT could not find (the robot then stands still)."""
         self.solves = 0
@@ -262,22 +290,13 @@ class OptimalController(Controller):
         self.failures.append(f"robot {i}: {error}")
 
     def _map(self, jobs: list[dict[str, Any]]) -> list[Plan | Exception]:
-        workers = self.params.workers or min(os.cpu_count() or 1, 8)
-        if workers <= 1 or len(jobs) < PARALLEL_THRESHOLD:
-            return [_solve(job) for job in jobs]
-        if self._executor is None:
-            # fork on Linux: works from any script (spawn re-imports __main__, which needs an `if __name__` guard)
-            method = "fork" if sys.platform.startswith("linux") else "spawn"
-            self._executor = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(method))
-        chunk = max(1, len(jobs) // (4 * workers))
-        return list(self._executor.map(_solve, jobs, chunksize=chunk))
+        return self._pool.map(jobs)
 
     def close(self) -> None:
         """Stop the worker processes."""
-        executor = getattr(self, "_executor", None)  # absent if __init__ failed (no CasADi)
-        if executor is not None:
-            executor.shutdown(cancel_futures=True)
-            self._executor = None
+        pool = getattr(self, "_pool", None)  # absent if __init__ failed (no CasADi)
+        if pool is not None:
+            pool.close()
 
     def __del__(self) -> None:
         self.close()

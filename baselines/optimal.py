@@ -64,12 +64,14 @@ def casadi_step_exact(state: Any, command: Any, h: Any) -> Any:
     )
 
 
-@lru_cache(maxsize=32)
-def minimum_energy_solver(intervals: int, max_iter: int = 1000, tol: float = 1e-10) -> Any:
+@lru_cache(maxsize=64)
+def minimum_energy_solver(intervals: int, max_iter: int = 1000, tol: float = 1e-10, response: bool = False) -> Any:
     """The IPOPT solver of the multiple-shooting problem with ``intervals`` held commands (built once, cached).
 
     Decision vector: the states (3, intervals + 1) then the commands (2, intervals), column-major;
-    parameter: the interval length h [s]; constraints: the exact steps.
+    parameter: the interval length h [s]; constraints: the exact steps. With ``response`` the parameter is
+    (h, b_u, b_omega, a, g) and the robot moves with (a u + b_u, a omega + g u + b_omega) for the command (u, omega)
+    (:func:`baselines.estimation.robot_velocities`; a disturbance, a failing wheel), whose energy is minimised.
     """
     ca = require_casadi()
     s, c, h_sym = ca.SX.sym("s", 3), ca.SX.sym("c", 2), ca.SX.sym("h")
@@ -77,8 +79,13 @@ def minimum_energy_solver(intervals: int, max_iter: int = 1000, tol: float = 1e-
     states = ca.MX.sym("X", 3, intervals + 1)
     commands = ca.MX.sym("U", 2, intervals)
     h = ca.MX.sym("h")
-    defects = states[:, 1:] - step.map(intervals)(states[:, :-1], commands, h)
-    problem = {"x": ca.veccat(states, commands), "f": h * ca.sumsqr(commands), "g": ca.vec(defects), "p": h}
+    parameters, velocities = h, commands
+    if response:
+        b_u, b_w, a, g = (ca.MX.sym(name) for name in ("b_u", "b_omega", "a", "g"))
+        parameters = ca.vertcat(h, b_u, b_w, a, g)
+        velocities = ca.vertcat(a * commands[0, :] + b_u, a * commands[1, :] + g * commands[0, :] + b_w)
+    defects = states[:, 1:] - step.map(intervals)(states[:, :-1], velocities, h)
+    problem = {"x": ca.veccat(states, commands), "f": h * ca.sumsqr(velocities), "g": ca.vec(defects), "p": parameters}
     options = {"ipopt.print_level": 0, "ipopt.sb": "yes", "print_time": False, "expand": True,
                "ipopt.max_iter": max_iter, "ipopt.tol": tol}  # fmt: skip
     return ca.nlpsol("minimum_energy", "ipopt", problem, options)
@@ -139,6 +146,9 @@ def solve_minimum_energy(
     intervals: int | None = None,
     warm_start: NDArray[np.float64] | None = None,
     guesses: int = 2,
+    response: tuple[float, float, float, float] | None = None,
+    pad_to: int = 1,
+    max_iter: int = 1000,
 ) -> Plan:
     """The minimum-energy plan from ``start`` (goal frame: goal at the origin, heading 0) to the goal.
 
@@ -151,12 +161,22 @@ def solve_minimum_energy(
     The problem is not convex: it is solved from ``guesses`` cold starts (driving forward, then in
     reverse; both ways round for the heading when the robot starts facing away) and the cheapest
     converged plan is kept; with ``warm_start`` (a previous plan's solution) that one is tried first.
+
+    With ``response`` (b_u, b_omega, a, g) the robot does (a u + b_u, a omega + g u + b_omega) with the planned
+    commands (u, omega), which stay within the limits; the plan's energy is that of the robot's velocities.
+    ``pad_to`` solves a problem of the next multiple of ``pad_to`` intervals whose last ones hold the robot still
+    at the goal, and returns the plan without them: the same plan from fewer solvers to build and cache.
+    ``max_iter`` bounds IPOPT's iterations per guess (a re-plan in a control loop must not take seconds).
     """
     h = dt * hold_steps
     if intervals is None:
         intervals = math.floor(arrival_time / h + 1e-9)
     moving = intervals - frozen
-    least = least_arrival_time(start, u_max, omega_max, heading)
+    reach = (u_max, omega_max)
+    if response is not None:  # the speeds the robot keeps at most, whatever it turns (a lower bound of the time)
+        b_u, b_w, a, _ = response
+        reach = (max(a * u_max + abs(b_u), 1e-9), max(a * omega_max + abs(b_w), 1e-9))
+    least = least_arrival_time(start, *reach, heading)
     if moving < 1 or moving * h < least * (1.0 + FEASIBILITY_MARGIN):
         smallest = math.ceil(least / h - 1e-9) * h + frozen * h
         raise InfeasibleArrivalTimeError(
@@ -164,7 +184,10 @@ def solve_minimum_energy(
             f"the robot needs at least {smallest:.4g} s at u_max={u_max:g} m/s, omega_max={omega_max:g} rad/s "
             f"(dt={dt:g} s); expected T_con >= {smallest:.4g}"
         )
-    solver = minimum_energy_solver(intervals)
+    planned = intervals
+    intervals = -(-intervals // pad_to) * pad_to  # the next multiple of pad_to
+    solver = minimum_energy_solver(intervals, max_iter=max_iter, response=response is not None)
+    parameters = h if response is None else [h, *response]
     n_states = 3 * (intervals + 1)
     lower, upper = np.full(n_states + 2 * intervals, -np.inf), np.full(n_states + 2 * intervals, np.inf)
     lower[:3] = upper[:3] = start
@@ -172,6 +195,12 @@ def solve_minimum_energy(
     lower[n_states::2], upper[n_states::2] = -u_max, u_max
     lower[n_states + 1 :: 2], upper[n_states + 1 :: 2] = -omega_max, omega_max
     lower[n_states : n_states + 2 * frozen] = upper[n_states : n_states + 2 * frozen] = 0.0
+    if response is not None:  # held still the robot moves with its disturbance: the padding commands cancel it
+        b_u, b_w, a, g = response
+        padding_command = np.tile([-b_u / a, (-b_w + g * b_u / a) / a], intervals - planned)
+    else:
+        padding_command = np.zeros(2 * (intervals - planned))
+    lower[n_states + 2 * planned :] = upper[n_states + 2 * planned :] = padding_command
 
     candidates: list[tuple[NDArray[np.float64], float | None]] = []
     if warm_start is not None:
@@ -182,14 +211,19 @@ def solve_minimum_energy(
         targets.append(math.copysign(2.0 * math.pi, start[2]))
     for target in targets:
         for reverse in (False, True)[:guesses]:
-            candidates.append((frozen_guess(start, intervals, frozen, h, target, reverse), target if heading else None))
+            guess = frozen_guess(start, planned, frozen, h, target, reverse)
+            if intervals > planned:  # the padding: the robot at the goal, holding still
+                states, commands = guess[: 3 * (planned + 1)], guess[3 * (planned + 1) :]
+                goal = np.tile(states[-3:], intervals - planned)
+                guess = np.concatenate([states, goal, commands, padding_command])
+            candidates.append((guess, target if heading else None))
     best: Plan | None = None
     began = time.perf_counter()
     iterations = 0
     for index, (guess, target) in enumerate(candidates):
         if target is not None:
             lower[3 * intervals + 2] = upper[3 * intervals + 2] = target
-        solution = solver(x0=guess, lbx=lower, ubx=upper, lbg=0.0, ubg=0.0, p=h)
+        solution = solver(x0=guess, lbx=lower, ubx=upper, lbg=0.0, ubg=0.0, p=parameters)
         stats = solver.stats()
         iterations += int(stats.get("iter_count", 0))
         if stats["success"]:
@@ -203,7 +237,8 @@ def solve_minimum_energy(
             f"IPOPT found no plan from start={tuple(round(v, 4) for v in start)} in {intervals * h:g} s "
             f"(last status: {solver.stats()['return_status']})"
         )
-    return Plan(best.commands, best.states, h, best.energy, iterations, time.perf_counter() - began, best.solution)
+    elapsed = time.perf_counter() - began
+    return Plan(best.commands[:planned], best.states[: planned + 1], h, best.energy, iterations, elapsed, best.solution)
 
 
 def frozen_guess(

@@ -14,17 +14,21 @@ from dwr_gym.validation import as_bool, as_float
 
 
 def astolfi_commands(
-    inputs: ControllerInput, k_rho: float, k_alpha: float, k_beta: float, reverse: bool
+    inputs: ControllerInput,
+    k_rho: float,
+    k_alpha: float,
+    k_beta: float,
+    reverse: bool,
+    direction: FloatArray | None = None,
 ) -> tuple[FloatArray, FloatArray]:
     """Astolfi's law in polar coordinates (rho, alpha, beta): (k_rho rho, k_alpha alpha + k_beta beta), signed
-    for reversing when ``reverse`` and the goal is behind (|alpha| > pi/2)."""
+    for reversing when ``reverse`` and the goal is behind (|alpha| > pi/2), or as ``direction`` (+1 forward,
+    -1 reverse, per robot) says when it is given."""
     rho = inputs.distance
     alpha = model.bearing_error(inputs.azimuth, inputs.heading)
-    direction = np.ones_like(rho)
-    if reverse:
-        behind = np.abs(alpha) > 0.5 * np.pi
-        direction = np.where(behind, -1.0, 1.0)
-        alpha = np.where(behind, model.wrap_angle(alpha + np.pi), alpha)
+    if direction is None:
+        direction = np.where(np.abs(alpha) > 0.5 * np.pi, -1.0, 1.0) if reverse else np.ones_like(rho)
+    alpha = np.where(direction < 0.0, model.wrap_angle(alpha + np.pi), alpha)
     beta = model.wrap_angle(-inputs.heading - alpha)
     return direction * k_rho * rho, k_alpha * alpha + k_beta * beta
 

@@ -45,9 +45,10 @@ PARAMS: dict[str, type[ControllerParams]] = {
     "pt-astolfi": PrescribedTimeAstolfiParams,
 }
 
-#: Every name :func:`make_controller` knows: the analytic laws above, and the minimum-energy NMPC
-#: ``optimal`` of :mod:`baselines.nmpc` (which needs the ``optimal`` extra, CasADi).
-CONTROLLER_NAMES: tuple[str, ...] = (*CONTROLLERS, "optimal")
+#: Every name :func:`make_controller` knows: the analytic laws above, the minimum-energy NMPC ``optimal`` of
+#: :mod:`baselines.nmpc` and the robust prescribed-time expert ``robust-pt`` of :mod:`baselines.robust` (both plan
+#: with CasADi: the ``optimal`` extra).
+CONTROLLER_NAMES: tuple[str, ...] = (*CONTROLLERS, "optimal", "robust-pt")
 
 
 def make_controller(name: str, **kwargs: Any) -> Controller:
@@ -56,6 +57,10 @@ def make_controller(name: str, **kwargs: Any) -> Controller:
         from baselines.nmpc import OptimalController, OptimalParams
 
         return OptimalController(OptimalParams.from_kwargs(**kwargs))
+    if name == "robust-pt":
+        from baselines.robust import RobustPTController, RobustPTParams
+
+        return RobustPTController(RobustPTParams.from_kwargs(**kwargs))
     if name not in CONTROLLERS:
         raise ValueError(f"controller={name!r} is invalid: expected one of {', '.join(CONTROLLER_NAMES)}")
     return CONTROLLERS[name](PARAMS[name].from_kwargs(**kwargs))  # type: ignore[call-arg]

@@ -33,7 +33,7 @@ from dwr_gym.robots import DifferentialDrive
 from dwr_gym.validation import reject_unknown
 
 #: The env keywords that are not fields of EnvParams: the robot's wheels and the disturbances.
-ROBOT_KEYWORDS = ("robot", "wheel_saturation", "disturbances")
+ROBOT_KEYWORDS = ("robot", "wheel_saturation", "disturbances", "disturbance_distribution")
 
 #: Number of pose features at the start of the observation (distance ... orientation error).
 POSE_FEATURES = 6
@@ -160,17 +160,18 @@ _RANDOM = (VelocityRandomWalk, MeasurementDropout)
 
 
 def split_env_kwargs(kwargs: dict[str, Any]) -> tuple[dict[str, Any], DifferentialDrive | None, tuple[Any, ...]]:
-    """Take ``robot``, ``wheel_saturation`` and ``disturbances`` out of env keywords.
+    """Take ``robot``, ``wheel_saturation``, ``disturbances`` and ``disturbance_distribution`` out of env keywords.
 
     A robot with finite wheel limits sets ``u_max`` and ``omega_max`` to what its wheels allow, unless
     they are given. Returns (the remaining keywords for :class:`EnvParams`, the drive or None, the
-    disturbances).
+    disturbances: a distribution is returned as the one item).
     """
     reject_unknown(EnvParams, kwargs, also=ROBOT_KEYWORDS)  # the error lists these too, not only EnvParams' fields
     kwargs = dict(kwargs)
     robot = kwargs.pop("robot", None)
     saturation = kwargs.pop("wheel_saturation", None)
     disturbances = kwargs.pop("disturbances", None) or ()
+    distribution = kwargs.pop("disturbance_distribution", None)
     drive = None if robot is None else robots.drive_from(robot)
     if saturation is not None:
         if drive is None:
@@ -187,6 +188,14 @@ def split_env_kwargs(kwargs: dict[str, Any]) -> tuple[dict[str, Any], Differenti
         if not isinstance(item, DISTURBANCE_TYPES):
             names = ", ".join(t.__name__ for t in DISTURBANCE_TYPES)
             raise ValueError(f"disturbances item {item!r} is invalid: expected instances of {names}")
+    if distribution is not None:
+        if not callable(getattr(distribution, "perturbation", None)):  # (randomization imports this module)
+            raise ValueError(f"disturbance_distribution={distribution!r} is invalid: expected a "
+                             "dwr_gym.randomization.DisturbanceDistribution or None")  # fmt: skip
+        if disturbances:
+            raise ValueError("disturbances and disturbance_distribution are exclusive: the distribution draws all "
+                             "seven kinds per episode; pass one of them")  # fmt: skip
+        disturbances = (distribution,)
     return kwargs, drive, tuple(disturbances)
 
 
@@ -196,6 +205,8 @@ def make_perturbation(
     """The perturbation of n robots, or None (the nominal env) when there is no robot and no disturbance."""
     if drive is None and not disturbances:
         return None
+    if disturbances and callable(getattr(disturbances[0], "perturbation", None)):  # a DisturbanceDistribution
+        return disturbances[0].perturbation(drive, params, n)  # type: ignore[no-any-return]
     return Perturbation(drive, disturbances, params, n)
 
 

@@ -120,3 +120,16 @@ def test_the_shipped_handover_agent_arrives_with_the_heading_for_less_energy_tha
         assert learned.success.mean() >= 0.98
         assert np.mean(learned.final_heading_error) <= 0.12
         assert np.mean(learned.energy) < np.mean(ptc.energy)
+
+
+def test_a_composite_agent_comes_apart_so_that_its_network_is_reported_alone() -> None:
+    from train.learning.agents import PRETRAINED, AgentLoadError
+    from train.learning.handover import HandoverPolicy
+
+    label, network = load_agent(PRETRAINED["dagger-handover"], part="network")
+    assert label == "dagger-handover (network alone)"
+    assert not isinstance(network, HandoverPolicy)
+    _, whole = load_agent(PRETRAINED["dagger-handover"])
+    assert type(whole.model) is type(network)
+    with pytest.raises(AgentLoadError, match="part='finish'"):
+        load_agent(PRETRAINED["dagger-handover"], part="finish")

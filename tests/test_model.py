@@ -307,7 +307,9 @@ def test_torch_backed_functions_equal_numpys_and_DWR_GYM_TORCH_0_keeps_torch_out
     result = json.loads(done.stdout)
     assert result.pop("torch imported") is (switch == "1")
     torch_names = {"arcsin": "asin", "arctan2": "atan2"}  # the functions torch computes on this CPU, by torch's names
-    expected = [torch_names.get(f, f) for f in ("sin", "cos", "tanh", "arcsin", "arctan2") if f in model.TORCH_FUNCTIONS]
+    expected = [
+        torch_names.get(f, f) for f in ("sin", "cos", "tanh", "arcsin", "arctan2") if f in model.TORCH_FUNCTIONS
+    ]
     assert result.pop("torch calls") == (expected if switch == "1" else [])
     assert max(result.values()) <= (1e-15 if switch == "1" else 0.0), result  # 1 ulp of values up to pi
 

@@ -239,7 +239,9 @@ def test_evaluate_robustness_sets_and_robustness_sweep_end_to_end(tmp_path: Path
                      "--n", "6", "--out", str(tmp_path / "rob"), "--no-progress")  # fmt: skip
     assert result.returncode == 0, result.stderr
     rows = json.loads((tmp_path / "rob" / "robustness.json").read_text())
-    assert [r["magnitude"] for r in rows] == [0, 4, 8, 16, 24, 32]
+    magnitudes = [r["magnitude"] for r in rows]
+    assert magnitudes == [0, 4, 8, 16, 24, 32][: len(magnitudes)]  # until it arrives in fewer than half
+    assert len(magnitudes) == 6 or rows[-1]["success_rate"] < 0.5
     assert rows[0]["success_rate"] == 1.0 and rows[-1]["success_rate"] < rows[0]["success_rate"]
     assert (tmp_path / "rob" / "robustness_delay.png").stat().st_size > 10_000
     assert "| delay (" in (tmp_path / "rob" / "robustness.md").read_text()
@@ -320,3 +322,27 @@ def test_the_disturbance_flags_are_booleans_from_the_reset_on_and_float32_stays_
     _, _, _, _, infos = vec.step(np.full((3, 2), 0.5, np.float32))
     assert infos["linear_velocity"].dtype == np.float32 and infos["angular_velocity"].dtype == np.float32
     np.testing.assert_allclose(infos["linear_velocity"], 0.5 * 0.22 + 0.01, rtol=1e-6)
+
+
+class StandStill:
+    """A policy that never moves: it fails at every magnitude."""
+
+    def predict(
+        self, observation: Any, state: Any = None, episode_start: Any = None, deterministic: bool = True
+    ) -> Any:
+        return np.zeros((np.shape(observation)[0], 2), dtype=np.float32), None
+
+
+def test_a_policy_that_fell_below_half_is_not_run_at_larger_magnitudes() -> None:
+    """The sweep gives up on a policy once it arrives in fewer than half of the episodes (its tolerance is known)."""
+    from train.evaluation.robustness import GIVE_UP_LEVEL, SWEEPS, sweep
+
+    rows = sweep({"still": StandStill(), "ptc": "ptc"}, ["delay"], n=4, env_kwargs={"T_con": 20.0})
+    magnitudes = {policy: [r["magnitude"] for r in rows if r["policy"] == policy] for policy in ("still", "ptc")}
+    assert GIVE_UP_LEVEL == 0.5
+    assert magnitudes["still"] == [0.0]
+    kept = [m for m in SWEEPS["delay"].magnitudes]
+    first_low = next((i for i, m in enumerate(kept) if m not in magnitudes["ptc"]), len(kept))
+    assert magnitudes["ptc"] == kept[:first_low]
+    below = [r for r in rows if r["policy"] == "ptc" and r["success_rate"] < GIVE_UP_LEVEL]
+    assert len(below) <= 1 and (not below or below[0]["magnitude"] == magnitudes["ptc"][-1])

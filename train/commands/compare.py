@@ -16,14 +16,18 @@ from train.commands.shared import (
     load_agents,
 )
 
+#: compare's default sets: the paper's Figures 5 and 7, the random starts nominal, and the four disturbed sets (the robust
+#: headline); ``--scenarios`` chooses others.
+COMPARE_SETS = ("paper-fig5", "paper-fig7", "random", "disturbed", "fault", "delay", "noise")
+
 
 def add_parser(sub: Any) -> None:
     """The ``compare`` subcommand."""
 
     p = sub.add_parser("compare", help="compare trained agents with the PTC expert and the other controllers")
-    add_scenario_arguments(p, "results/compare")
+    add_scenario_arguments(p, "results/compare", COMPARE_SETS)
     add_agents_argument(p, "compared with the controllers (default: the agents shipped with dwr-gym)")
-    p.set_defaults(func=run)  # fmt: skip
+    p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -41,6 +45,7 @@ def run(args: argparse.Namespace) -> int:
     from train.learning.agents import AgentLoadError, find_run_dir, pretrained_paths
     from train.reporting.compare_figures import plot_learning_curves, plot_time_series, plot_trajectories
     from train.reporting.results import write_results
+    from train.reporting.robust_headline import DISTURBED, headline_table, plot_pareto
     from train.reporting.tables import EVAL_COLUMNS, print_blocks, table_notes
 
     paths = [Path(p) for p in args.agents] if args.agents else list(pretrained_paths().values())
@@ -54,7 +59,8 @@ def run(args: argparse.Namespace) -> int:
         except AgentLoadError:
             pass
     rows, recorded, labels = compare(agents, controllers, args.scenarios, args.n, args.seed, env_kwargs,
-                                     progress=not args.no_progress, optimum=checked_optimum(args), T_cons=args.T_con)  # fmt: skip
+                                     progress=not args.no_progress, optimum=checked_optimum(args), T_cons=args.T_con,
+                                     n_optimal=args.n_optimal)  # fmt: skip
     rows = [{**row, "env_id": env_id} for row in rows]
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -68,6 +74,11 @@ def run(args: argparse.Namespace) -> int:
     print_blocks(rows, EVAL_COLUMNS)
     if table_notes(rows):
         print(table_notes(rows))
+    if any(r["scenario"] == "random" for r in rows) and any(r["scenario"] in DISTURBED for r in rows):
+        print("\nthe robust headline (in time, final heading error and energy on each set; E/opt on the nominal one):")
+        print(headline_table(rows))
+        figures.append(out / "pareto.png")
+        plot_pareto(rows, figures[-1])
     for path in write_results(rows, args.out, "comparison"):
         print(f"wrote {path}")
     for figure in figures:

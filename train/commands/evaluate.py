@@ -34,7 +34,8 @@ def run(args: argparse.Namespace) -> int:
     from train.reporting.tables import EVAL_COLUMNS, print_blocks, table_notes
 
     rows = evaluate_sets(policies, args.scenarios, args.n, args.seed, env_kwargs, progress=not args.no_progress,
-                          optimum=checked_optimum(args), T_cons=args.T_con)  # fmt: skip
+                          optimum=checked_optimum(args), T_cons=args.T_con,
+                          n_optimal=args.n_optimal)  # fmt: skip
     rows = [{**row, "env_id": env_id} for row in rows]
     print(f"env: {env_id}")
     print_blocks(rows, EVAL_COLUMNS)

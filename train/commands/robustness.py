@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 from pathlib import Path
 from typing import Any
 
@@ -63,6 +64,12 @@ def add_parser(sub: Any) -> None:
                    "--env-kwargs)")  # fmt: skip
     add_env_arguments(p, "observation_noise=0.01")
     p.add_argument("--out", default="results/robustness", help="output directory (default: results/robustness)")
+    p.add_argument("--workers", type=count, default=0,
+                   help="processes that sweep (disturbance, magnitude) jobs in parallel, each loading the policies "
+                   "once; 0 (default): every core, at most 8; 1: this process, with a log line per policy")  # fmt: skip
+    p.add_argument("--give-up-below", type=float, default=0.5, metavar="RATE",
+                   help="a policy arriving in time in fewer than this share of the episodes at one magnitude is not run "
+                   "at the larger ones of that disturbance; 0.95 gives the tolerance table alone, fastest (default: 0.5)")  # fmt: skip
     p.add_argument("--no-plots", action="store_true", help="write no figures")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     p.set_defaults(func=run)  # fmt: skip
@@ -99,13 +106,29 @@ def run(args: argparse.Namespace) -> int:
         from train.learning.agents import pretrained_paths
 
         paths = [str(path) for path in pretrained_paths().values()] + paths
-    policies.update(load_agents(paths, env_id))
+    agents = load_agents(paths, env_id)  # (loaded here too: a bad path is an error before any work)
+    policies.update(agents)
     if args.n_optimal < 1:
         raise UsageError(f"--n-optimal {args.n_optimal} is invalid: expected an integer >= 1")
+    if not 0.0 <= args.give_up_below <= 1.0:
+        raise UsageError(f"--give-up-below {args.give_up_below} is invalid: expected a share in [0, 1]")
+    workers = args.workers or min(os.cpu_count() or 1, 8)
+    if workers > 1:
+        from train.evaluation.robustness import sweep_parallel
+
+        def save(found: list[dict[str, Any]]) -> None:
+            write_results([{**row, "env_id": env_id} for row in found], str(out), "robustness")
+
+        found = sweep_parallel([k for k, v in policies.items() if isinstance(v, str)], paths, args.disturbances,
+                               n=args.n, seed=args.seed, env_kwargs=env_kwargs, workers=workers,
+                               progress=not args.no_progress, n_optimal=args.n_optimal, on_rows=save,
+                               give_up=args.give_up_below)  # fmt: skip
+        return report([{**row, "env_id": env_id} for row in found], out, args.no_plots)
     rows: list[dict[str, Any]] = []
     for name in args.disturbances:  # the rows so far are saved after each disturbance: a long sweep can be cut short
         found = sweep(policies, [name], n=args.n, seed=args.seed, env_kwargs=env_kwargs,
-                      progress=not args.no_progress, log=print, n_optimal=args.n_optimal)  # fmt: skip
+                      progress=not args.no_progress, log=print, n_optimal=args.n_optimal,
+                      give_up=args.give_up_below)  # fmt: skip
         rows += [{**row, "env_id": env_id} for row in found]
         write_results(rows, str(out), "robustness")
     return report(rows, out, args.no_plots)

@@ -140,7 +140,7 @@ def checked_selection(args: argparse.Namespace) -> list[str]:
     from train.evaluation.scenarios import SCENARIO_SETS
 
     if "all" in args.controllers:
-        names = [*CONTROLLERS, *(["optimal"] if casadi_available() else [])]
+        names = [*CONTROLLERS, *(["optimal", "robust-pt"] if casadi_available() else [])]  # both plan with CasADi
     else:
         names = args.controllers
     for name in names:
@@ -160,14 +160,17 @@ def checked_selection(args: argparse.Namespace) -> list[str]:
             )
     if not 1 <= args.n <= 10**7:
         raise UsageError(f"--n {args.n} is invalid: expected an integer in [1, 1e7]")
+    if not 1 <= args.n_optimal <= 10**7:
+        raise UsageError(f"--n-optimal {args.n_optimal} is invalid: expected an integer in [1, 1e7]")
     if not 0 <= args.seed < 2**32:
         raise UsageError(f"--seed {args.seed} is invalid: expected an integer in [0, 2**32 - 1]")
     check_writable_dir("--out", args.out)
     return list(names)
 
 
-def add_scenario_arguments(p: argparse.ArgumentParser, out: str) -> None:
-    """The options shared by ``evaluate`` and ``compare``: the env, the controllers and the scenario sets."""
+def add_scenario_arguments(p: argparse.ArgumentParser, out: str, sets: Sequence[str] | None = None) -> None:
+    """The options shared by ``evaluate`` and ``compare``: the env, the controllers and the scenario sets (by default
+    ``sets``, else the scenario sets without disturbances)."""
     from baselines.registry import CONTROLLER_NAMES
     from train.evaluation.disturbance_sets import ROBUSTNESS_SETS
     from train.evaluation.optimum import OPTIMA
@@ -195,12 +198,15 @@ def add_scenario_arguments(p: argparse.ArgumentParser, out: str) -> None:
     p.add_argument(
         "--scenarios",
         nargs="+",
-        default=list(SCENARIO_SETS),
+        default=list(sets or SCENARIO_SETS),
         metavar="SET",
-        help=f"scenario sets: any of {', '.join(SCENARIO_SETS)} (default: these), or the imperfect robots' "
-        f"{', '.join(ROBUSTNESS_SETS)} (see 'Robustness' in the README)",
+        help=f"scenario sets: any of {', '.join(SCENARIO_SETS)}, or the imperfect robots' "
+        f"{', '.join(ROBUSTNESS_SETS)} (see the robustness page of the docs) (default: {' '.join(sets or SCENARIO_SETS)})",
     )
     p.add_argument("--n", type=count, default=1000, help="number of random start poses for 'random' (default: 1000)")
+    p.add_argument("--n-optimal", type=count, default=50,
+                   help="episodes of each disturbed set (disturbed, fault, delay, noise) that the 'optimal' controller "
+                   "runs, the first of the n: it re-plans with CasADi whenever pushed off its plan (default: 50)")  # fmt: skip
     p.add_argument("--seed", type=count, default=0, help="seed of the random scenario set (default: 0)")
     p.add_argument("--out", default=out, help=f"output directory (default: {out})")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")  # fmt: skip

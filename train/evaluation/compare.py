@@ -22,13 +22,16 @@ def compare(
     progress: bool = True,
     optimum: str = "none",
     T_cons: list[float] | None = None,
+    n_optimal: int | None = None,
 ) -> tuple[list[dict[str, Any]], dict[str, RolloutResult], tuple[str, ...]]:
     """Evaluate agents and controllers on each scenario set (at each T_con).
 
     Returns the rows, every policy's recorded rollouts from Figure 5's starts, and those starts' labels.
     """
     policies: dict[str, Any] = {**agents, **{name: name for name in controllers}}
-    rows = evaluate_sets(policies, scenarios, n, seed, env_kwargs or {}, progress, optimum=optimum, T_cons=T_cons)
+    rows = evaluate_sets(
+        policies, scenarios, n, seed, env_kwargs or {}, progress, optimum=optimum, T_cons=T_cons, n_optimal=n_optimal
+    )
     trajectory_scenario = make_scenario(TRAJECTORY_SCENARIO, env_kwargs=env_kwargs)
     recorded = evaluate(policies, trajectory_scenario, record=True)
     return rows, recorded, trajectory_scenario.labels

@@ -60,8 +60,12 @@ def evaluate_sets(
     progress: bool = False,
     optimum: str = "none",
     T_cons: list[float] | None = None,
+    n_optimal: int | None = None,
 ) -> list[dict[str, Any]]:
     """Evaluate policies on named scenario sets, at each prescribed time of ``T_cons`` (default: the set's own).
+
+    With ``n_optimal``, the ``optimal`` controller (which re-plans from the measured pose once a disturbance pushes
+    the robot off its plan, a CasADi solve each time) runs on the disturbed sets' first ``n_optimal`` episodes only.
 
     Returns one row per (scenario, T_con, policy): the keys ``scenario``, ``T_con``, ``policy``, those
     of :meth:`RolloutResult.summary`, and ``optimum_note``, why the first episode without an optimum has none.
@@ -72,10 +76,39 @@ def evaluate_sets(
             # a prescribed time asked for replaces the env's range of them (v1 draws T_con per episode)
             kwargs = env_kwargs if T_con is None else {**env_kwargs, "T_con": T_con, "T_con_range": None}
             scenario = make_scenario(name, n=n, seed=seed, env_kwargs=kwargs)
-            results = evaluate(policies, scenario, seed=seed, progress=progress, optimum=optimum)
+            results = evaluate_subset(policies, scenario, seed, progress, optimum, n_optimal)
             for label, result in results.items():
                 note = result.optimum_failures[0] if result.optimum_failures else ""
                 T_row = float("nan") if scenario.T_cons is not None else result.params.T_con  # nan: per episode
                 rows.append({"scenario": name, "T_con": T_row, "policy": label, **result.summary(),
                              "optimum_note": note})  # fmt: skip
     return rows
+
+
+def evaluate_subset(
+    policies: dict[str, Policy | str],
+    scenario: Scenario,
+    seed: int,
+    progress: bool,
+    optimum: str,
+    n_optimal: int | None,
+) -> dict[str, RolloutResult]:
+    """:func:`evaluate`, with ``optimal`` on the first ``n_optimal`` episodes where the set is a disturbed one."""
+    from dataclasses import replace
+
+    from train.evaluation.disturbance_sets import ROBUSTNESS_SETS
+
+    if (
+        n_optimal is None
+        or "optimal" not in policies
+        or scenario.name not in ROBUSTNESS_SETS
+        or scenario.size <= n_optimal
+    ):
+        return evaluate(policies, scenario, seed=seed, progress=progress, optimum=optimum)
+    head = replace(scenario, starts=scenario.starts[:n_optimal], goals=scenario.goals[:n_optimal],
+                   labels=scenario.labels[:n_optimal],
+                   T_cons=None if scenario.T_cons is None else scenario.T_cons[:n_optimal])  # fmt: skip
+    others = evaluate({k: v for k, v in policies.items() if k != "optimal"}, scenario, seed=seed, progress=progress,
+                      optimum=optimum)  # fmt: skip
+    optimal = evaluate({"optimal": policies["optimal"]}, head, seed=seed, progress=progress, optimum=optimum)
+    return {label: optimal["optimal"] if label == "optimal" else others[label] for label in policies}

@@ -30,6 +30,9 @@ from train.evaluation.scenarios import Scenario, make_scenario
 
 #: Success rate that counts as "still arrives by T_con".
 SUCCESS_LEVEL = 0.95
+#: A policy whose success rate falls below this at one magnitude is not run at the larger ones of the same sweep
+#: (its tolerance is already known, and its curve has shown the fall; a planner there re-plans at every step).
+GIVE_UP_LEVEL = 0.5
 
 
 @dataclass(frozen=True)
@@ -69,6 +72,118 @@ SWEEPS: dict[str, Sweep] = {
 }  # fmt: skip
 
 
+def _magnitude_rows(
+    policies: dict[str, Policy | str],
+    base: Scenario,
+    name: str,
+    magnitude: float,
+    seed: int,
+    n_optimal: int,
+    progress: bool = False,
+) -> list[dict[str, Any]]:
+    """Every policy's row at one magnitude of one sweep (``optimal`` on the first ``n_optimal`` starts only)."""
+    if not policies:
+        return []
+    spec = SWEEPS[name]
+    T_con = float(base.env_kwargs.get("T_con", 20.0))
+    kwargs = {**base.env_kwargs, **spec.env_kwargs(magnitude, T_con)}
+    groups: list[tuple[dict[str, Policy | str], int]] = [
+        ({k: v for k, v in policies.items() if k != "optimal"}, base.size),
+        ({k: v for k, v in policies.items() if k == "optimal"}, min(base.size, n_optimal)),
+    ]
+    results = {}
+    for group, size in groups:
+        if group:
+            scenario = Scenario(f"{name}={magnitude:g}", base.starts[:size], base.goals[:size], kwargs)
+            results.update(evaluate(group, scenario, seed=seed, progress=progress))
+    return [{"disturbance": name, "magnitude": float(magnitude), "policy": label, "T_con": result.params.T_con,
+             **result.summary()} for label, result in results.items()]  # fmt: skip
+
+
+_WORKER: dict[str, Any] = {}
+
+
+def _load_policies(controllers: list[str], agents: list[str], env_id: str | None) -> None:
+    """A worker's policies, loaded once per process (agents from their run directories)."""
+    from train.learning.agents import load_agent
+
+    policies: dict[str, Any] = {name: name for name in controllers}
+    for path in agents:
+        label, policy = load_agent(path)
+        policies[label] = policy
+    _WORKER["policies"] = policies
+
+
+def _sweep_rows(
+    policies: dict[str, Policy | str],
+    base: Scenario,
+    name: str,
+    seed: int,
+    n_optimal: int,
+    progress: bool = False,
+    log: Callable[[str], None] | None = None,
+    give_up: float = GIVE_UP_LEVEL,
+) -> list[dict[str, Any]]:
+    """The rows of one sweep, its magnitudes in increasing order; a policy below ``give_up`` at one magnitude is left
+    out of the larger ones."""
+    rows: list[dict[str, Any]] = []
+    running = dict(policies)
+    for magnitude in SWEEPS[name].magnitudes:
+        found = _magnitude_rows(running, base, name, magnitude, seed, n_optimal, progress)
+        rows += found
+        for row in found:
+            if row["success_rate"] < give_up:
+                running.pop(row["policy"], None)
+            if log is not None:
+                log(f"{name:12s} {magnitude:6g} {row['policy']:18s} success {row['success_rate']:.3f}  "
+                    f"d_end mean {row['final_distance_mean']:.4f}")  # fmt: skip
+    return rows
+
+
+def _job(job: tuple[str, Scenario, int, int, float]) -> list[dict[str, Any]]:
+    name, base, seed, n_optimal, give_up = job
+    return _sweep_rows(_WORKER["policies"], base, name, seed, n_optimal, give_up=give_up)
+
+
+def sweep_parallel(
+    controllers: list[str],
+    agents: list[str],
+    names: list[str] | tuple[str, ...],
+    n: int = 200,
+    seed: int = 0,
+    env_kwargs: dict[str, Any] | None = None,
+    workers: int = 2,
+    progress: bool = True,
+    n_optimal: int = 20,
+    on_rows: Callable[[list[dict[str, Any]]], None] | None = None,
+    give_up: float = GIVE_UP_LEVEL,
+) -> list[dict[str, Any]]:
+    """:func:`sweep` of the controllers named and the agents at the run directories given, each disturbance a job of
+    a pool of ``workers`` processes (each loads the policies once); ``on_rows`` gets the rows found so far after each
+    job (to save them: a long sweep can be cut short). Rows come in the order of :func:`sweep`'s, whatever order the
+    jobs end in."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    base = make_scenario("random", n=n, seed=seed, env_kwargs=env_kwargs)
+    jobs = [(name, base, seed, n_optimal, give_up) for name in names]
+    done: dict[int, list[dict[str, Any]]] = {}
+    context = multiprocessing.get_context("spawn")  # a fresh interpreter: no torch or OpenMP state inherited
+    with ProcessPoolExecutor(workers, mp_context=context, initializer=_load_policies,
+                             initargs=(list(controllers), list(agents), None)) as pool:  # fmt: skip
+        futures = {pool.submit(_job, job): i for i, job in enumerate(jobs)}
+        pending = as_completed(futures)
+        if progress:
+            from tqdm.auto import tqdm
+
+            pending = tqdm(pending, total=len(jobs), desc="robustness: disturbances", unit="sweep")
+        for future in pending:
+            done[futures[future]] = future.result()
+            if on_rows is not None:
+                on_rows([row for i in sorted(done) for row in done[i]])
+    return [row for i in sorted(done) for row in done[i]]
+
+
 def sweep(
     policies: dict[str, Policy | str],
     names: list[str] | tuple[str, ...],
@@ -78,37 +193,16 @@ def sweep(
     progress: bool = False,
     log: Callable[[str], None] | None = None,
     n_optimal: int = 20,
+    give_up: float = GIVE_UP_LEVEL,
 ) -> list[dict[str, Any]]:
     """Rows (disturbance, magnitude, policy, metrics...) of each sweep in ``names`` over its magnitudes.
 
     The ``optimal`` controller (one CasADi plan per robot and re-plan, about 1 s per disturbed
-    episode) runs on the first ``n_optimal`` of the ``n`` start poses.
+    episode) runs on the first ``n_optimal`` of the ``n`` start poses. A policy whose success rate falls below
+    ``give_up`` at a magnitude is not run at the larger ones of that sweep.
     """
     base = make_scenario("random", n=n, seed=seed, env_kwargs=env_kwargs)
-    T_con = float(base.env_kwargs.get("T_con", 20.0))
-    few = min(n, n_optimal)
-    groups: list[tuple[dict[str, Policy | str], int]] = [
-        ({k: v for k, v in policies.items() if k != "optimal"}, n),
-        ({"optimal": "optimal"}, few),
-    ]
-    rows = []
-    for name in names:
-        spec = SWEEPS[name]
-        for magnitude in spec.magnitudes:
-            kwargs = {**base.env_kwargs, **spec.env_kwargs(magnitude, T_con)}
-            results = {}
-            for group, size in groups:
-                if group and (group.keys() != {"optimal"} or "optimal" in policies):
-                    scenario = Scenario(f"{name}={magnitude:g}", base.starts[:size], base.goals[:size], kwargs)
-                    results.update(evaluate(group, scenario, seed=seed, progress=progress))
-            for label, result in results.items():
-                summary = result.summary()
-                rows.append({"disturbance": name, "magnitude": float(magnitude), "policy": label,
-                             "T_con": result.params.T_con, **summary})  # fmt: skip
-                if log is not None:
-                    log(f"{name:12s} {magnitude:6g} {label:18s} success {summary['success_rate']:.3f}  "
-                        f"d_end mean {summary['final_distance_mean']:.4f}")  # fmt: skip
-    return rows
+    return [row for name in names for row in _sweep_rows(policies, base, name, seed, n_optimal, progress, log, give_up)]
 
 
 def tolerated(rows: list[dict[str, Any]], level: float = SUCCESS_LEVEL) -> dict[tuple[str, str], float | None]:
@@ -129,4 +223,4 @@ def tolerated(rows: list[dict[str, Any]], level: float = SUCCESS_LEVEL) -> dict[
     return table
 
 
-__all__ = ["SUCCESS_LEVEL", "SWEEPS", "Sweep", "sweep", "tolerated"]
+__all__ = ["SUCCESS_LEVEL", "SWEEPS", "Sweep", "sweep", "sweep_parallel", "tolerated"]

@@ -41,7 +41,10 @@ class RolloutResult:
     peak_angular_velocity: NDArray[np.float64]
     energy: NDArray[np.float64]  # integral of u^2 + omega^2
     path_length: NDArray[np.float64]
-    command_rate_rms: NDArray[np.float64]  # RMS of the change of (u, omega) per second: lower is smoother
+    command_rate_rms: NDArray[np.float64]  # RMS of the change of the commanded (u, omega) per second: lower is smoother
+    velocity_rate_rms: NDArray[
+        np.float64
+    ]  # the same of the velocities the robot had (with actuation noise, delay, ...)
     episode_return: NDArray[np.float64]
     left_arena: NDArray[np.bool_]
     trajectory: dict[str, NDArray[np.float64]] | None = None
@@ -89,6 +92,7 @@ class RolloutResult:
             "energy_mean": float(np.mean(self.energy)),
             "path_length_mean": float(np.mean(self.path_length)),
             "command_rate_rms_mean": float(np.mean(self.command_rate_rms)),
+            "velocity_rate_rms_mean": float(np.mean(self.velocity_rate_rms)),
             "return_mean": float(np.mean(self.episode_return)),
             "energy_ratio_mean": stat(ratio[np.isfinite(ratio)], np.mean),
             "energy_ratio_max": stat(ratio[np.isfinite(ratio)], np.max),
@@ -142,11 +146,13 @@ def rollout(
     arrival_time = np.full(n, np.nan)
     success = np.zeros(n, dtype=bool)
     left_arena = np.zeros(n, dtype=bool)
-    peak_u, peak_w, path, rate_sq, ret = (np.zeros(n) for _ in range(5))
+    peak_u, peak_w, path, rate_sq, velocity_rate_sq, ret = (np.zeros(n) for _ in range(6))
     final_distance, final_heading = coords.distance.copy(), np.abs(coords.psi)
     final_energy = np.zeros(n)
     steps_taken = np.zeros(n)
     prev_u, prev_w = np.zeros(n), np.zeros(n)
+    prev_command = np.zeros((n, 2))
+    limits = np.array([params.u_max, params.omega_max])
     trajectory: dict[str, list[NDArray[np.float64]]] = {}
     if record:
         x, y, psi = state.world_pose()
@@ -174,7 +180,10 @@ def rollout(
         peak_u = np.where(live, np.maximum(peak_u, np.abs(u)), peak_u)
         peak_w = np.where(live, np.maximum(peak_w, np.abs(w)), peak_w)
         path += np.where(live, np.abs(u) * params.dt, 0.0)
-        rate_sq += np.where(live, ((u - prev_u) ** 2 + (w - prev_w) ** 2) / params.dt**2, 0.0)
+        command = np.clip(actions, -1.0, 1.0) * limits  # what the policy asked for (the env clips it so)
+        rate_sq += np.where(live, np.sum((command - prev_command) ** 2, axis=1) / params.dt**2, 0.0)
+        velocity_rate_sq += np.where(live, ((u - prev_u) ** 2 + (w - prev_w) ** 2) / params.dt**2, 0.0)
+        prev_command = command
         steps_taken += live
         prev_u, prev_w = u, w
         ret += np.where(live, result.reward, 0.0)
@@ -212,6 +221,7 @@ def rollout(
         energy=final_energy,
         path_length=path,
         command_rate_rms=np.sqrt(rate_sq / np.maximum(steps_taken, 1)),
+        velocity_rate_rms=np.sqrt(velocity_rate_sq / np.maximum(steps_taken, 1)),
         episode_return=ret,
         left_arena=left_arena,
         trajectory={k: np.array(v) for k, v in trajectory.items()} if record else None,

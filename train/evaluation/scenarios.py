@@ -83,7 +83,7 @@ def controller_for(name: str, scenario: Scenario, params: EnvParams, **overrides
         kwargs["T_con"] = params.T_con  # the expert reads T_con from the observation; this keeps repr honest
     if name == "fabregas":
         kwargs["dt"] = params.dt
-    if name == "optimal":
+    if name in ("optimal", "robust-pt"):
         kwargs.update(T_con=params.T_con, dt=params.dt, u_max=params.u_max, omega_max=params.omega_max)
     kwargs.update(scenario.controller_kwargs.get(name, {}))
     kwargs.update(overrides)

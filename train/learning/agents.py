@@ -13,16 +13,27 @@ PRETRAINED = {
     "ppo": PRETRAINED_DIR / "ppo",
     "dagger": PRETRAINED_DIR / "dagger",
     "dagger-handover": PRETRAINED_DIR / "dagger_handover",
+    "robust": PRETRAINED_DIR / "robust",
 }
 
 
-def load_agent(path: str | Path) -> tuple[str, Any]:
-    """(label, policy) for a saved agent: a run directory (its model.zip) or a .zip inside a run."""
+#: What of a composite agent ``load_agent`` returns: the whole agent, the network alone, or (for a robust agent)
+#: the network with the analytic finish of ``robust-pt`` but without its planner.
+PARTS = ("whole", "network", "no-plan")
+
+
+def load_agent(path: str | Path, part: str = "whole") -> tuple[str, Any]:
+    """(label, policy) for a saved agent: a run directory (its model.zip) or a .zip inside a run.
+
+    ``part`` (one of :data:`PARTS`) takes a composite agent apart, to report the network alone beside the whole.
+    """
     from train.learning.config import ConfigError
     from train.learning.hyperparams import algorithm_class
     from train.learning.training import as_policy
 
     path = Path(path)
+    if part not in PARTS:
+        raise AgentLoadError(f"part={part!r} is invalid: expected one of {', '.join(PARTS)}")
     if not path.exists():
         raise AgentLoadError(f"agent {str(path)!r} is invalid: no such file or directory")
     model_path = path / MODEL_FILE if path.is_dir() else path
@@ -42,6 +53,8 @@ def load_agent(path: str | Path) -> tuple[str, Any]:
         raise AgentLoadError(f"agent {str(path)!r} could not be loaded: {error}") from error
     label = run_dir.name.replace("_", "-") if path.is_dir() else f"{run_dir.name}/{model_path.stem}"
     policy = as_policy(model, config)
+    if part == "network":
+        return f"{label} (network alone)", policy
     handover = load_extra(run_dir).get("handover")
     if handover:  # a network that hands over to an analytic law for the finish (train.learning.handover.HandoverPolicy)
         from train.learning.handover import make_handover_policy
@@ -53,6 +66,16 @@ def load_agent(path: str | Path) -> tuple[str, Any]:
             )  # fmt: skip
         except (KeyError, TypeError, ValueError) as error:
             raise AgentLoadError(f"agent {str(path)!r} has an invalid handover section: {error}") from error
+    robust = load_extra(run_dir).get("robust_agent")
+    if robust is not None:  # robust-pt whose cruise is the network (train.learning.robust_dagger)
+        from train.learning.robust_agent import agent
+
+        if part == "no-plan":
+            robust, label = {**robust, "plan": False}, f"{label} (no planner)"
+        try:
+            policy = agent(policy, config.env_params(), **robust)
+        except (TypeError, ValueError, ImportError) as error:
+            raise AgentLoadError(f"agent {str(path)!r} has an invalid robust_agent section: {error}") from error
     return label, policy
 
 
@@ -76,6 +99,7 @@ def pretrained_paths() -> dict[str, Path]:
 
 
 __all__ = [
+    "PARTS",
     "PRETRAINED",
     "PRETRAINED_DIR",
     "AgentLoadError",

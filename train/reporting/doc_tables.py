@@ -36,6 +36,8 @@ POLICY_NAMES = {
     "ppo": "`ppo` (v0)",
     "dagger": "`dagger` (v1)",
     "dagger-handover": "`dagger-handover` (v1)",
+    "robust-pt": "`robust-pt` (3)",
+    "robust": "`robust` agent (v1)",
 }
 
 
@@ -85,7 +87,8 @@ def compare_caption(rows: list[dict[str, Any]]) -> str:
         sets.append(f"{name} ({r['n']:.0f} episode{'s' if r['n'] != 1 else ''}, {T})")
     notes = {"fabregas": "(1) Fabregas [9] is the slow law the paper compares at T_con = 70 s (paper-fig7): it is not "
              "designed to arrive by a shorter T_con", "pt-astolfi": "(2) not from the paper: Astolfi's law on the time "
-             "scale of eq. (12)", "optimal": "optimum: the `optimal` controller, the least energy to the pose by T_con",
+             "scale of eq. (12)", "robust-pt": "(3) not from the paper: minimum-energy re-planning to 0.8 T_con behind "
+             "a Kalman filter, Astolfi's law on the time scale of eq. (12) as the finish (docs/robust.md)", "optimal": "optimum: the `optimal` controller, the least energy to the pose by T_con",
              "ppo": "(v0), (v1): the shipped agent and the env id it was trained on"}  # fmt: skip
     present = {r["policy"] for r in rows}
     note = "".join(f"; {text}" for name, text in notes.items() if name in present)
@@ -138,6 +141,50 @@ def verdict(by_T_con: dict[str, bool]) -> str:
     return "**met**" if not missed else f"**not met** at T_con = {', '.join(missed)} s"
 
 
+def robust_goal_table(data: dict[str, Any]) -> str:
+    """Issue 22's goal (benchmarks/robust_goal.py): each policy on each (T_con, set), then each one's verdicts."""
+    rows = data["rows"]
+    policies = list(dict.fromkeys(r["policy"] for r in rows))
+    by = {(r["T_con"], r["set"], r["policy"]): r for r in rows}
+    lines = ["| T_con [s] | set | " + " | ".join(POLICY_NAMES.get(p, f"`{p}`") for p in policies) + " |",
+             "|---|---" + "|---" * len(policies) + "|"]  # fmt: skip
+    for T, name in dict.fromkeys((r["T_con"], r["set"]) for r in rows):
+        cells = []
+        for policy in policies:
+            r = by.get((T, name, policy))
+            cells.append("" if r is None else f"{percent(r['success_rate'])} / {number(r['final_heading_error_mean'], '.2f')}"
+                         f" / {number(r['energy_mean'], '.2f')} / {number(r['command_rate_rms_mean'], '.2f')}")  # fmt: skip
+        lines.append(f"| {T:g} | {name} | " + " | ".join(cells) + " |")
+    lines += ["", "| policy | criteria met | not met (measured, bar) |", "|---|---|---|"]
+    for key, checks in data.items():
+        if key.startswith("verdicts:"):
+            missed = "; ".join(f"{c['criterion']}: {c['measured']:.3f}" + (f" (bar {c['bar']:.3f})" if "bar" in c else "")
+                               for c in checks if not c["met"])  # fmt: skip
+            lines.append(f"| {POLICY_NAMES.get(key[9:], f'`{key[9:]}`')} | {sum(c['met'] for c in checks)} / "
+                         f"{len(checks)} | {missed or 'none'} |")  # fmt: skip
+    caption = (
+        f"Each cell: in time / mean \\|psi_end\\| [rad] / mean energy / command-rate RMS; {data['n']} starts "
+        f"0.3-3 m per (T_con, set), seed {data['seed']}; `python benchmarks/robust_goal.py` ({data['seconds']} s)."
+    )
+    return "\n".join(lines) + f"\n\n*{caption}*\n"
+
+
+def filter_rates_table(data: dict[str, Any]) -> str:
+    """robust-pt's in-time rate and energy with each rate of its filter (benchmarks/robust_filter_rates.py)."""
+    kinds = list(dict.fromkeys(r["kind"] for r in data["rows"]))
+    rates = list(dict.fromkeys(tuple(r["disturbance_rate"]) for r in data["rows"]))
+    by = {(r["kind"], tuple(r["disturbance_rate"])): r for r in data["rows"]}
+    lines = ["| `disturbance_rate` (b_u, b_omega) | " + " | ".join(kinds) + " |", "|---" * (len(kinds) + 1) + "|"]
+    for rate in rates:
+        cells = [f"{percent(by[(k, rate)]['success_rate'])} / {by[(k, rate)]['energy_mean']:.2f}" for k in kinds]
+        lines.append(f"| ({rate[0]:g}, {rate[1]:g}) | " + " | ".join(cells) + " |")
+    n = data["rows"][0]["n"]
+    return (
+        "\n".join(lines)
+        + f"\n\n*In time / mean energy; {n} starts 0.3-3 m, T_con = {data['T_con']:g} s, seed {data['seed']}.*\n"
+    )
+
+
 def optimal_timing_table(rows: list[dict[str, Any]]) -> str:
     """Seconds per episode of the reference optimum and of the ``optimal`` controller."""
     lines = ["| set | n | reference optimum (env grid) [s/episode] | `optimal` controller rollout [s/episode] | "
@@ -156,10 +203,19 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "compare-fig7": ("docs/compare/comparison.json", lambda rows: compare_table(rows, ("paper-fig7",))),
     "claims": ("docs/reproduce/claims.json", claims_table),
     "robustness": ("docs/robustness/robustness.json", tolerance_table),
-    "robustness-issue10": ("docs/robustness/issue10/robustness.json", tolerance_table),
     "prescribed-time-goal": ("docs/prescribed_time/goal.json", goal_table),
     "optimal-timing": ("docs/benchmarks/optimal.json", optimal_timing_table),
+    "robust-goal": ("docs/robust/goal.json", robust_goal_table),
+    "robust-filter-rates": ("docs/robust/filter_rates.json", filter_rates_table),
+    "robust-headline": ("docs/compare/comparison.json", lambda rows: robust_headline(rows)),
 }
+
+
+def robust_headline(rows: list[dict[str, Any]]) -> str:
+    """The robust headline of ``dwr-gym compare`` (train.reporting.robust_headline) with the tables' policy names."""
+    from train.reporting.robust_headline import headline_table
+
+    return headline_table(rows, POLICY_NAMES)
 
 
 def markdown_files(root: Path = ROOT) -> list[Path]:

@@ -16,8 +16,15 @@ METRIC_LABELS = {"return_mean": "return per episode, mean [-]", "success_rate": 
                  "final_distance_mean": "final distance, mean [m]"}  # fmt: skip
 
 
-def plot_dagger_curve(curve: list[dict[str, Any]], T_cons: tuple[float, ...], path: Path) -> Any:
-    """Success, final heading error and energy at each evaluation T_con against the DAgger round."""
+def plot_dagger_curve(
+    curve: list[dict[str, Any]],
+    T_cons: tuple[float, ...],
+    path: Path,
+    prefix: str = "",
+    title: str = "DAgger on minimum-energy plans: fixed evaluation starts 0.3-3 m away",
+) -> Any:
+    """Success, final heading error and energy at each evaluation T_con against the DAgger round (the columns
+    ``{prefix}success_T{T}`` ...)."""
     try:
         plt = pyplot()
     except ImportError:  # the plots extra is optional
@@ -26,10 +33,11 @@ def plot_dagger_curve(curve: list[dict[str, Any]], T_cons: tuple[float, ...], pa
     fig, axes = plt.subplots(1, 3, figsize=(14.5, 4.2))
     for ax, key, label in zip(axes, ("success", "heading", "energy"), (SUCCESS, HEADING_ERROR, ENERGY), strict=True):
         for i, T in enumerate(T_cons):
-            ax.plot(rounds, [row[f"{key}_T{int(T)}"] for row in curve], label=f"T_con = {T:g} s", **style(i))
+            ax.plot(rounds, [float(row[f"{prefix}{key}_T{int(T)}"]) for row in curve], label=f"T_con = {T:g} s",
+                    **style(i))  # fmt: skip
         ax.set(xlabel="DAgger round (0: demonstrations only) [-]", ylabel=label)
     figure_legend(fig)
-    fig.suptitle("DAgger on minimum-energy plans: fixed evaluation starts 0.3-3 m away")
+    fig.suptitle(title)
     return save(fig, path, dpi=100)
 
 
