@@ -255,6 +255,7 @@ def test_rollout_metrics_of_straight_drives_by_hand() -> None:
     np.testing.assert_allclose(result.path_length, 0.5 * 0.05 * steps)
     np.testing.assert_allclose(result.energy, 0.25 * 0.05 * steps)
     np.testing.assert_allclose(result.command_rate_rms, np.sqrt((0.5 / 0.05) ** 2 / steps))
+    np.testing.assert_allclose(result.velocity_rate_rms, result.command_rate_rms)  # the ideal robot does as commanded
     np.testing.assert_allclose(result.final_distance[[0, 2]], [0.0, 5.01], atol=1e-9)
     np.testing.assert_allclose(result.final_heading_error, [0.0, math.atan2(4.0, -3.0), math.pi], atol=1e-12)
     np.testing.assert_array_equal(result.T_con, [20.0, 8.0, 20.0])
@@ -275,7 +276,8 @@ def test_rollout_metrics_of_straight_drives_by_hand() -> None:
     assert summary["final_distance_mean"] == pytest.approx(5.01 / 3)
     assert summary["final_heading_error_mean"] == pytest.approx((math.atan2(4.0, -3.0) + math.pi) / 3)
     assert summary["command_rate_rms_mean"] == pytest.approx(np.mean(10.0 / np.sqrt(steps)))
-    assert len(summary) == 23  # the keys above and the energy-ratio ones
+    assert summary["velocity_rate_rms_mean"] == pytest.approx(summary["command_rate_rms_mean"])
+    assert len(summary) == 24  # the keys above and the energy-ratio ones
 
 
 def test_evaluate_sets_gives_one_row_per_set_T_con_and_policy_as_evaluate_summarises_them() -> None:
