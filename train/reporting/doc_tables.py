@@ -213,9 +213,17 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
 
 def robust_headline(rows: list[dict[str, Any]]) -> str:
     """The robust headline of ``dwr-gym compare`` (train.reporting.robust_headline) with the tables' policy names."""
-    from train.reporting.robust_headline import headline_table
+    from train.reporting.robust_headline import DISTURBED, NOMINAL, headline_table
 
-    return headline_table(rows, POLICY_NAMES)
+    sets = [name for name in (NOMINAL, *DISTURBED) if any(r["scenario"] == name for r in rows)]
+    sizes = {name: {int(r["n"]) for r in rows if r["scenario"] == name} for name in sets}
+    counts = ", ".join(f"{name} {'/'.join(str(n) for n in sorted(sizes[name], reverse=True))}" for name in sets)
+    env = rows[0].get("env_id", "DWRPointStabilization-v0")
+    return headline_table(rows, POLICY_NAMES) + (
+        f"\n*{env}, T_con drawn per episode, the same starts on every set; episodes per set: {counts} (the smaller "
+        "number: the `optimal` controller, which re-plans with CasADi whenever pushed off its plan, on the first "
+        "ones); E/opt: energy / the optimum's on the same episode, nominal.*\n"
+    )
 
 
 def markdown_files(root: Path = ROOT) -> list[Path]:
