@@ -563,19 +563,19 @@ def rendered_block(name: str) -> str:
 
 def docs_block(name: str) -> str:
     """The text between the markers of block ``name`` in docs/throughput.md."""
-    text = DOCS.read_text()
-    begin = f"<!-- {name}:begin -->"
-    return text[text.index(begin) + len(begin) : text.index(f"<!-- {name}:end -->")]
+    from train.reporting.doc_tables import block
+
+    return block(DOCS.read_text(), name)
 
 
 def write_docs() -> None:
     """Render every block of docs/throughput.md whose JSON file exists from that file."""
+    from train.reporting.doc_tables import with_block
+
     text = DOCS.read_text()
     for name, (path, _) in BLOCKS.items():
         if path.exists():
-            begin, end = f"<!-- {name}:begin -->", f"<!-- {name}:end -->"
-            start, stop = text.index(begin) + len(begin), text.index(end)
-            text = text[:start] + rendered_block(name) + text[stop:]
+            text = with_block(text, name, rendered_block(name))
     DOCS.write_text(text)
     print(f"wrote {DOCS}")
 

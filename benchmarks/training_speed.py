@@ -126,16 +126,15 @@ def rendered_block(results: dict[str, Any]) -> str:
 
 def docs_block(name: str = "training-speed") -> str:
     """The text between the markers of block ``name`` in docs/training.md."""
-    text = DOCS.read_text()
-    begin = f"<!-- {name}:begin -->"
-    return text[text.index(begin) + len(begin) : text.index(f"<!-- {name}:end -->")]
+    from train.reporting.doc_tables import block
+
+    return block(DOCS.read_text(), name)
 
 
 def write_docs(results: dict[str, Any], name: str = "training-speed") -> None:
-    text = DOCS.read_text()
-    begin, end = f"<!-- {name}:begin -->", f"<!-- {name}:end -->"
-    start, stop = text.index(begin) + len(begin), text.index(end)
-    DOCS.write_text(text[:start] + rendered_block(results) + text[stop:])
+    from train.reporting.doc_tables import with_block
+
+    DOCS.write_text(with_block(DOCS.read_text(), name, rendered_block(results)))
     print(f"wrote {DOCS}")
 
 

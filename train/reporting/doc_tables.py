@@ -226,6 +226,19 @@ def robust_headline(rows: list[dict[str, Any]]) -> str:
     )
 
 
+def block(text: str, name: str) -> str:
+    """The text between ``<!-- NAME:begin -->`` and ``<!-- NAME:end -->`` (a benchmark's block in a docs page)."""
+    begin = f"<!-- {name}:begin -->"
+    return text[text.index(begin) + len(begin) : text.index(f"<!-- {name}:end -->")]
+
+
+def with_block(text: str, name: str, body: str) -> str:
+    """``text`` with block ``name`` replaced by ``body``."""
+    begin = f"<!-- {name}:begin -->"
+    start, stop = text.index(begin) + len(begin), text.index(f"<!-- {name}:end -->")
+    return text[:start] + body + text[stop:]
+
+
 def markdown_files(root: Path = ROOT) -> list[Path]:
     """The README and every page of the docs."""
     return [root / "README.md", *sorted((root / "docs").rglob("*.md"))]
