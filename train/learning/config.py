@@ -15,6 +15,12 @@ from dwr_gym.validation import as_bool, as_choice, as_float, as_int
 from train.env_ids import ENV_HELP, TASK_ENV_ID, UNRECORDED_ENV_ID, check_env_id, env_keywords
 
 ALGORITHMS: tuple[str, ...] = ("ppo", "sac", "td3")
+BACKENDS: tuple[str, ...] = ("sb3", "jax")
+"""Training libraries: stable-baselines3 on torch, or the jitted PPO on the JAX functional env (PPO only).
+Both write the same run directory, whose model.zip loads as a stable-baselines3 model."""
+LEARNED_FROM: tuple[str, ...] = ("reward", "expert")
+"""What an agent learned from, as its config.yaml records it (``learned_from``): the env's reward (RL, residual
+RL) or an expert's actions (cloning, DAgger)."""
 MAX_TIMESTEPS = 10**10
 MAX_TRAIN_ENVS = 4096
 """More training envs than this give rollouts of little use and risk exhausting memory; larger values are refused."""
@@ -40,6 +46,10 @@ class TrainConfig:
     """Everything a training run needs; written beside the model as config.yaml so it can be re-run exactly."""
 
     algo: str = option("ppo", "algorithm: ppo, sac or td3")
+    backend: str = option("sb3", "training library: sb3 (stable-baselines3 on torch) or jax (jitted PPO, extra 'jax')")
+    threads: int | None = option(
+        None, "torch threads for training and evaluation", shown_default="1 (our commands only)", metavar="N"
+    )
     env_id: str = option(TASK_ENV_ID, ENV_HELP, flag="--env", metavar="ID")
     total_timesteps: int | None = option(
         None, "total environment steps over all envs", shown_default=BUDGET_HELP["n_timesteps"], metavar="N"
@@ -102,6 +112,9 @@ class TrainConfig:
 
     def _coerce(self) -> None:
         self.algo = as_choice("--algo", self.algo, ALGORITHMS)
+        self.backend = as_choice("--backend", self.backend, BACKENDS)
+        if self.threads is not None:
+            self.threads = as_int("--threads", self.threads, 1, 1024, text=True)
         self.env_id = check_env_id(self.env_id)
         if self.total_timesteps is not None:  # None: the algorithm's default, set by resolve_hyperparams
             self.total_timesteps = as_int("--total-timesteps", self.total_timesteps, 1, MAX_TIMESTEPS, text=True)
