@@ -13,6 +13,7 @@ from train.commands.shared import (
     checked_env,
     checked_optimum,
     checked_selection,
+    command_threads,
     load_agents,
 )
 
@@ -32,6 +33,11 @@ def add_parser(sub: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Evaluate agents and controllers on the same scenarios; print the table, write CSV, JSON and plots."""
+    with command_threads(args):
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     env_id, env_kwargs = checked_env(args)

@@ -11,6 +11,7 @@ from train.commands.shared import (
     checked_env,
     checked_optimum,
     checked_selection,
+    command_threads,
     load_agents,
 )
 
@@ -25,6 +26,11 @@ def add_parser(sub: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Evaluate controllers (and saved agents) on named scenario sets."""
+    with command_threads(args):
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
     env_id, env_kwargs = checked_env(args)
     names = checked_selection(args)
     policies: dict[str, Any] = {name: name for name in names}

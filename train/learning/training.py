@@ -238,10 +238,25 @@ def train(
     """Train as configured; returns the run directory. ``on_evaluation`` receives each periodic
     evaluation as a dict of EVAL_FIELDS (e.g. to report it to a tuner).
 
+    torch runs on ``config.threads`` threads (default 1) while it trains; the caller's count is restored
+    afterwards (:mod:`train.threads`).
+
     Ctrl-C saves a checkpoint at the next rollout boundary; a second Ctrl-C stops after the current env
     step and saves what there is (a third stops at once, saving nothing more). Then it prints the command
     that resumes and raises KeyboardInterrupt.
     """
+    from train.threads import torch_threads
+
+    config.validate()
+    with torch_threads(config.threads):
+        return _train(config, command, on_evaluation)
+
+
+def _train(
+    config: TrainConfig,
+    command: list[str] | None,
+    on_evaluation: Callable[[dict[str, Any]], None] | None,
+) -> Path:
     import pickle
     import random
     import signal
@@ -249,7 +264,6 @@ def train(
 
     import torch
 
-    config.validate()
     fill_budget(config)
     run_dir, lock = prepare_run_dir(config)
     try:
