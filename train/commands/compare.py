@@ -14,6 +14,7 @@ from train.commands.shared import (
     checked_optimum,
     checked_selection,
     command_threads,
+    interrupted,
     load_agents,
 )
 
@@ -64,9 +65,17 @@ def _run(args: argparse.Namespace) -> int:
             run_dirs[label] = find_run_dir(path if path.is_dir() else path.parent)
         except AgentLoadError:
             pass
-    rows, recorded, labels = compare(agents, controllers, args.scenarios, args.n, args.seed, env_kwargs,
-                                     progress=not args.no_progress, optimum=checked_optimum(args), T_cons=args.T_con,
-                                     n_optimal=args.n_optimal)  # fmt: skip
+    done: list[dict[str, Any]] = []  # the rows of the scenario sets finished so far
+
+    def keep(found: list[dict[str, Any]]) -> None:
+        done[:] = found
+
+    try:
+        rows, recorded, labels = compare(agents, controllers, args.scenarios, args.n, args.seed, env_kwargs,
+                                         progress=not args.no_progress, optimum=checked_optimum(args),
+                                         T_cons=args.T_con, n_optimal=args.n_optimal, on_rows=keep)  # fmt: skip
+    except KeyboardInterrupt:
+        return interrupted(done, env_id, args.out, "comparison")
     rows = [{**row, "env_id": env_id} for row in rows]
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

@@ -75,6 +75,21 @@ def command_threads(args: argparse.Namespace) -> AbstractContextManager[int]:
         raise UsageError(str(error)) from None
 
 
+def interrupted(rows: list[dict[str, Any]], env_id: str, out: str, stem: str) -> int:
+    """After Ctrl-C: the rows of the scenario sets that finished written to ``out``, one line said; exit code 130."""
+    from train.reporting.results import write_results
+
+    cached = "the optima solved so far are cached"
+    if rows:
+        csv_path, json_path = write_results([{**row, "env_id": env_id} for row in rows], out, stem)
+        counted = f"{len(rows)} row{'s' if len(rows) != 1 else ''}"
+        print(f"\ninterrupted: wrote the {counted} finished so far to {csv_path} and {json_path}; {cached}",
+              file=sys.stderr)  # fmt: skip
+    else:
+        print(f"\ninterrupted before the first scenario set finished: no results written; {cached}", file=sys.stderr)
+    return 130
+
+
 def parse_env_kwargs(items: Sequence[str] | None) -> dict[str, Any]:
     """Parse ``KEY=VALUE`` pairs; VALUE is read as JSON when it parses, else as a string."""
     kwargs: dict[str, Any] = {}
