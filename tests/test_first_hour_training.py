@@ -156,3 +156,76 @@ def test_ctrl_c_in_evaluate_and_compare_writes_the_finished_sets_and_says_so_in_
     assert err[-1].startswith("interrupted: wrote the 3 rows finished so far") and "Traceback" not in "".join(err)
     rows = json.loads((out / f"{stem}.json").read_text())
     assert {row["scenario"] for row in rows} == {"paper-fig5"} and len(rows) == 3
+
+
+# 4. The smaller frictions.
+
+
+def test_evaluate_shows_the_range_a_per_episode_T_con_is_drawn_from_not_nan(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from train.cli import main
+
+    assert main(["evaluate", "--controllers", "ptc", "--scenarios", "random", "--n", "3", "--optimum", "none",
+                 "--no-progress", "--out", str(tmp_path)]) == 0  # fmt: skip
+    printed = capsys.readouterr().out
+    row = next(line for line in printed.splitlines() if line.startswith("random ") and " ptc " in line)
+    assert "drawn in [10, 60]" in row and "nan" not in row.split("ptc")[0]
+    assert "random, T_con drawn per episode in [10, 60] s" in printed
+
+
+def test_a_mean_energy_ratio_over_few_episodes_says_how_many() -> None:
+    from train.reporting.tables import EVAL_COLUMNS, format_table
+
+    few = {"scenario": "random", "T_con": 20.0, "policy": "agent", "n": 200.0, "energy_ratio_mean": 1.34,
+           "energy_ratio_episodes": 3.0}  # fmt: skip
+    every = {**few, "policy": "ptc", "energy_ratio_mean": 2.56, "energy_ratio_episodes": 200.0}
+    columns = [c for c in EVAL_COLUMNS if c[0] in few]
+    table = format_table([few, every], columns).splitlines()
+    assert table[2].split()[-2:] == ["1.34", "(3/200)"] and table[3].split()[-1] == "2.56"
+
+
+def test_a_mistyped_flag_names_the_near_match_and_the_commands_help(capsys: pytest.CaptureFixture[str]) -> None:
+    from train.cli import main
+
+    with pytest.raises(SystemExit) as exit_:
+        main(["train", "--total-timestep", "5"])
+    error = capsys.readouterr().err.strip()
+    assert exit_.value.code == 2 and len(error.splitlines()) == 1
+    assert "--total-timestep 5 (did you mean --total-timesteps?) (see dwr-gym train --help)" in error
+
+
+def test_an_unknown_hyperparameter_lists_the_accepted_ones(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from train.cli import main
+
+    assert main(["train", "--hyperparams", "lr=1e-3", "--run-dir", str(tmp_path / "run")]) == 2
+    error = capsys.readouterr().err
+    assert "['lr'] are not accepted by PPO (did you mean learning_rate?); accepted: " in error
+    assert {"learning_rate", "n_steps", "batch_size", "gamma"} <= set(error.split("accepted: ")[1].strip().split(", "))
+
+
+def test_a_residual_on_the_optimal_expert_warns_at_once_that_it_plans_per_robot(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import train.learning.training as training
+
+    def stop(config: TrainConfig) -> None:
+        raise RuntimeError("stopped before the first plan")
+
+    monkeypatch.setattr(training, "make_training_env", stop)
+    config = tiny(tmp_path / "run", 256, eval_freq=10**6)
+    config.residual, config.expert = True, "optimal"
+    with pytest.raises(RuntimeError, match="stopped before the first plan"):
+        train(config, command=["test"])
+    assert "note: --expert optimal solves a minimum-energy plan with CasADi for each robot" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("command", ["evaluate", "compare", "robustness"])
+def test_a_command_that_stops_early_leaves_no_empty_results_folder(
+    command: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from train.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    assert main([command, "--agents", "missing.zip"]) == 2
+    assert list(tmp_path.iterdir()) == []

@@ -35,6 +35,7 @@ def run(args: argparse.Namespace) -> int:
     runs = measure(args.dt, log=lambda stage: print(f"running {stage} ...", flush=True))
     found = claims(runs)
     print("drawing the figures" + (" and the animation" if not args.no_gif else "") + " ...", flush=True)
+    out.mkdir(parents=True, exist_ok=True)
     plot_paper_figures(runs, out, gif=not args.no_gif)
     write_report(found, out / "report.md", args.dt, optimum_lines(runs))
     write_claims(found, out / "claims.json", args.dt, optimum_lines(runs))

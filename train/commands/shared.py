@@ -30,6 +30,34 @@ class Parser(argparse.ArgumentParser):
     def error(self, message: str) -> NoReturn:
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
+    def parse_args(self, args: Sequence[str] | None = None, namespace: Any = None) -> Any:  # type: ignore[override]
+        """As argparse's, but an unknown option is reported by the command it was given to (``dwr-gym train:
+        ... (see dwr-gym train --help)``), with the nearest option it takes."""
+        parsed, extras = self.parse_known_args(args, namespace)
+        if extras:
+            parser = self._chosen_command(parsed) or self
+            parser.error(f"unrecognized arguments: {' '.join(extras)}{parser._near_options(extras)}")
+        return parsed
+
+    def _chosen_command(self, parsed: argparse.Namespace) -> Parser | None:
+        for action in self._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                chosen = action.choices.get(getattr(parsed, action.dest, None) or "")
+                return chosen if isinstance(chosen, Parser) else None
+        return None
+
+    def _near_options(self, extras: Sequence[str]) -> str:
+        import difflib
+
+        options = sorted({flag for action in self._actions for flag in action.option_strings})
+        flags = [item.partition("=")[0] for item in extras if item.startswith("--")]
+        hints = []
+        for flag in flags:
+            near = difflib.get_close_matches(flag, options, n=1, cutoff=0.7)
+            if near:
+                hints.append(f"{near[0]} for {flag}" if len(flags) > 1 else near[0])
+        return f" (did you mean {', '.join(hints)}?)" if hints else ""
+
 
 def count(text: str) -> int:
     """An argparse type for counts and seeds: accepts 1000, 1e3 and 1_000; the option's own check says what range
@@ -43,19 +71,26 @@ def count(text: str) -> int:
 
 
 def check_writable_dir(flag: str, path: str) -> None:
-    """Create ``path`` if needed and check a file can be written in it, before any work starts."""
+    """Check, before any work starts, that files can be written in ``path``: in it if it exists, else in the
+    nearest folder above it that does (where it will be created once there are results, so that a command that
+    stops early leaves no empty folder behind)."""
+    import os
     import tempfile
     from pathlib import Path
 
-    out = Path(path)
+    out = Path(path).absolute()
     if out.exists() and not out.is_dir():
         raise UsageError(f"{flag} {path!r} is invalid: it is a file, expected a directory")
+    existing = next(folder for folder in (out, *out.parents) if folder.exists())
+    if not existing.is_dir():
+        raise UsageError(f"{flag} {path!r} is invalid: {str(existing)!r} is a file, expected a directory")
     try:
-        out.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryFile(dir=out):
+        with tempfile.TemporaryFile(dir=existing):
             pass
     except OSError as error:
         raise UsageError(f"{flag} {path!r} is not writable: {error.strerror or error}") from None
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise UsageError(f"{flag} {path!r} is not writable: permission denied")
 
 
 def add_threads_argument(p: argparse.ArgumentParser) -> None:

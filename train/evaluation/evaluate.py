@@ -82,9 +82,13 @@ def evaluate_sets(
             results = evaluate_subset(policies, scenario, seed, progress, optimum, n_optimal)
             for label, result in results.items():
                 note = result.optimum_failures[0] if result.optimum_failures else ""
-                T_row = float("nan") if scenario.T_cons is not None else result.params.T_con  # nan: per episode
-                rows.append({"scenario": name, "T_con": T_row, "policy": label, **result.summary(),
-                             "optimum_note": note})  # fmt: skip
+                drawn = scenario.T_cons is not None
+                T_row = float("nan") if drawn else result.params.T_con  # nan: drawn per episode, in T_con_range
+                T_range = (
+                    list(result.params.T_con_range or (min(scenario.T_cons), max(scenario.T_cons))) if drawn else None
+                )
+                rows.append({"scenario": name, "T_con": T_row, "T_con_range": T_range, "policy": label,
+                             **result.summary(), "optimum_note": note})  # fmt: skip
             if on_rows is not None:
                 on_rows(list(rows))
     return rows

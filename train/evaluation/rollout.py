@@ -96,6 +96,7 @@ class RolloutResult:
             "return_mean": float(np.mean(self.episode_return)),
             "energy_ratio_mean": stat(ratio[np.isfinite(ratio)], np.mean),
             "energy_ratio_max": stat(ratio[np.isfinite(ratio)], np.max),
+            "energy_ratio_episodes": float(np.isfinite(ratio).sum()),  # the episodes behind E/opt: in time, optimum known
             "optimal_energy_mean": float("nan") if self.optimal_energy is None
             else stat(self.optimal_energy[np.isfinite(self.optimal_energy)], np.mean),
             "planner_failures": float(self.planner_failures),

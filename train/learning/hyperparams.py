@@ -210,13 +210,27 @@ def algorithm_class(algo: str) -> Any:
     return {"ppo": stable_baselines3.PPO, "sac": stable_baselines3.SAC, "td3": stable_baselines3.TD3}[algo]
 
 
+_ALIASES = {"lr": "learning_rate", "learning-rate": "learning_rate", "batch": "batch_size", "epochs": "n_epochs",
+            "discount": "gamma", "net_arch": "policy_kwargs"}  # fmt: skip
+"""Names users type for a hyperparameter that stable-baselines3 calls otherwise."""
+
+
 def check_algo_kwargs(algo: str, params: dict[str, Any]) -> dict[str, Any]:
     """The hyperparameters coerced to their types; unknown or ill-typed ones raise ConfigError before any work."""
     accepted = set(inspect.signature(algorithm_class(algo).__init__).parameters) - {"self", "env", "device", "seed"}
     accepted |= {"action_noise_sigma"}
     unknown = sorted(set(params) - accepted)
     if unknown:
-        raise ConfigError(f"hyperparameter(s) {unknown} are not accepted by {algo.upper()}")
+        import difflib
+
+        shown = sorted(key for key in accepted if not key.startswith("_") and key not in ("verbose", "tensorboard_log"))
+        near = {key: [_ALIASES[key]] if key in _ALIASES else difflib.get_close_matches(key, shown, n=1, cutoff=0.6)
+                for key in unknown}  # fmt: skip
+        hints = ", ".join(
+            f"{near[key][0]} for {key}" if len(unknown) > 1 else near[key][0] for key in unknown if near[key]
+        )
+        raise ConfigError(f"hyperparameter(s) {unknown} are not accepted by {algo.upper()}"
+                          f"{f' (did you mean {hints}?)' if hints else ''}; accepted: {', '.join(shown)}")  # fmt: skip
     checked = dict(params)
     try:
         for key, low in _INT_KEYS.items():

@@ -40,6 +40,15 @@ EVAL_FIELDS = ("timesteps", "wall_time", "success_rate", "arrival_time_mean", "f
                "energy_mean", "return_mean", "final_distance_mean")  # fmt: skip
 
 
+OPTIMAL_EXPERT_NOTE = (
+    "note: --expert optimal solves a minimum-energy plan with CasADi for each robot (about 0.1 s of CPU per plan, "
+    "docs/controllers.md) at every episode's start, and again every second of simulated time once the residual moves "
+    "it off its plan: about {solves:g} plans per step of the {n} robots, seconds per step where --expert ptc takes "
+    "milliseconds; try --num-envs 4 --total-timesteps 2000 first"
+)
+"""What ``train`` says at once when the residual's expert is ``optimal`` (``n``, ``solves``: robots, plans per step)."""
+
+
 def task_score(row: dict[str, Any]) -> tuple[float, float, float]:
     """The order in which evaluations rank, highest best: the share of episodes in time (``success_rate``) first;
     among equal shares the lower mean energy, when any episode arrives in time (a policy that arrives nowhere
@@ -299,6 +308,8 @@ def _train(
         note = rollout_rounding(config)
         if note and config.resume is None:
             print(note, file=sys.stderr)
+        if config.residual and config.expert == "optimal":
+            print(OPTIMAL_EXPERT_NOTE.format(n=config.num_envs, solves=config.num_envs / 20), file=sys.stderr)
         algo = algorithm_class(config.algo)
         state = read_state(run_dir) if config.resume is not None else {}
         if config.resume is not None:

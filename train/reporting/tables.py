@@ -13,9 +13,7 @@ def format_table(rows: list[dict[str, Any]], columns: list[tuple[str, str, str]]
     """Rows as an aligned text table; ``columns`` are (key, header, format)."""
     cells = [[header for _, header, _ in columns]]
     for row in rows:
-        cells.append(
-            [format(row[key], fmt) if isinstance(row[key], float) else str(row[key]) for key, _, fmt in columns]
-        )
+        cells.append([cell(row, key, fmt) for key, _, fmt in columns])
     widths = [max(len(r[i]) for r in cells) for i in range(len(columns))]
     lines = [
         "  ".join(c.rjust(w) if i else c.ljust(w) for i, (c, w) in enumerate(zip(r, widths, strict=True)))
@@ -23,6 +21,21 @@ def format_table(rows: list[dict[str, Any]], columns: list[tuple[str, str, str]]
     ]
     lines.insert(1, "-" * len(lines[0]))
     return "\n".join(lines)
+
+
+def cell(row: dict[str, Any], key: str, fmt: str) -> str:
+    """One cell: a T_con drawn per episode as its range; a mean E/opt over fewer episodes than the row's with how
+    many stand behind it (an agent in time on 3 of 200 would otherwise look better than a law in time on all)."""
+    value = row[key]
+    if key == "T_con" and isinstance(value, float) and math.isnan(value) and row.get("T_con_range"):
+        low, high = row["T_con_range"]
+        return f"drawn in [{low:g}, {high:g}]"
+    text = format(value, fmt) if isinstance(value, float) else str(value)
+    behind = row.get("energy_ratio_episodes")
+    if key == "energy_ratio_mean" and isinstance(value, float) and math.isfinite(value) and behind is not None:
+        if behind < row["n"]:
+            return f"{text} ({behind:.0f}/{row['n']:.0f})"
+    return text
 
 
 EVAL_COLUMNS = [
@@ -63,7 +76,10 @@ def print_blocks(rows: list[dict[str, Any]], columns: list[tuple[str, str, str]]
 
     def block_of(row: dict[str, Any]) -> str:
         T_con = row["T_con"]
-        return f"{row['scenario']}, " + ("T_con drawn per episode" if T_con != T_con else f"T_con = {T_con:g} s")
+        if T_con == T_con:
+            return f"{row['scenario']}, T_con = {T_con:g} s"
+        drawn = " in [{:g}, {:g}] s".format(*row["T_con_range"]) if row.get("T_con_range") else ""
+        return f"{row['scenario']}, T_con drawn per episode{drawn}"
 
     blocks: dict[str, list[dict[str, Any]]] = {}
     for row in rows:
