@@ -87,8 +87,8 @@ def evaluate_sets(
                 T_range = (
                     list(result.params.T_con_range or (min(scenario.T_cons), max(scenario.T_cons))) if drawn else None
                 )
-                rows.append({"scenario": name, "T_con": T_row, "T_con_range": T_range, "policy": label,
-                             **result.summary(), "optimum_note": note})  # fmt: skip
+                rows.append({"scenario": name, "T_con": T_row, "policy": label, **result.summary(),
+                             "optimum_note": note, "T_con_range": T_range})  # fmt: skip
             if on_rows is not None:
                 on_rows(list(rows))
     return rows

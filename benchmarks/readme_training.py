@@ -1,0 +1,127 @@
+"""The README's training example, run as a user runs it: its wall and CPU time, and whether the agent arrives.
+
+    nice -n 10 python benchmarks/readme_training.py --docs     # writes docs/training/readme_example.json, ~5-30 min
+    python benchmarks/readme_training.py --render              # the README's block from the JSON
+
+Runs ``COMMAND`` (a fresh `dwr-gym train` process, in a temporary directory), times it (wall clock, and the CPU time
+of the process and its children: on an idle machine the wall time of a run on one thread), then evaluates the
+run's best_model.zip and the PTC expert with `dwr-gym evaluate` on 200 random starts of the task (seed 0, not the
+training's evaluation set). The README quotes both times, the load average and the share that arrives in time.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import os
+import platform
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+JSON_PATH = ROOT / "docs" / "training" / "readme_example.json"
+README = ROOT / "README.md"
+BLOCK = "readme-training"
+COMMAND = ["dwr-gym", "train", "--run-dir", "runs/ppo-v1"]
+EVALUATE = ["dwr-gym", "evaluate", "--agents", "runs/ppo-v1", "--controllers", "ptc", "--scenarios", "random",
+            "--n", "200", "--optimum", "none"]  # fmt: skip
+
+
+KEPT = ("policy", "n", "success_rate", "energy_mean", "final_heading_error_mean")
+
+
+def cli(args: list[str], cwd: str) -> subprocess.CompletedProcess[str]:
+    """``dwr-gym ...`` as this checkout's code, in ``cwd``."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "MPLBACKEND": "Agg"}
+    env.pop("OMP_NUM_THREADS", None)  # the user's setting: none
+    command = [sys.executable, "-m", "train.cli", *args[1:]]
+    return subprocess.run(command, cwd=cwd, env=env, check=True, capture_output=True, text=True)
+
+
+def measure() -> dict[str, Any]:
+    """Train as the README says, then evaluate the best model and PTC; the times and the rows."""
+    with tempfile.TemporaryDirectory() as tmp:
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        began = time.perf_counter()
+        cli([*COMMAND, "--no-progress"], tmp)
+        wall = time.perf_counter() - began
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        load = os.getloadavg()[0]
+        cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+        with (Path(tmp) / "runs/ppo-v1/evaluations.csv").open() as handle:
+            curve = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(handle)]
+        best = json.loads((Path(tmp) / "runs/ppo-v1/run_state.json").read_text())["best"]
+        cli([*EVALUATE, "--no-progress", "--out", "out"], tmp)
+        rows = json.loads((Path(tmp) / "out" / "evaluation.json").read_text())
+    import torch
+
+    return {
+        "machine": f"{platform.machine()}, {os.cpu_count()} cores, torch {torch.__version__}",
+        "command": " ".join(COMMAND),
+        "evaluate": " ".join(EVALUATE),
+        "wall_seconds": round(wall, 1),
+        "cpu_seconds": round(cpu, 1),
+        "load_average_1min_at_end": round(load, 2),
+        "curve": curve,
+        "best": best,
+        "evaluation": [{k: row[k] for k in KEPT} for row in rows],
+    }
+
+
+def render(results: dict[str, Any]) -> str:
+    """The README's lines: the command, its times, and who arrives in time on the 200 starts."""
+    rows = {row["policy"]: row for row in results["evaluation"]}
+    agent = next(row for name, row in rows.items() if name != "ptc")
+    ptc = rows["ptc"]
+    steps = int(results["curve"][-1]["timesteps"])
+    return (
+        f"\n```bash\n{results['command']}     # {steps:,} env steps\n{results['evaluate']}\n```\n\n"
+        f"Measured ({results['machine']}): {results['cpu_seconds'] / 60:.1f} min of CPU time, which is the wall time "
+        f"on an idle machine (the run uses one core); {results['wall_seconds'] / 60:.1f} min of wall time on the shared "
+        f"machine it ran on (load average {results['load_average_1min_at_end']:g}). Its best model arrives in time on "
+        f"{agent['success_rate']:.0%} of the 200 random starts of the task, with a mean energy of {agent['energy_mean']:.2f} "
+        f"(PTC: {ptc['success_rate']:.0%}, {ptc['energy_mean']:.2f}); final heading error "
+        f"{agent['final_heading_error_mean']:.2f} rad on average (PTC: {ptc['final_heading_error_mean']:.2f}). "
+        "One seed, from `docs/training/readme_example.json` (`benchmarks/readme_training.py`).\n"
+    )
+
+
+def readme_block() -> str:
+    from train.reporting.doc_tables import block
+
+    return block(README.read_text(), BLOCK)
+
+
+def write_readme(results: dict[str, Any]) -> None:
+    from train.reporting.doc_tables import with_block
+
+    README.write_text(with_block(README.read_text(), BLOCK, render(results)))
+    print(f"wrote {README}")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} and the README block")
+    parser.add_argument("--render", action="store_true", help="only render the README block from the JSON")
+    args = parser.parse_args()
+    if args.render:
+        write_readme(json.loads(JSON_PATH.read_text()))
+        return
+    results = measure()
+    print(render(results))
+    if args.docs:
+        JSON_PATH.parent.mkdir(parents=True, exist_ok=True)
+        JSON_PATH.write_text(json.dumps(results, indent=1) + "\n")
+        print(f"wrote {JSON_PATH}")
+        write_readme(results)
+
+
+if __name__ == "__main__":
+    main()
