@@ -123,6 +123,7 @@ def _run(args: argparse.Namespace) -> int:
     workers = args.workers or min(os.cpu_count() or 1, 8)
     if workers > 1:
         from train.evaluation.robustness import sweep_parallel
+        from train.threads import check_threads
 
         def save(found: list[dict[str, Any]]) -> None:
             write_results([{**row, "env_id": env_id} for row in found], str(out), "robustness")
@@ -130,7 +131,7 @@ def _run(args: argparse.Namespace) -> int:
         found = sweep_parallel([k for k, v in policies.items() if isinstance(v, str)], paths, args.disturbances,
                                n=args.n, seed=args.seed, env_kwargs=env_kwargs, workers=workers,
                                progress=not args.no_progress, n_optimal=args.n_optimal, on_rows=save,
-                               give_up=args.give_up_below)  # fmt: skip
+                               give_up=args.give_up_below, threads=check_threads(args.threads))  # fmt: skip
         return report([{**row, "env_id": env_id} for row in found], out, args.no_plots)
     rows: list[dict[str, Any]] = []
     for name in args.disturbances:  # the rows so far are saved after each disturbance: a long sweep can be cut short

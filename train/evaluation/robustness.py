@@ -103,9 +103,14 @@ def _magnitude_rows(
 _WORKER: dict[str, Any] = {}
 
 
-def _load_policies(controllers: list[str], agents: list[str], env_id: str | None) -> None:
-    """A worker's policies, loaded once per process (agents from their run directories)."""
+def _load_policies(controllers: list[str], agents: list[str], env_id: str | None, threads: int = 1) -> None:
+    """A worker's policies, loaded once per process (agents from their run directories); torch on ``threads``
+    threads in this process of ours (a fresh interpreter would take one per core: train.threads says why not)."""
+    import torch
+
     from train.learning.agents import load_agent
+
+    torch.set_num_threads(threads)
 
     policies: dict[str, Any] = {name: name for name in controllers}
     for path in agents:
@@ -157,9 +162,10 @@ def sweep_parallel(
     n_optimal: int = 20,
     on_rows: Callable[[list[dict[str, Any]]], None] | None = None,
     give_up: float = GIVE_UP_LEVEL,
+    threads: int = 1,
 ) -> list[dict[str, Any]]:
     """:func:`sweep` of the controllers named and the agents at the run directories given, each disturbance a job of
-    a pool of ``workers`` processes (each loads the policies once); ``on_rows`` gets the rows found so far after each
+    a pool of ``workers`` processes (each loads the policies once, and runs torch on ``threads`` threads); ``on_rows`` gets the rows found so far after each
     job (to save them: a long sweep can be cut short). Rows come in the order of :func:`sweep`'s, whatever order the
     jobs end in."""
     import multiprocessing
@@ -170,7 +176,7 @@ def sweep_parallel(
     done: dict[int, list[dict[str, Any]]] = {}
     context = multiprocessing.get_context("spawn")  # a fresh interpreter: no torch or OpenMP state inherited
     with ProcessPoolExecutor(workers, mp_context=context, initializer=_load_policies,
-                             initargs=(list(controllers), list(agents), None)) as pool:  # fmt: skip
+                             initargs=(list(controllers), list(agents), None, threads)) as pool:  # fmt: skip
         futures = {pool.submit(_job, job): i for i, job in enumerate(jobs)}
         pending = as_completed(futures)
         if progress:
