@@ -128,6 +128,38 @@ def test_two_commands_caching_at_once_keep_each_others_optima(monkeypatch: pytes
     assert set(written) < set(cache) and len(written) == 4 and list(cache.values()).count(2.0) == 4
 
 
+def test_two_commands_solving_the_same_episodes_share_the_work(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    import os
+    import subprocess
+    import sys
+
+    import train.evaluation.optimum as optimum
+    from dwr_gym.params import EnvParams
+    from train.evaluation.scenarios import make_scenario
+
+    monkeypatch.setenv("DWR_GYM_CACHE", str(tmp_path))
+    params, scenario = EnvParams(), make_scenario("random", n=6, seed=7)
+    keys = [optimum._start_key(s, params.T_con) for s in optimum.goal_frame_starts(scenario.starts, scenario.goals)]
+    path = optimum._cache_file(params, True)
+    ended = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    other, dead = os.getppid(), int(ended.stdout)  # a running process, and one that has ended
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.with_suffix(".claims").write_text(json.dumps({keys[0]: other, keys[1]: other, keys[2]: dead}))
+    solved: list[object] = []
+
+    def solve(job: object) -> float:
+        solved.append(job)
+        if len(solved) == 4:  # meanwhile the other command finishes the two episodes it claimed
+            optimum._merge_into_cache(path, {keys[0]: 10.0, keys[1]: 11.0})
+        return 1.0
+
+    monkeypatch.setattr(optimum, "_solve_energy", solve)
+    energies, _ = optimum.optimal_energies(params, scenario.starts, scenario.goals, workers=1)
+    assert len(solved) == 4  # the dead process's claim is taken over, the running one's left to it
+    assert list(energies) == [10.0, 11.0, 1.0, 1.0, 1.0, 1.0]
+    assert json.loads(path.with_suffix(".claims").read_text()) == {}
+
+
 # 3. Ctrl-C in evaluate and compare: one line, the finished sets' rows written, exit code 130.
 
 

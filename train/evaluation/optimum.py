@@ -7,7 +7,7 @@ and the limits, so that a second ``evaluate`` or ``compare`` does not solve agai
 
 The cache is written as the optima are solved, a few at a time (an interrupted command keeps what it solved), and
 merged under a file lock with an atomic replace, so two commands may solve and cache at once: each keeps the
-other's optima and skips those the other solved first. It lives in ``$DWR_GYM_CACHE`` (default
+other's optima and skips those the other has solved or is solving (each batch is claimed first). It lives in ``$DWR_GYM_CACHE`` (default
 ``~/.cache/dwr-gym``); delete it to solve afresh.
 """
 
@@ -19,6 +19,7 @@ import math
 import multiprocessing
 import os
 import sys
+import time
 from collections.abc import Iterator
 from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
@@ -29,6 +30,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dwr_gym import model
+
+try:
+    import fcntl
+except ImportError:  # not POSIX: no lock and no claims (see _locked)
+    fcntl = None  # type: ignore[assignment]
 from dwr_gym.params import EnvParams
 
 #: Bump when the problem or the solver settings change, so that stale optima are not reused.
@@ -36,6 +42,8 @@ CACHE_VERSION = 2
 OPTIMA = ("pose", "position", "none")
 BATCH_PER_WORKER = 8
 """Plans per solver process between two writes of the cache: a few seconds of work, so an interruption loses little."""
+CLAIM_WAIT = 1.0  # [s]
+"""How often a process waiting for optima that another process is solving looks at the cache again."""
 
 
 def cache_dir() -> Path:
@@ -123,12 +131,10 @@ def _read_cache(path: Path) -> dict[str, float | str]:
 def _locked(path: Path) -> Iterator[None]:
     """An exclusive lock of the cache file ``path`` between processes (POSIX ``flock`` on a ``.lock`` beside it;
     where there is none, the atomic replace alone: two processes writing at once may then lose one's optima)."""
-    try:
-        import fcntl
-    except ImportError:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if fcntl is None:
         yield
         return
-    path.parent.mkdir(parents=True, exist_ok=True)
     with path.with_suffix(".lock").open("a") as handle:
         fcntl.flock(handle, fcntl.LOCK_EX)
         try:
@@ -137,15 +143,57 @@ def _locked(path: Path) -> Iterator[None]:
             fcntl.flock(handle, fcntl.LOCK_UN)
 
 
-def _merge_into_cache(path: Path, found: dict[str, float | str]) -> dict[str, float | str]:
-    """Add ``found`` to the cache file, reading, merging and replacing it atomically under the lock, so that two
-    processes writing at once both keep what they solved. Returns the merged cache (what others solved too)."""
+def _replace(path: Path, data: dict[str, Any]) -> None:
+    temporary = path.with_suffix(f".{os.getpid()}.tmp")
+    temporary.write_text(json.dumps(data))
+    os.replace(temporary, path)
+
+
+def _running(pid: int) -> bool:
+    """Whether process ``pid`` still runs (POSIX only: it is asked where ``fcntl`` exists)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def _claims(path: Path, cache: dict[str, float | str]) -> dict[str, int]:
+    """The keys being solved by running processes (``<cache>.claims`` beside the cache), without those cached."""
+    if fcntl is None:
+        return {}
+    claimed = _read_cache(path.with_suffix(".claims"))
+    return {k: int(pid) for k, pid in claimed.items() if k not in cache and _running(int(pid))}  # type: ignore[arg-type]
+
+
+def _claim(path: Path, todo: list[str], size: int) -> tuple[list[str], dict[str, float | str], set[int]]:
+    """Under the lock: the next ``size`` keys of ``todo`` neither cached nor being solved by another running process,
+    now claimed by this one; the cache as it is; the processes solving the rest of ``todo``."""
     with _locked(path):
         cache = _read_cache(path)
-        cache.update(found)
-        temporary = path.with_suffix(f".{os.getpid()}.tmp")
-        temporary.write_text(json.dumps(cache))
-        os.replace(temporary, path)
+        claims = _claims(path, cache)
+        batch = [k for k in todo if k not in cache and k not in claims][:size]
+        if fcntl is not None:
+            _replace(path.with_suffix(".claims"), {**claims, **dict.fromkeys(batch, os.getpid())})
+    wanted = set(todo)
+    others = {pid for k, pid in claims.items() if k in wanted and pid != os.getpid()}
+    return batch, cache, others
+
+
+def _merge_into_cache(path: Path, found: dict[str, float | str], release: bool = False) -> dict[str, float | str]:
+    """Add ``found`` to the cache file, reading, merging and replacing it atomically under the lock, so that two
+    processes writing at once both keep what they solved; their claims go (with ``release``, all of this process's).
+    Returns the merged cache (what others solved too)."""
+    with _locked(path):
+        cache = _read_cache(path)
+        if found:
+            cache.update(found)
+            _replace(path, cache)
+        if fcntl is not None:
+            claims = {k: pid for k, pid in _claims(path, cache).items() if not (release and pid == os.getpid())}
+            _replace(path.with_suffix(".claims"), claims)
     return cache
 
 
@@ -153,8 +201,9 @@ def _solve_and_cache(
     jobs: dict[str, Any], path: Path, workers: int, progress: bool, description: str
 ) -> dict[str, float | str]:
     """Solve ``jobs`` (by cache key) in batches of a few seconds' work, merging each batch into the cache file as it
-    ends, and skipping what another process cached meanwhile; an interruption (Ctrl-C) keeps every optimum solved
-    before it. Returns the results by key."""
+    ends. Each batch is claimed first, so that two processes solving the same episodes share the work: each skips
+    what the other solved or is solving, and waits for the other's last batch. An interruption (Ctrl-C) keeps every
+    optimum solved before it. Returns the results by key."""
     workers = workers or min(os.cpu_count() or 1, 8)
     bar: Any = None
     if progress:
@@ -164,25 +213,26 @@ def _solve_and_cache(
     found: dict[str, float | str] = {}
     pending: dict[str, float | str] = {}
     pool: ProcessPoolExecutor | None = None
-    warned = False
+    shared = True  # False once the cache cannot be written: the optima are still returned, just not kept
+    waiting_noted = False
 
-    def flush() -> None:
-        nonlocal warned
-        if not pending:
-            return
-        try:
-            known = _merge_into_cache(path, pending)
-        except OSError as error:  # a read-only home: the optima are still returned, just not kept
-            if not warned:
-                print(f"warning: could not cache optimal energies in {path.parent}: {error}", file=sys.stderr)
-            warned, known = True, {}
-        found.update(pending)
-        pending.clear()
-        for key in [key for key in todo if key in known]:  # solved by another process meanwhile
+    def take(known: dict[str, float | str]) -> None:
+        for key in [key for key in todo if key in known]:  # solved by another process
             found[key] = known[key]
             todo.remove(key)
             if bar is not None:
                 bar.update()
+
+    def flush(release: bool = False) -> None:
+        nonlocal shared
+        if shared and (pending or release):
+            try:
+                take(_merge_into_cache(path, pending, release))
+            except OSError as error:
+                print(f"warning: could not cache optimal energies in {path.parent}: {error}", file=sys.stderr)
+                shared = False
+        found.update(pending)
+        pending.clear()
 
     todo = list(jobs)
     try:
@@ -191,7 +241,25 @@ def _solve_and_cache(
             pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(method),
                                        initializer=_ignore_interrupts)  # fmt: skip
         while todo:
-            batch, todo = todo[: BATCH_PER_WORKER * workers], todo[BATCH_PER_WORKER * workers :]
+            size, batch, others = BATCH_PER_WORKER * workers, [], set()
+            if shared:
+                try:
+                    batch, cache, others = _claim(path, todo, size)
+                    take(cache)
+                except OSError as error:  # a read-only home: solved here alone, not kept
+                    print(f"warning: could not cache optimal energies in {path.parent}: {error}", file=sys.stderr)
+                    shared = False
+            if not shared:
+                batch = todo[:size]
+            if not batch:
+                if todo and not waiting_noted:
+                    print(f"\n{description}: waiting for {len(todo)} optima that process(es) "
+                          f"{', '.join(map(str, sorted(others)))} are solving", file=sys.stderr)  # fmt: skip
+                    waiting_noted = True
+                time.sleep(CLAIM_WAIT)
+                continue
+            for key in batch:
+                todo.remove(key)
             solved = map(_solve_energy, (jobs[k] for k in batch)) if pool is None else pool.map(
                 _solve_energy, (jobs[k] for k in batch))  # fmt: skip
             for key, result in zip(batch, solved, strict=True):
@@ -200,7 +268,7 @@ def _solve_and_cache(
                     bar.update()
             flush()
     finally:
-        flush()  # also on Ctrl-C: what was solved is kept
+        flush(release=True)  # also on Ctrl-C: what was solved is kept, this process's claims go
         if pool is not None:
             pool.shutdown(wait=False, cancel_futures=True)
         if bar is not None:
