@@ -66,8 +66,13 @@ class PPOSettings:
         return self.n_envs * self.n_steps
 
     @property
+    def minibatch_size(self) -> int:
+        """batch_size, or the whole rollout where it is smaller (as SB3 then takes one minibatch of it all)."""
+        return min(self.batch_size, self.steps_per_update)
+
+    @property
     def minibatches(self) -> int:
-        return self.steps_per_update // self.batch_size
+        return self.steps_per_update // self.minibatch_size
 
     @classmethod
     def from_algo_kwargs(cls, algo_kwargs: dict[str, Any], n_envs: int) -> PPOSettings:
@@ -111,7 +116,7 @@ class PPOSettings:
 
     def check(self) -> None:
         """Raise ConfigError unless a rollout splits into whole minibatches."""
-        if self.steps_per_update % self.batch_size:
+        if self.steps_per_update % self.minibatch_size:
             raise ConfigError(
                 f"batch_size={self.batch_size} is invalid for --backend jax: it must divide n_steps * n_envs = "
                 f"{self.n_steps} * {self.n_envs} = {self.steps_per_update} (the minibatches are a reshape)"

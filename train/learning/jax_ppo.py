@@ -100,6 +100,26 @@ def env_step(env: Any, env_params: Any, key: Any, state: Any, action: Any) -> tu
     return obs, state, jnp.asarray(reward, jnp.float32), terminated, truncated, obs_step, success
 
 
+def gae(rewards: Any, values: Any, terminated: Any, truncated: Any, final_values: Any, last_value: Any,
+        gamma: float, lam: float) -> tuple[Any, Any]:  # fmt: skip
+    """GAE(gamma, lambda) advantages and returns (advantages + values) of a rollout (arrays (n_steps, n_envs)),
+    as SB3's PPO computes them: the reward of a truncated, not terminated, step gets gamma * V(final observation)
+    (``final_values``), and an episode's end cuts the recursion; ``last_value`` (n_envs,) bootstraps the last step."""
+    rewards = rewards + gamma * jnp.where(truncated & ~terminated, final_values, 0.0)
+    alive = 1.0 - (terminated | truncated).astype(jnp.float32)
+
+    def backward(carry: tuple[Any, Any], step: tuple[Any, Any, Any]) -> tuple[tuple[Any, Any], Any]:
+        advantage, next_value = carry
+        reward, value, not_done = step
+        delta = reward + gamma * next_value * not_done - value
+        advantage = delta + gamma * lam * not_done * advantage
+        return (advantage, value), advantage
+
+    _, advantages = jax.lax.scan(backward, (jnp.zeros_like(last_value), last_value), (rewards, values, alive),
+                                 reverse=True)  # fmt: skip
+    return advantages, advantages + values
+
+
 class JaxPPO:
     """The jitted PPO of one configuration on one functional env: :meth:`init` a :class:`Runner`, :meth:`run` it
     for some updates; :meth:`run_seeds` and :meth:`init_seeds` do the same for several seeds under ``vmap``."""
@@ -188,26 +208,11 @@ class JaxPPO:
         return runner, transitions, totals
 
     def advantages(self, params: Any, transitions: Transition, last_obs: Any) -> tuple[Any, Any]:
-        """GAE(gamma, lambda) and the returns (advantages + values), as SB3's RolloutBuffer computes them; the
-        reward of a truncated (not terminated) step gets gamma * V(final observation), as SB3's PPO adds."""
-        gamma, lam = self.settings.gamma, self.settings.gae_lambda
+        """:func:`gae` of a rollout, with the values of its final and its last observations."""
         final_values = self.policy(params, transitions.final_obs)[2]
-        bootstrap = transitions.truncated & ~transitions.terminated
-        rewards = transitions.reward + gamma * jnp.where(bootstrap, final_values, 0.0)
-        not_done = 1.0 - (transitions.terminated | transitions.truncated).astype(jnp.float32)
         last_value = self.policy(params, last_obs)[2]
-
-        def backward(carry: tuple[Any, Any], step: tuple[Any, Any, Any]) -> tuple[tuple[Any, Any], Any]:
-            advantage, next_value = carry
-            reward, value, alive = step
-            delta = reward + gamma * next_value * alive - value
-            advantage = delta + gamma * lam * alive * advantage
-            return (advantage, value), advantage
-
-        _, advantages = jax.lax.scan(
-            backward, (jnp.zeros_like(last_value), last_value), (rewards, transitions.value, not_done), reverse=True
-        )
-        return advantages, advantages + transitions.value
+        return gae(transitions.reward, transitions.value, transitions.terminated, transitions.truncated, final_values,
+                   last_value, self.settings.gamma, self.settings.gae_lambda)  # fmt: skip
 
     def loss(self, params: Any, batch: tuple[Any, ...]) -> Any:
         """SB3's PPO loss on one minibatch: clipped surrogate + ent_coef * (-entropy) + vf_coef * MSE(returns)."""
@@ -247,7 +252,7 @@ class JaxPPO:
             params, opt_state, rng = carry
             rng, key = jax.random.split(rng)
             order = jax.random.permutation(key, s.steps_per_update)
-            batches = jax.tree.map(lambda x: x[order].reshape((s.minibatches, s.batch_size, *x.shape[1:])), flat)
+            batches = jax.tree.map(lambda x: x[order].reshape((s.minibatches, s.minibatch_size, *x.shape[1:])), flat)
             (params, opt_state), _ = jax.lax.scan(minibatch_step, (params, opt_state), batches)
             return (params, opt_state, rng), None
 
