@@ -57,6 +57,17 @@ def configure_threads(threads: int | None) -> None:
     os.environ["XLA_FLAGS"] = flags.strip()
 
 
+def use_compilation_cache() -> None:
+    """Keep XLA's compiled programs in ``<dwr-gym cache>/xla`` (``$DWR_GYM_CACHE``, else ~/.cache/dwr-gym), so a
+    second run of the same configuration starts in seconds instead of compiling again."""
+    import jax
+
+    from train.evaluation.optimum import cache_dir
+
+    if jax.config.jax_compilation_cache_dir is None:
+        jax.config.update("jax_compilation_cache_dir", str(cache_dir() / "xla"))
+
+
 def make_jax_env(config: TrainConfig) -> tuple[Any, Any]:
     """The functional env of ``config.env_id`` and its params, gymnax-style (``dwr_gym.jax_env``)."""
     try:
@@ -180,6 +191,7 @@ def train_jax(
     fill_budget(config)
     settings = PPOSettings.from_algo_kwargs(config.algo_kwargs, int(config.num_envs or 0))
     env, env_params = make_jax_env(config)
+    use_compilation_cache()
     from train.learning.jax_export import SB3Exporter
     from train.learning.jax_ppo import JaxPPO
     from train.learning.training import make_training_env
