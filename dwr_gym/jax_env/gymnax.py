@@ -3,7 +3,8 @@
 ``reset(key, params) -> (obs, state)`` and ``step(key, state, action, params) -> (obs, state, reward, done,
 info)`` for one robot (``jax.vmap`` them for a batch), with gymnax's auto-reset: the step that ends an episode
 returns the new episode's observation and state, and the reward, ``done`` and info of the step that ended it
-(``info["terminated"]`` and ``info["truncated"]`` tell the two apart: bootstrap on truncation). gymnax itself is
+(``info["terminated"]`` and ``info["truncated"]`` tell the two apart: bootstrap on truncation from
+``info["final_observation"]``, the ended step's observation). gymnax itself is
 not needed: the spaces are small classes of the same interface.
 """
 
@@ -77,6 +78,7 @@ class DWRGymnaxEnv:
         params = self.default_params if params is None else params
         step_key, reset_key = jax.random.split(key)
         obs, next_state, reward, done, info = self.step_env(step_key, state, action, params)
+        info["final_observation"] = obs  # the ended step's (to bootstrap a truncated episode's value from)
         reset_obs, reset_state = self.reset_env(reset_key, params)
         next_state = jax.tree.map(lambda new, old: jnp.where(done, new, old), reset_state, next_state)
         return jnp.where(done, reset_obs, obs), next_state, reward, done, info
