@@ -17,7 +17,7 @@ import pytest
 from train.learning.config import TrainConfig
 from train.learning.hyperparams import resolve_hyperparams
 from train.learning.runs import RunDirError, RunLock, resume_config
-from train.learning.training import train
+from train.learning.training import task_score, train
 
 
 def tiny(run_dir: Path, total: int = 512, **overrides: object) -> TrainConfig:
@@ -52,13 +52,13 @@ def test_same_seed_same_agent_and_resume_equals_the_uninterrupted_run(tmp_path: 
     train(resume_config({"resume": str(split), "total_timesteps": 512, "progress": False}))
     for a, b in zip(parameters(first), parameters(split), strict=True):
         np.testing.assert_array_equal(a, b)
-    assert evaluations(split) == evaluations(first)
-    assert (
-        json.loads((split / "run_state.json").read_text())["best_score"]
-        == json.loads((first / "run_state.json").read_text())["best_score"]
-    )  # the best score survives the resume
+    # the same evaluations, and one more where the first part ended: a finished run is evaluated at its last step
+    assert [row for row in evaluations(split) if row[0] != "256"] == evaluations(first)
     steps = [int(row[0]) for row in evaluations(split)[1:]]
-    assert steps == sorted(steps) and steps[-1] == 400
+    assert steps == [0, 200, 256, 400, 512]
+    with (split / "evaluations.csv").open() as handle:
+        best = max(csv.DictReader(handle), key=lambda row: task_score({k: float(v) for k, v in row.items()}))
+    assert json.loads((split / "run_state.json").read_text())["best"]["timesteps"] == int(best["timesteps"])
     wall = [float(row[1]) for row in list(csv.reader((split / "evaluations.csv").read_text().splitlines()))[1:]]
     assert wall == sorted(wall)  # wall time continues across the resume
 
@@ -83,7 +83,7 @@ def test_a_run_directory_holds_one_run(tmp_path: Path) -> None:
     finally:
         lock.release()
     train(tiny(run_dir, total=128, overwrite=True))
-    assert [int(row[0]) for row in evaluations(run_dir)[1:]] == [0]  # the old run's log went with --overwrite
+    assert [int(row[0]) for row in evaluations(run_dir)[1:]] == [0, 128]  # the old run's log went with --overwrite
 
 
 def test_a_run_dir_that_is_a_file_is_refused_before_any_work(tmp_path: Path) -> None:

@@ -13,6 +13,8 @@ from train.commands.shared import (
     checked_env,
     checked_optimum,
     checked_selection,
+    command_threads,
+    interrupted,
     load_agents,
 )
 
@@ -32,6 +34,11 @@ def add_parser(sub: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Evaluate agents and controllers on the same scenarios; print the table, write CSV, JSON and plots."""
+    with command_threads(args):
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     env_id, env_kwargs = checked_env(args)
@@ -58,9 +65,17 @@ def run(args: argparse.Namespace) -> int:
             run_dirs[label] = find_run_dir(path if path.is_dir() else path.parent)
         except AgentLoadError:
             pass
-    rows, recorded, labels = compare(agents, controllers, args.scenarios, args.n, args.seed, env_kwargs,
-                                     progress=not args.no_progress, optimum=checked_optimum(args), T_cons=args.T_con,
-                                     n_optimal=args.n_optimal)  # fmt: skip
+    done: list[dict[str, Any]] = []  # the rows of the scenario sets finished so far
+
+    def keep(found: list[dict[str, Any]]) -> None:
+        done[:] = found
+
+    try:
+        rows, recorded, labels = compare(agents, controllers, args.scenarios, args.n, args.seed, env_kwargs,
+                                         progress=not args.no_progress, optimum=checked_optimum(args),
+                                         T_cons=args.T_con, n_optimal=args.n_optimal, on_rows=keep)  # fmt: skip
+    except KeyboardInterrupt:
+        return interrupted(done, env_id, args.out, "comparison")
     rows = [{**row, "env_id": env_id} for row in rows]
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

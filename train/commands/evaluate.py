@@ -11,6 +11,8 @@ from train.commands.shared import (
     checked_env,
     checked_optimum,
     checked_selection,
+    command_threads,
+    interrupted,
     load_agents,
 )
 
@@ -25,6 +27,11 @@ def add_parser(sub: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Evaluate controllers (and saved agents) on named scenario sets."""
+    with command_threads(args):
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
     env_id, env_kwargs = checked_env(args)
     names = checked_selection(args)
     policies: dict[str, Any] = {name: name for name in names}
@@ -33,9 +40,17 @@ def run(args: argparse.Namespace) -> int:
     from train.reporting.results import write_results
     from train.reporting.tables import EVAL_COLUMNS, print_blocks, table_notes
 
-    rows = evaluate_sets(policies, args.scenarios, args.n, args.seed, env_kwargs, progress=not args.no_progress,
-                          optimum=checked_optimum(args), T_cons=args.T_con,
-                          n_optimal=args.n_optimal)  # fmt: skip
+    done: list[dict[str, Any]] = []  # the rows of the scenario sets finished so far
+
+    def keep(found: list[dict[str, Any]]) -> None:
+        done[:] = found
+
+    try:
+        rows = evaluate_sets(policies, args.scenarios, args.n, args.seed, env_kwargs, progress=not args.no_progress,
+                             optimum=checked_optimum(args), T_cons=args.T_con, n_optimal=args.n_optimal,
+                             on_rows=keep)  # fmt: skip
+    except KeyboardInterrupt:
+        return interrupted(done, env_id, args.out, "evaluation")
     rows = [{**row, "env_id": env_id} for row in rows]
     print(f"env: {env_id}")
     print_blocks(rows, EVAL_COLUMNS)

@@ -48,7 +48,7 @@ def run(args: argparse.Namespace) -> int:
         config.env_id = check_env_id(config.env_id)
     except ValueError as error:
         raise UsageError(str(error)) from None
-    positive = {"episodes": 1, "epochs": 1, "batch_size": 1, "eval_episodes": 1, "eval_every": 1}
+    positive = {"episodes": 1, "epochs": 1, "batch_size": 1, "eval_episodes": 1, "eval_every": 1, "threads": 1}
     for key, low in positive.items():
         if getattr(config, key) < low:
             raise UsageError(

@@ -14,8 +14,10 @@ from train.commands.shared import (
     UsageError,
     add_agents_argument,
     add_env_arguments,
+    add_threads_argument,
     checked_env,
     checked_selection,
+    command_threads,
     count,
     load_agents,
     validated_env_params,
@@ -72,11 +74,17 @@ def add_parser(sub: Any) -> None:
                    "at the larger ones of that disturbance; 0.95 gives the tolerance table alone, fastest (default: 0.5)")  # fmt: skip
     p.add_argument("--no-plots", action="store_true", help="write no figures")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    add_threads_argument(p)
     p.set_defaults(func=run)  # fmt: skip
 
 
 def run(args: argparse.Namespace) -> int:
     """Sweep disturbances for the controllers and agents; print the tolerance table, write CSV, JSON, PNG, MD."""
+    with command_threads(args):
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
     from train.evaluation.robustness import SWEEPS, sweep
     from train.reporting.results import write_results
 

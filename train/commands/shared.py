@@ -8,6 +8,7 @@ import ast
 import json
 import sys
 from collections.abc import Sequence
+from contextlib import AbstractContextManager
 from typing import Any, NoReturn
 
 
@@ -55,6 +56,38 @@ def check_writable_dir(flag: str, path: str) -> None:
             pass
     except OSError as error:
         raise UsageError(f"{flag} {path!r} is not writable: {error.strerror or error}") from None
+
+
+def add_threads_argument(p: argparse.ArgumentParser) -> None:
+    """``--threads N``: torch's thread count while the command runs (:mod:`train.threads`)."""
+    p.add_argument("--threads", type=count, default=None, metavar="N",
+                   help="torch threads while the command runs; the caller's count is restored afterwards "
+                   "(default: 1: a small network waits on a thread pool, most on a busy machine)")  # fmt: skip
+
+
+def command_threads(args: argparse.Namespace) -> AbstractContextManager[int]:
+    """The scope of ``--threads`` (:func:`train.threads.torch_threads`); a bad count is a UsageError."""
+    from train.threads import check_threads, torch_threads
+
+    try:
+        return torch_threads(check_threads(getattr(args, "threads", None)))
+    except ValueError as error:
+        raise UsageError(str(error)) from None
+
+
+def interrupted(rows: list[dict[str, Any]], env_id: str, out: str, stem: str) -> int:
+    """After Ctrl-C: the rows of the scenario sets that finished written to ``out``, one line said; exit code 130."""
+    from train.reporting.results import write_results
+
+    cached = "the optima solved so far are cached"
+    if rows:
+        csv_path, json_path = write_results([{**row, "env_id": env_id} for row in rows], out, stem)
+        counted = f"{len(rows)} row{'s' if len(rows) != 1 else ''}"
+        print(f"\ninterrupted: wrote the {counted} finished so far to {csv_path} and {json_path}; {cached}",
+              file=sys.stderr)  # fmt: skip
+    else:
+        print(f"\ninterrupted before the first scenario set finished: no results written; {cached}", file=sys.stderr)
+    return 130
 
 
 def parse_env_kwargs(items: Sequence[str] | None) -> dict[str, Any]:
@@ -210,6 +243,7 @@ def add_scenario_arguments(p: argparse.ArgumentParser, out: str, sets: Sequence[
     p.add_argument("--seed", type=count, default=0, help="seed of the random scenario set (default: 0)")
     p.add_argument("--out", default=out, help=f"output directory (default: {out})")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")  # fmt: skip
+    add_threads_argument(p)
     add_env_arguments(p)
 
 

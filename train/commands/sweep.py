@@ -9,7 +9,14 @@ import json
 from pathlib import Path
 from typing import Any
 
-from train.commands.shared import UsageError, add_env_arguments, count, parse_env_kwargs
+from train.commands.shared import (
+    UsageError,
+    add_env_arguments,
+    add_threads_argument,
+    command_threads,
+    count,
+    parse_env_kwargs,
+)
 from train.learning.config import BUDGET_HELP, TrainConfig
 from train.learning.sweep import METRICS, SEARCHES
 
@@ -61,11 +68,17 @@ def add_parser(sub: Any) -> None:
         "the agents in `dwr-gym compare` (default: ppo, ppo-residual, ...)",
     )
     p.add_argument("--resume", action="store_true", help="continue an interrupted sweep in --out")
+    add_threads_argument(p)
     p.set_defaults(func=run)  # fmt: skip
 
 
 def run(args: argparse.Namespace) -> int:
     """Run the sweep, then write trials.csv, best.yml and learning_curves.png in --out."""
+    with command_threads(args):
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
     from train.learning.config import ConfigError
     from train.learning.sweep import (
         optuna_space,
@@ -84,7 +97,7 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out).resolve()
     base = {"algo": args.algo, "residual": args.residual, "total_timesteps": args.total_timesteps,
             "num_envs": args.num_envs, "env_id": args.env, "env_kwargs": parse_env_kwargs(args.env_kwargs),
-            "eval_freq": args.eval_freq, "eval_episodes": args.eval_episodes}  # fmt: skip
+            "eval_freq": args.eval_freq, "eval_episodes": args.eval_episodes, "threads": args.threads}  # fmt: skip
     base = {key: value for key, value in base.items() if value is not None}  # unset: the YAML's, else the defaults
     if args.hyperparams:
         base["hyperparams"] = str(Path(args.hyperparams).resolve())

@@ -3,6 +3,7 @@ scenarios, and the recorded Figure 5 rollouts that its figures draw."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 from train.evaluation.evaluate import evaluate, evaluate_sets
@@ -23,14 +24,25 @@ def compare(
     optimum: str = "none",
     T_cons: list[float] | None = None,
     n_optimal: int | None = None,
+    on_rows: Callable[[list[dict[str, Any]]], None] | None = None,
 ) -> tuple[list[dict[str, Any]], dict[str, RolloutResult], tuple[str, ...]]:
     """Evaluate agents and controllers on each scenario set (at each T_con).
 
-    Returns the rows, every policy's recorded rollouts from Figure 5's starts, and those starts' labels.
+    Returns the rows, every policy's recorded rollouts from Figure 5's starts, and those starts' labels;
+    ``on_rows`` receives the rows so far after each scenario set (:func:`evaluate_sets`).
     """
     policies: dict[str, Any] = {**agents, **{name: name for name in controllers}}
     rows = evaluate_sets(
-        policies, scenarios, n, seed, env_kwargs or {}, progress, optimum=optimum, T_cons=T_cons, n_optimal=n_optimal
+        policies,
+        scenarios,
+        n,
+        seed,
+        env_kwargs or {},
+        progress,
+        optimum=optimum,
+        T_cons=T_cons,
+        n_optimal=n_optimal,
+        on_rows=on_rows,
     )
     trajectory_scenario = make_scenario(TRAJECTORY_SCENARIO, env_kwargs=env_kwargs)
     recorded = evaluate(policies, trajectory_scenario, record=True)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 from baselines.expert import ExpertPolicy
@@ -61,6 +62,7 @@ def evaluate_sets(
     optimum: str = "none",
     T_cons: list[float] | None = None,
     n_optimal: int | None = None,
+    on_rows: Callable[[list[dict[str, Any]]], None] | None = None,
 ) -> list[dict[str, Any]]:
     """Evaluate policies on named scenario sets, at each prescribed time of ``T_cons`` (default: the set's own).
 
@@ -69,6 +71,7 @@ def evaluate_sets(
 
     Returns one row per (scenario, T_con, policy): the keys ``scenario``, ``T_con``, ``policy``, those
     of :meth:`RolloutResult.summary`, and ``optimum_note``, why the first episode without an optimum has none.
+    ``on_rows`` receives the rows so far after each (scenario, T_con): what an interrupted command still reports.
     """
     rows = []
     for name in scenarios:
@@ -82,6 +85,8 @@ def evaluate_sets(
                 T_row = float("nan") if scenario.T_cons is not None else result.params.T_con  # nan: per episode
                 rows.append({"scenario": name, "T_con": T_row, "policy": label, **result.summary(),
                              "optimum_note": note})  # fmt: skip
+            if on_rows is not None:
+                on_rows(list(rows))
     return rows
 
 

@@ -5,7 +5,10 @@ For each episode of a scenario set, :func:`optimal_energies` solves the minimum-
 the goal by T_con, and caches the energy on disk, keyed by the start in the goal's frame, T_con, dt
 and the limits, so that a second ``evaluate`` or ``compare`` does not solve again.
 
-The cache lives in ``$DWR_GYM_CACHE`` (default ``~/.cache/dwr-gym``); delete it to solve afresh.
+The cache is written as the optima are solved, a few at a time (an interrupted command keeps what it solved), and
+merged under a file lock with an atomic replace, so two commands may solve and cache at once: each keeps the
+other's optima and skips those the other solved first. It lives in ``$DWR_GYM_CACHE`` (default
+``~/.cache/dwr-gym``); delete it to solve afresh.
 """
 
 from __future__ import annotations
@@ -16,7 +19,9 @@ import math
 import multiprocessing
 import os
 import sys
+from collections.abc import Iterator
 from concurrent.futures import ProcessPoolExecutor
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -29,6 +34,8 @@ from dwr_gym.params import EnvParams
 #: Bump when the problem or the solver settings change, so that stale optima are not reused.
 CACHE_VERSION = 2
 OPTIMA = ("pose", "position", "none")
+BATCH_PER_WORKER = 8
+"""Plans per solver process between two writes of the cache: a few seconds of work, so an interruption loses little."""
 
 
 def cache_dir() -> Path:
@@ -87,58 +94,125 @@ def optimal_energies(
 
     Returns the energies (N,) and the messages of the episodes without an optimum (infeasible T_con
     or an IPOPT failure), whose energy is NaN. Solved in ``workers`` processes (0: every core, at
-    most 8) and cached on disk.
+    most 8) and cached on disk as they are solved, a few at a time; two processes may share the cache.
     """
     local = goal_frame_starts(starts, goals)
     path = _cache_file(params, heading)
-    try:
-        cache: dict[str, float | str] = json.loads(path.read_text())
-    except (OSError, ValueError):
-        cache = {}
+    cache = _read_cache(path)
     T_cons = np.full(len(local), params.T_con) if T_cons is None else np.asarray(T_cons, dtype=np.float64)
     keys = [_start_key(s, T) for s, T in zip(local, T_cons, strict=True)]
     missing = sorted({k: i for i, k in enumerate(keys) if k not in cache}.values())
     if missing:
-        jobs = [(tuple(map(float, local[i])), float(T_cons[i]), params.dt, params.u_max, params.omega_max, heading)
-                for i in missing]  # fmt: skip
-        results = _map(jobs, workers, progress, description)
-        cache.update({keys[i]: result for i, result in zip(missing, results, strict=True)})
-        try:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            temporary = path.with_suffix(f".{os.getpid()}.tmp")
-            temporary.write_text(json.dumps(cache))
-            os.replace(temporary, path)
-        except OSError as error:  # a read-only home: the optimum is still returned, just not kept
-            print(f"warning: could not cache optimal energies in {path.parent}: {error}", file=sys.stderr)
+        jobs = {keys[i]: (tuple(map(float, local[i])), float(T_cons[i]), params.dt, params.u_max, params.omega_max,
+                          heading) for i in missing}  # fmt: skip
+        cache.update(_solve_and_cache(jobs, path, workers, progress, description))
     values = [cache[k] for k in keys]
     energies = np.array([v if isinstance(v, float) else math.nan for v in values])
     failures = [f"episode {i}: {v}" for i, v in enumerate(values) if not isinstance(v, float)]
     return energies, failures
 
 
-def _map(jobs: list[Any], workers: int, progress: bool, description: str) -> list[float | str]:
+def _read_cache(path: Path) -> dict[str, float | str]:
+    try:
+        return dict(json.loads(path.read_text()))
+    except (OSError, ValueError, TypeError):
+        return {}
+
+
+@contextmanager
+def _locked(path: Path) -> Iterator[None]:
+    """An exclusive lock of the cache file ``path`` between processes (POSIX ``flock`` on a ``.lock`` beside it;
+    where there is none, the atomic replace alone: two processes writing at once may then lose one's optima)."""
+    try:
+        import fcntl
+    except ImportError:
+        yield
+        return
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.with_suffix(".lock").open("a") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
+
+
+def _merge_into_cache(path: Path, found: dict[str, float | str]) -> dict[str, float | str]:
+    """Add ``found`` to the cache file, reading, merging and replacing it atomically under the lock, so that two
+    processes writing at once both keep what they solved. Returns the merged cache (what others solved too)."""
+    with _locked(path):
+        cache = _read_cache(path)
+        cache.update(found)
+        temporary = path.with_suffix(f".{os.getpid()}.tmp")
+        temporary.write_text(json.dumps(cache))
+        os.replace(temporary, path)
+    return cache
+
+
+def _solve_and_cache(
+    jobs: dict[str, Any], path: Path, workers: int, progress: bool, description: str
+) -> dict[str, float | str]:
+    """Solve ``jobs`` (by cache key) in batches of a few seconds' work, merging each batch into the cache file as it
+    ends, and skipping what another process cached meanwhile; an interruption (Ctrl-C) keeps every optimum solved
+    before it. Returns the results by key."""
     workers = workers or min(os.cpu_count() or 1, 8)
     bar: Any = None
     if progress:
         from train.progress import Progress
 
         bar = Progress(total=len(jobs), desc=description, unit="plan", leave=False)
-    results: list[float | str] = []
-    if workers <= 1 or len(jobs) < 4:
-        for job in jobs:
-            results.append(_solve_energy(job))
+    found: dict[str, float | str] = {}
+    pending: dict[str, float | str] = {}
+    pool: ProcessPoolExecutor | None = None
+    warned = False
+
+    def flush() -> None:
+        nonlocal warned
+        if not pending:
+            return
+        try:
+            known = _merge_into_cache(path, pending)
+        except OSError as error:  # a read-only home: the optima are still returned, just not kept
+            if not warned:
+                print(f"warning: could not cache optimal energies in {path.parent}: {error}", file=sys.stderr)
+            warned, known = True, {}
+        found.update(pending)
+        pending.clear()
+        for key in [key for key in todo if key in known]:  # solved by another process meanwhile
+            found[key] = known[key]
+            todo.remove(key)
             if bar is not None:
                 bar.update()
-    else:
-        method = "fork" if sys.platform.startswith("linux") else "spawn"
-        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(method)) as pool:
-            for result in pool.map(_solve_energy, jobs, chunksize=max(1, min(16, len(jobs) // (4 * workers)))):
-                results.append(result)
+
+    todo = list(jobs)
+    try:
+        if workers > 1 and len(jobs) >= 4:
+            method = "fork" if sys.platform.startswith("linux") else "spawn"
+            pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(method),
+                                       initializer=_ignore_interrupts)  # fmt: skip
+        while todo:
+            batch, todo = todo[: BATCH_PER_WORKER * workers], todo[BATCH_PER_WORKER * workers :]
+            solved = map(_solve_energy, (jobs[k] for k in batch)) if pool is None else pool.map(
+                _solve_energy, (jobs[k] for k in batch))  # fmt: skip
+            for key, result in zip(batch, solved, strict=True):
+                pending[key] = result
                 if bar is not None:
                     bar.update()
-    if bar is not None:
-        bar.close()
-    return results
+            flush()
+    finally:
+        flush()  # also on Ctrl-C: what was solved is kept
+        if pool is not None:
+            pool.shutdown(wait=False, cancel_futures=True)
+        if bar is not None:
+            bar.close()
+    return found
+
+
+def _ignore_interrupts() -> None:
+    """Solver processes leave Ctrl-C to the parent, which keeps what they solved and stops them."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 __all__ = ["OPTIMA", "cache_dir", "casadi_available", "goal_frame_starts", "optimal_energies"]

@@ -88,6 +88,8 @@ class DaggerConfig:
     """If set (e.g. "pt-astolfi"), the trained network hands over to this analytic law for the finish
     (train.learning.handover.HandoverPolicy), with the thresholds of HANDOVER_GRID that :func:`select_handover` chooses
     on the evaluation starts (not a benchmark's)."""
+    threads: int = 1
+    """torch threads while it runs (restored afterwards; train.threads)."""
 
 
 def _solve(job: tuple[tuple[float, float, float], float, float, float, float, int]) -> Any:
@@ -308,7 +310,15 @@ def select_handover(model: Any, config: DaggerConfig, params: EnvParams) -> tupl
 
 
 def run(config: DaggerConfig, run_dir: Path, command: list[str]) -> Path:
-    """Collect, clone, run the DAgger rounds, save model.zip, config.yaml and evaluations.csv in ``run_dir``."""
+    """Collect, clone, run the DAgger rounds, save model.zip, config.yaml and evaluations.csv in ``run_dir``.
+    torch runs on ``config.threads`` threads meanwhile; the caller's count is restored afterwards."""
+    from train.threads import torch_threads
+
+    with torch_threads(config.threads):
+        return _run(config, run_dir, command)
+
+
+def _run(config: DaggerConfig, run_dir: Path, command: list[str]) -> Path:
     import csv
 
     import torch
@@ -322,7 +332,6 @@ def run(config: DaggerConfig, run_dir: Path, command: list[str]) -> Path:
         raise SystemExit(f"--run-dir {str(run_dir)!r} already holds a trained model: choose another")
     run_dir.mkdir(parents=True, exist_ok=True)
     torch.manual_seed(config.seed)
-    torch.set_num_threads(1)
     params = EnvParams.from_kwargs(**env_keywords(config.env_id, config.env_kwargs))
     rng = np.random.default_rng(config.seed)
     began = time.time()

@@ -50,6 +50,7 @@ class ImitationConfig:
     eval_episodes: int = option(200, "size of the fixed random scenario set of the learning curve")
     eval_seed: int = option(12345, "seed of that scenario set (kept apart from the training seed)")
     eval_every: int = option(10, "evaluate every this many epochs")
+    threads: int = option(1, "torch threads while it runs (restored afterwards)")
 
 
 def env_kwargs(config: ImitationConfig) -> dict[str, Any]:
@@ -108,7 +109,15 @@ def record_demonstrations(
 
 
 def imitate(config: ImitationConfig, run_dir: Path, progress: bool = True) -> Path:
-    """Record demonstrations, clone them into a PPO policy, save model.zip, config.yaml and evaluations.csv."""
+    """Record demonstrations, clone them into a PPO policy, save model.zip, config.yaml and evaluations.csv.
+    torch runs on ``config.threads`` threads meanwhile; the caller's count is restored afterwards."""
+    from train.threads import torch_threads
+
+    with torch_threads(config.threads):
+        return _imitate(config, run_dir, progress)
+
+
+def _imitate(config: ImitationConfig, run_dir: Path, progress: bool) -> Path:
     import torch
     import yaml
     from stable_baselines3 import PPO

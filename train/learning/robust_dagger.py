@@ -84,6 +84,8 @@ class RobustDaggerConfig:
     env_kwargs: dict[str, Any] = field(default_factory=dict)
     distribution: dict[str, Any] = field(default_factory=dict)
     """Keywords of the DisturbanceDistribution (its defaults where left out)."""
+    threads: int = 1
+    """torch threads while it runs (restored afterwards; train.threads)."""
 
 
 def student(model: Any, params: EnvParams) -> Any:
@@ -179,7 +181,15 @@ def evaluate(policy: Any, params: EnvParams, config: RobustDaggerConfig) -> dict
 
 
 def run(config: RobustDaggerConfig, run_dir: Path, command: list[str]) -> Path:
-    """Warm start, DAgger rounds under disturbances, the hand-over; save model.zip, config.yaml, evaluations.csv."""
+    """Warm start, DAgger rounds under disturbances, the hand-over; save model.zip, config.yaml, evaluations.csv.
+    torch runs on ``config.threads`` threads meanwhile; the caller's count is restored afterwards."""
+    from train.threads import torch_threads
+
+    with torch_threads(config.threads):
+        return _run(config, run_dir, command)
+
+
+def _run(config: RobustDaggerConfig, run_dir: Path, command: list[str]) -> Path:
     import torch
     from stable_baselines3 import PPO
 
@@ -190,7 +200,6 @@ def run(config: RobustDaggerConfig, run_dir: Path, command: list[str]) -> Path:
     DisturbanceDistribution(**config.distribution)  # a bad keyword fails here, before any work
     run_dir.mkdir(parents=True, exist_ok=True)
     torch.manual_seed(config.seed)
-    torch.set_num_threads(1)
     params = EnvParams.from_kwargs(**env_keywords(config.env_id, config.env_kwargs))
     rng = np.random.default_rng(config.seed)
     began = time.time()

@@ -7,6 +7,7 @@ evaluation on a fixed seeded scenario set, checkpoints that resume bit for bit, 
 from __future__ import annotations
 
 import csv
+import math
 import sys
 import time
 from collections.abc import Callable
@@ -37,6 +38,30 @@ from train.learning.runs import (
 
 EVAL_FIELDS = ("timesteps", "wall_time", "success_rate", "arrival_time_mean", "final_heading_error_mean",
                "energy_mean", "return_mean", "final_distance_mean")  # fmt: skip
+
+
+def task_score(row: dict[str, Any]) -> tuple[float, float, float]:
+    """The order in which evaluations rank, highest best: the share of episodes in time (``success_rate``) first;
+    among equal shares the lower mean energy, when any episode arrives in time (a policy that arrives nowhere
+    would win on energy by standing still); then the higher return."""
+    success, energy, ret = (float(row.get(key, math.nan)) for key in ("success_rate", "energy_mean", "return_mean"))
+    finite = [v if math.isfinite(v) else -math.inf for v in (success, -energy if success > 0 else 0.0, ret)]
+    return finite[0], finite[1], finite[2]
+
+
+def saved_best(state: dict[str, Any], csv_path: Path) -> tuple[float, float, float]:
+    """The score of the run's best_model.zip: ``best`` of run_state.json, or, in a run saved before the task score
+    (``best_score``, a return), the score of the evaluation whose return that was."""
+    if "best" in state:
+        return task_score(state["best"])
+    best_return = float(state.get("best_score", -math.inf))
+    if math.isfinite(best_return) and csv_path.is_file():
+        with csv_path.open(newline="") as handle:
+            rows = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(handle)]
+        matching = [row for row in rows if math.isclose(row["return_mean"], best_return, rel_tol=1e-9, abs_tol=1e-12)]
+        if matching:
+            return task_score(matching[-1])
+    return -math.inf, -math.inf, best_return
 
 
 def make_expert(config: TrainConfig) -> Any:
@@ -102,11 +127,12 @@ def make_run_callback(
     class RunCallback(BaseCallback):
         def __init__(self) -> None:
             super().__init__()
-            self.best = float(state.get("best_score", -np.inf))
+            self.csv_path = run_dir / EVAL_FILE
+            self.best = saved_best(state, self.csv_path)
+            self.best_row: dict[str, float] = dict(state.get("best", {}))
             self.start = time.time() - float(state.get("wall_time", 0.0))
             self.last_eval = int(state.get("last_eval", -1))
             self.last_checkpoint = int(state.get("timesteps", 0))
-            self.csv_path = run_dir / EVAL_FILE
             self.interrupt_requested = False
             self.stop_now = False
 
@@ -115,13 +141,13 @@ def make_run_callback(
                 with self.csv_path.open("w", newline="") as handle:
                     csv.writer(handle).writerow(EVAL_FIELDS)
             if self.last_eval < 0:
-                self._evaluate()
+                self.evaluate()
 
         def _on_step(self) -> bool:
             if self.stop_now:  # a second Ctrl-C: stop after this env step, between steps where the state is whole
                 return False
             if self.num_timesteps // config.eval_freq > max(self.last_eval, 0) // config.eval_freq:
-                self._evaluate()
+                self.evaluate()
             return True
 
         def _on_rollout_start(self) -> None:
@@ -151,10 +177,12 @@ def make_run_callback(
                 pickle.dump({"timesteps": steps, "env": env_snapshot(env), "generators": generators}, handle)
             self.model.save(run_dir / MODEL_FILE)
             self.last_checkpoint = steps
-            write_state(run_dir, {"timesteps": steps, "wall_time": self.wall_time(), "best_score": self.best,
-                                  "last_eval": self.last_eval, "finished": finished})  # fmt: skip
+            write_state(run_dir, {"timesteps": steps, "wall_time": self.wall_time(), "best": self.best_row,
+                                  "best_score": self.best[2], "last_eval": self.last_eval,
+                                  "finished": finished})  # fmt: skip  # best_score: the best's return, as before
 
-        def _evaluate(self) -> None:
+        def evaluate(self) -> None:
+            """Evaluate now; best_model.zip is replaced where :func:`task_score` ranks this model higher."""
             summary = rollout(as_policy(self.model, config), params, scenario.starts, scenario.goals,
                               T_con=scenario.T_cons, env_kwargs=scenario.env_kwargs).summary()  # fmt: skip
             row = {"timesteps": self.num_timesteps, "wall_time": self.wall_time(),
@@ -164,9 +192,9 @@ def make_run_callback(
             for key in EVAL_FIELDS[2:]:
                 self.logger.record(f"eval/{key}", row[key])
             self.last_eval = self.num_timesteps
-            score = summary["return_mean"]
+            score = task_score(row)
             if score > self.best:
-                self.best = score
+                self.best, self.best_row = score, {k: row[k] for k in ("timesteps", *EVAL_FIELDS[2:])}
                 self.model.save(run_dir / "best_model.zip")
             if on_evaluation is not None:
                 on_evaluation(row)
@@ -238,10 +266,25 @@ def train(
     """Train as configured; returns the run directory. ``on_evaluation`` receives each periodic
     evaluation as a dict of EVAL_FIELDS (e.g. to report it to a tuner).
 
+    torch runs on ``config.threads`` threads (default 1) while it trains; the caller's count is restored
+    afterwards (:mod:`train.threads`).
+
     Ctrl-C saves a checkpoint at the next rollout boundary; a second Ctrl-C stops after the current env
     step and saves what there is (a third stops at once, saving nothing more). Then it prints the command
     that resumes and raises KeyboardInterrupt.
     """
+    from train.threads import torch_threads
+
+    config.validate()
+    with torch_threads(config.threads):
+        return _train(config, command, on_evaluation)
+
+
+def _train(
+    config: TrainConfig,
+    command: list[str] | None,
+    on_evaluation: Callable[[dict[str, Any]], None] | None,
+) -> Path:
     import pickle
     import random
     import signal
@@ -249,7 +292,6 @@ def train(
 
     import torch
 
-    config.validate()
     fill_budget(config)
     run_dir, lock = prepare_run_dir(config)
     try:
@@ -322,6 +364,8 @@ def train(
             env.close()
         if bar is not None:
             bar.close()
+        if callback.last_eval != model.num_timesteps:  # a run shorter than --eval-freq, or ending between two
+            callback.evaluate()
         callback.checkpoint(finished=True)
     finally:
         lock.release()

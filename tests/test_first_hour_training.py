@@ -1,0 +1,158 @@
+"""The first hour of a new user (issue 35), training and comparing: a short run that evaluates at its end, the best
+model chosen by the task, and the smaller frictions of evaluate, compare and train."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from pathlib import Path
+
+import pytest
+
+from train.learning.config import TrainConfig
+from train.learning.hyperparams import resolve_hyperparams
+from train.learning.training import saved_best, task_score, train
+
+
+def tiny(run_dir: Path, total: int, eval_freq: int) -> TrainConfig:
+    config = TrainConfig(total_timesteps=total, num_envs=4, eval_freq=eval_freq, eval_episodes=4,
+                         run_dir=str(run_dir), progress=False)  # fmt: skip
+    resolve_hyperparams(config, set())
+    config.algo_kwargs.update(n_steps=32, batch_size=64)  # a rollout is 128 steps
+    return config
+
+
+def evaluated_steps(run_dir: Path) -> list[int]:
+    with (run_dir / "evaluations.csv").open() as handle:
+        return [int(row["timesteps"]) for row in csv.DictReader(handle)]
+
+
+# 1. A run shorter than --eval-freq (the README's example was) evaluates at its end too, so best_model.zip is trained.
+
+
+def test_a_run_shorter_than_the_evaluation_period_is_evaluated_at_its_last_step(tmp_path: Path) -> None:
+    run_dir = train(tiny(tmp_path / "run", 256, eval_freq=10**6), command=["test"])
+    assert evaluated_steps(run_dir) == [0, 256]
+    state = json.loads((run_dir / "run_state.json").read_text())
+    assert state["last_eval"] == 256 and state["finished"]
+    assert (run_dir / "best_model.zip").is_file()
+
+
+def test_a_run_ending_on_an_evaluation_is_not_evaluated_twice(tmp_path: Path) -> None:
+    run_dir = train(tiny(tmp_path / "run", 256, eval_freq=128), command=["test"])
+    assert evaluated_steps(run_dir) == [0, 128, 256]
+
+
+# 2. best_model.zip is chosen by the task: the share in time first, then the lower energy, then the return.
+
+
+def row(success: float, energy: float, ret: float) -> dict[str, float]:
+    return {"success_rate": success, "energy_mean": energy, "return_mean": ret}
+
+
+def test_the_best_model_is_the_one_that_arrives_in_time_most_not_the_one_with_the_highest_return() -> None:
+    assert task_score(row(0.56, 3.0, -14.96)) > task_score(row(0.09, 1.0, -13.17))  # issue 35's 600 k-step run
+    assert task_score(row(0.5, 2.0, -20.0)) > task_score(row(0.5, 2.5, -10.0))  # equal share: the lower energy
+    assert task_score(row(0.5, 2.0, -10.0)) > task_score(row(0.5, 2.0, -20.0))  # then the return
+    # arriving nowhere, standing still would be the cheapest: the return decides
+    assert task_score(row(0.0, 9.0, -10.0)) > task_score(row(0.0, 0.0, -20.0))
+    assert task_score(row(0.1, math.nan, -20.0)) < task_score(row(0.1, 5.0, -20.0))
+
+
+def test_a_run_saved_with_a_return_as_its_best_score_resumes_with_that_evaluations_task_score(tmp_path: Path) -> None:
+    evaluations = tmp_path / "evaluations.csv"
+    with evaluations.open("w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=["timesteps", "success_rate", "energy_mean", "return_mean"])
+        writer.writeheader()
+        writer.writerows([{"timesteps": 0, **row(0.0, 0.5, -20.0)}, {"timesteps": 200, **row(0.09, 1.0, -13.17)},
+                          {"timesteps": 400, **row(0.56, 3.0, -14.96)}])  # fmt: skip
+    older = saved_best({"best_score": -13.17}, evaluations)  # run_state.json before issue 35
+    assert older == task_score(row(0.09, 1.0, -13.17))
+    assert saved_best({"best_score": -13.17, "best": row(0.56, 3.0, -14.96)}, evaluations) > older
+    assert saved_best({}, evaluations) < task_score(row(0.0, 0.0, -1e9))
+
+
+# 3. The optimum cache keeps every optimum solved, even when interrupted, and two commands may share it.
+
+
+def test_the_optimum_cache_keeps_what_an_interrupted_command_solved(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+
+    import train.evaluation.optimum as optimum
+    from dwr_gym.params import EnvParams
+    from train.evaluation.scenarios import make_scenario
+
+    monkeypatch.setenv("DWR_GYM_CACHE", str(tmp_path))
+    params, scenario = EnvParams(), make_scenario("random", n=6, seed=3)
+    solved: list[object] = []
+
+    def interrupted_after_three(job: object) -> float:
+        if len(solved) == 3:
+            raise KeyboardInterrupt
+        solved.append(job)
+        return float(len(solved))
+
+    monkeypatch.setattr(optimum, "_solve_energy", interrupted_after_three)
+    with pytest.raises(KeyboardInterrupt):
+        optimum.optimal_energies(params, scenario.starts, scenario.goals, workers=1)
+    (cache_file,) = tmp_path.glob("optimal-energy-*.json")
+    assert sorted(json.loads(cache_file.read_text()).values()) == [1.0, 2.0, 3.0]
+
+    again: list[object] = []
+    monkeypatch.setattr(optimum, "_solve_energy", lambda job: again.append(job) or 7.0)
+    energies, _ = optimum.optimal_energies(params, scenario.starts, scenario.goals, workers=1)
+    assert len(again) == 3 and sorted(energies) == [1.0, 2.0, 3.0, 7.0, 7.0, 7.0]
+
+
+def test_two_commands_caching_at_once_keep_each_others_optima(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    import train.evaluation.optimum as optimum
+    from dwr_gym.params import EnvParams
+    from train.evaluation.scenarios import make_scenario
+
+    monkeypatch.setenv("DWR_GYM_CACHE", str(tmp_path))
+    params, scenario = EnvParams(), make_scenario("random", n=4, seed=5)
+    path = optimum._cache_file(params, True)
+
+    written: list[str] = []
+
+    def solved_while_another_writes(job: object) -> float:
+        written.append(f"another command's {len(written)}")
+        optimum._merge_into_cache(path, {written[-1]: 0.5})
+        return 2.0
+
+    monkeypatch.setattr(optimum, "_solve_energy", solved_while_another_writes)
+    optimum.optimal_energies(params, scenario.starts, scenario.goals, workers=1)
+    cache = json.loads(path.read_text())
+    assert set(written) < set(cache) and len(written) == 4 and list(cache.values()).count(2.0) == 4
+
+
+# 3. Ctrl-C in evaluate and compare: one line, the finished sets' rows written, exit code 130.
+
+
+@pytest.mark.parametrize("command, stem", [("evaluate", "evaluation"), ("compare", "comparison")])
+def test_ctrl_c_in_evaluate_and_compare_writes_the_finished_sets_and_says_so_in_one_line(
+    command: str, stem: str, monkeypatch: pytest.MonkeyPatch, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import train.evaluation.evaluate as evaluate
+    from train.cli import main
+
+    finished = evaluate.evaluate_subset
+    calls: list[str] = []
+
+    def interrupted_on_the_second_set(policies: dict, scenario: object, *args: object) -> object:
+        calls.append(scenario.name)  # type: ignore[attr-defined]
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return finished(policies, scenario, *args)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(evaluate, "evaluate_subset", interrupted_on_the_second_set)
+    out = tmp_path / "out"
+    code = main([command, "--controllers", "ptc", "pt-astolfi", "--scenarios", "paper-fig5", "random", "--n", "4",
+                 "--optimum", "none", "--no-progress", "--out", str(out), "--agents", "train/pretrained/ppo"])  # fmt: skip
+    assert code == 130
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1].startswith("interrupted: wrote the 3 rows finished so far") and "Traceback" not in "".join(err)
+    rows = json.loads((out / f"{stem}.json").read_text())
+    assert {row["scenario"] for row in rows} == {"paper-fig5"} and len(rows) == 3
