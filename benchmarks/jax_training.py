@@ -56,17 +56,22 @@ CRITERIA = {"in_time": 0.99, "energy_ratio": 1.5, "final_heading": 0.1}
 TIME_GOAL_S = 300.0
 
 
-def setup(overrides: dict[str, Any] | None = None) -> tuple[Any, Any, Any]:
-    """(config, settings, JaxPPO) of `dwr-gym train --backend jax` with the shipped PPO defaults."""
+def make_config(overrides: dict[str, Any] | None = None) -> Any:
+    """The TrainConfig of `dwr-gym train --backend jax` with the shipped PPO defaults and ``overrides``."""
     from train.learning.config import TrainConfig
     from train.learning.hyperparams import resolve_hyperparams
+
+    config = TrainConfig(backend="jax", progress=False, hyperparam_overrides=dict(overrides or {}))
+    config.validate()
+    return resolve_hyperparams(config, set())
+
+
+def setup(config: Any) -> tuple[Any, Any, Any]:
+    """(config, settings, JaxPPO) of ``config``."""
     from train.learning.jax_policy import PPOSettings
     from train.learning.jax_ppo import JaxPPO
     from train.learning.jax_training import make_jax_env
 
-    config = TrainConfig(backend="jax", progress=False, hyperparam_overrides=dict(overrides or {}))
-    config.validate()
-    config = resolve_hyperparams(config, set())
     settings = PPOSettings.from_algo_kwargs(config.algo_kwargs, int(config.num_envs or 0))
     env, env_params = make_jax_env(config)
     return config, settings, JaxPPO(settings, env, env_params)
@@ -100,7 +105,7 @@ def speed(threads: int, repeats: int, updates: int, seeds: int) -> dict[str, Any
     from train.learning.training import make_training_env
 
     torch.set_num_threads(threads)
-    config, settings, ppo = setup()
+    config, settings, ppo = setup(make_config())
     per_update = settings.steps_per_update
     total = 10**9
     sb3 = PPO("MlpPolicy", make_training_env(config), seed=0, device="cpu", verbose=0,
@@ -153,18 +158,19 @@ def meets(row: dict[str, Any]) -> bool:
 def learn(seeds: int, eval_every: int, budget_s: float, overrides: dict[str, Any]) -> dict[str, Any]:
     """Train ``seeds`` seeds together under vmap, evaluating every ``eval_every`` updates, until all meet the
     criteria or ``budget_s`` seconds of wall clock pass."""
-    import jax
-    import numpy as np
-
     from train.evaluation.evaluate import evaluate
     from train.evaluation.scenarios import make_scenario
+
+    config = make_config(overrides)
+    scenario = make_scenario("random", n=config.eval_episodes, seed=config.eval_seed, env_kwargs=config.env_keywords())
+    evaluate({"ptc": "ptc"}, scenario, optimum="pose")  # the optimum's energies, solved (or cached) before jax starts
+    import jax
+
     from train.learning.jax_export import SB3Exporter
     from train.learning.jax_training import export_runner
     from train.learning.training import make_training_env
 
-    config, settings, ppo = setup(overrides)
-    scenario = make_scenario("random", n=config.eval_episodes, seed=config.eval_seed, env_kwargs=config.env_keywords())
-    evaluate({"ptc": "ptc"}, scenario, optimum="pose")  # the optimum's energies, solved (or cached) before timing
+    config, settings, ppo = setup(config)
     exporter = SB3Exporter(make_training_env(config), config.algo_kwargs)
     keys = jax.random.split(jax.random.PRNGKey(config.seed), seeds)
     wall0, cpu0 = time.perf_counter(), time.process_time()
@@ -254,7 +260,9 @@ def write_docs() -> None:
     text = DOCS.read_text()
     for name, (file, render) in BLOCKS.items():
         if (OUT / file).is_file():
-            text = with_block(text, name, "\n```\n" + "\n".join(render(json.loads((OUT / file).read_text()))) + "\n```\n")
+            text = with_block(
+                text, name, "\n```\n" + "\n".join(render(json.loads((OUT / file).read_text()))) + "\n```\n"
+            )
     DOCS.write_text(text)
     print(f"wrote {DOCS}")
 
@@ -281,7 +289,10 @@ def main() -> None:
         if getattr(args, name) < 1:
             parser.error(f"--{name.replace('_', '-')}={getattr(args, name)} is invalid: expected a positive integer")
     if args.what == "speed":
-        data, file = speed(args.threads, args.repeats, args.updates, args.seeds), f"training_speed_{args.threads}thread.json"
+        data, file = (
+            speed(args.threads, args.repeats, args.updates, args.seeds),
+            f"training_speed_{args.threads}thread.json",
+        )
         lines = render_speed(data)
     else:
         from train.learning.hyperparams import parse_overrides

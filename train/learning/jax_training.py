@@ -11,7 +11,6 @@ same updates, so the same weights, as the uninterrupted run; tests/test_jax_trai
 
 from __future__ import annotations
 
-import math
 import os
 import pickle
 import sys
@@ -40,9 +39,18 @@ def check_jax_config(config: TrainConfig) -> None:
     """Raise ConfigError (one line) for what --backend jax does not train."""
     if config.algo != "ppo":
         raise ConfigError(f"--algo {config.algo!r} is invalid with --backend jax: the jitted trainer is PPO only; "
-                          "use --algo ppo, or --backend sb3 for SAC and TD3")  # fmt: skip
+                          "use --algo ppo, or --backend sb3 for the others")  # fmt: skip
     if config.residual:
         raise ConfigError("--residual is invalid with --backend jax: residual agents train with --backend sb3")
+    # Options of the SB3 path's env wrappers (train.learning.wrappers), where this TrainConfig has them.
+    if getattr(config, "normalize_obs", False):
+        raise ConfigError("--normalize-obs is invalid with --backend jax: give --hyperparams "
+                          "'policy_kwargs=dict(net_arch=[64, 64], normalize_observations=True)' (folded into the "
+                          "exported weights)")  # fmt: skip
+    for name, inactive in (("normalize_reward", False), ("action_repeat", 1)):
+        if getattr(config, name, inactive) != inactive:
+            flag = "--" + name.replace("_", "-")
+            raise ConfigError(f"{flag} is invalid with --backend jax: it is an option of --backend sb3 only")
 
 
 def configure_threads(threads: int | None) -> None:
@@ -108,12 +116,6 @@ def load_runner(path: Path, template: Any) -> tuple[Any, int]:
     return flax.serialization.from_bytes(template, saved["runner"]), int(saved["timesteps"])
 
 
-def is_better(summary: dict[str, float], best: float) -> tuple[bool, float]:
-    """Whether an evaluation beats the best so far (the SB3 path's rule: the mean return), and its score."""
-    score = float(summary["return_mean"])
-    return score > best, score
-
-
 class JaxRun:
     """One run of the jitted PPO in its run directory: evaluations, checkpoints, the run state."""
 
@@ -126,7 +128,10 @@ class JaxRun:
         self.params = config.env_params()
         self.scenario = make_scenario("random", n=config.eval_episodes, seed=config.eval_seed,
                                       env_kwargs=config.env_keywords())  # fmt: skip
-        self.best = float(state.get("best_score", -math.inf))
+        from train.learning.training import saved_best
+
+        self.best = saved_best(state, run_dir / EVAL_FILE)
+        self.best_row: dict[str, float] = dict(state.get("best", {}))
         self.start = time.time() - float(state.get("wall_time", 0.0))
         self.last_eval = int(state.get("last_eval", -1))
         self.last_checkpoint = int(state.get("timesteps", 0))
@@ -140,7 +145,7 @@ class JaxRun:
         import csv
 
         from train.evaluation.rollout import rollout
-        from train.learning.training import EVAL_FIELDS
+        from train.learning.training import EVAL_FIELDS, task_score
 
         if not self.csv_path.exists():
             with self.csv_path.open("w", newline="") as handle:
@@ -152,9 +157,9 @@ class JaxRun:
         with self.csv_path.open("a", newline="") as handle:
             csv.writer(handle).writerow([row[k] for k in EVAL_FIELDS])
         self.last_eval = steps
-        better, score = is_better(summary, self.best)
-        if better:
-            self.best = score
+        score = task_score(row)  # the SB3 path's rule: in time first, then lower energy, then return
+        if score > self.best:
+            self.best, self.best_row = score, {k: row[k] for k in ("timesteps", *EVAL_FIELDS[2:])}
             model.save(self.run_dir / "best_model.zip")
         if self.on_evaluation is not None:
             self.on_evaluation(row)
@@ -167,8 +172,9 @@ class JaxRun:
         save_runner(self.run_dir / RESUME_FILE, runner, steps)
         model.save(self.run_dir / MODEL_FILE)
         self.last_checkpoint = steps
-        write_state(self.run_dir, {"timesteps": steps, "wall_time": self.wall_time(), "best_score": self.best,
-                                   "last_eval": self.last_eval, "finished": finished, "backend": "jax"})  # fmt: skip
+        write_state(self.run_dir, {"timesteps": steps, "wall_time": self.wall_time(), "best": self.best_row,
+                                   "best_score": self.best[2], "last_eval": self.last_eval, "finished": finished,
+                                   "backend": "jax"})  # fmt: skip
 
 
 def train_jax(
@@ -178,11 +184,21 @@ def train_jax(
 ) -> Path:
     """Train as configured with the jitted PPO; returns the run directory (see :func:`train.learning.training.train`,
     whose contract this keeps). Ctrl-C saves at the end of the running chunk (at most one evaluation period);
-    a second Ctrl-C stops at once and saves the state of the last finished chunk."""
+    a second Ctrl-C stops at once and saves the state of the last finished chunk. torch (the evaluations) runs on
+    ``config.threads`` threads (default 1), XLA on as many where given, else on XLA's default."""
+    from train.threads import torch_threads
+
+    config.validate()
+    with torch_threads(config.threads):
+        return _train_jax(config, command, on_evaluation)
+
+
+def _train_jax(
+    config: TrainConfig, command: list[str] | None, on_evaluation: Callable[[dict[str, Any]], None] | None
+) -> Path:
     import signal
     import threading
 
-    config.validate()
     check_jax_config(config)
     configure_threads(config.threads)
     from train.learning.hyperparams import fill_budget, rollout_rounding, steps_to_run
@@ -234,7 +250,10 @@ def train_jax(
         try:
             if run.last_eval < 0:
                 run.evaluate(runner, steps)
+            time_limit = getattr(config, "time_limit", None)  # --time-limit, where this TrainConfig has it
             while steps < config.total_timesteps and not interrupts[0]:
+                if time_limit is not None and run.wall_time() >= time_limit:
+                    break
                 target = min((steps // config.eval_freq + 1) * config.eval_freq,
                              run.last_checkpoint + config.checkpoint_freq, config.total_timesteps)  # fmt: skip
                 n_updates = max(1, -(-(target - steps) // settings.steps_per_update))
@@ -248,6 +267,8 @@ def train_jax(
                     run.checkpoint(runner, steps)
             if interrupts[0]:
                 raise KeyboardInterrupt
+            if run.last_eval != steps:  # a run ending between two evaluations is evaluated at its last step
+                run.evaluate(runner, steps)
         except KeyboardInterrupt:
             if bar is not None:
                 bar.close()
