@@ -2,7 +2,7 @@
 
     nice -n 10 python benchmarks/jax_training.py speed --threads 1 --docs   # docs/jax/training_speed_1thread.json
     nice -n 10 python benchmarks/jax_training.py learn --docs               # docs/jax/time_to_criteria.json
-    python benchmarks/jax_training.py --render                              # docs/jax.md's blocks from the JSON
+    python benchmarks/jax_training.py --render                              # docs/jax-training.md's blocks from the JSON
 
 ``speed``: env steps per second including the updates, on DWRPointStabilization-v1 with the defaults of
 train/hyperparams/ppo.yml (256 robots, rollouts of 64 steps, 4 epochs over minibatches of 1024), in one process
@@ -50,7 +50,7 @@ from typing import Any  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 OUT = ROOT / "docs" / "jax"
-DOCS = ROOT / "docs" / "jax.md"
+DOCS = ROOT / "docs" / "jax-training.md"
 SPEED_GOALS = {"ratio_to_sb3": 10.0, "steps_per_second": 200_000.0, "vmap_ratio": 3.0}
 CRITERIA = {"in_time": 0.99, "energy_ratio": 1.5, "final_heading": 0.1}
 TIME_GOAL_S = 300.0
@@ -107,7 +107,7 @@ def speed(threads: int, repeats: int, updates: int, seeds: int) -> dict[str, Any
     torch.set_num_threads(threads)
     config, settings, ppo = setup(make_config())
     per_update = settings.steps_per_update
-    total = 10**9
+    total = 1e9
     sb3 = PPO("MlpPolicy", make_training_env(config), seed=0, device="cpu", verbose=0,
               **build_algo_kwargs(config.algo_kwargs))  # fmt: skip
     sb3.learn(per_update)  # warm-up: the first rollout's allocations
@@ -179,7 +179,7 @@ def learn(seeds: int, eval_every: int, budget_s: float, overrides: dict[str, Any
     reached: list[dict[str, Any] | None] = [None] * seeds
     compile_s = None
     while time.perf_counter() - wall0 < budget_s and not all(reached):
-        runners, _ = ppo.run_seeds(runners, eval_every, 10**9)
+        runners, _ = ppo.run_seeds(runners, eval_every, 1e9)
         jax.block_until_ready(runners)
         compile_s = compile_s or time.perf_counter() - wall0
         steps = int(runners.updates[0]) * settings.steps_per_update
@@ -254,15 +254,25 @@ BLOCKS = {"jax-training-speed": ("training_speed_1thread.json", render_speed),
           "jax-time-to-criteria": ("time_to_criteria.json", render_learn)}  # fmt: skip
 
 
+def rendered_block(name: str, data: dict[str, Any]) -> str:
+    """The docs block ``name`` rendered from its JSON ``data``."""
+    return "\n```\n" + "\n".join(BLOCKS[name][1](data)) + "\n```\n"
+
+
+def docs_block(name: str) -> str:
+    """The text between the markers of block ``name`` in the docs page."""
+    from train.reporting.doc_tables import block
+
+    return block(DOCS.read_text(), name)
+
+
 def write_docs() -> None:
     from train.reporting.doc_tables import with_block
 
     text = DOCS.read_text()
-    for name, (file, render) in BLOCKS.items():
+    for name, (file, _) in BLOCKS.items():
         if (OUT / file).is_file():
-            text = with_block(
-                text, name, "\n```\n" + "\n".join(render(json.loads((OUT / file).read_text()))) + "\n```\n"
-            )
+            text = with_block(text, name, rendered_block(name, json.loads((OUT / file).read_text())))
     DOCS.write_text(text)
     print(f"wrote {DOCS}")
 
@@ -277,8 +287,8 @@ def main() -> None:
     parser.add_argument("--eval-every", type=int, default=10, help="learn: updates between evaluations (default: 10)")
     parser.add_argument("--budget", type=float, default=1800.0, help="learn: wall-clock budget, s (default: 1800)")
     parser.add_argument("--hyperparams", nargs="*", default=[], metavar="KEY=VALUE", help="learn: overrides")
-    parser.add_argument("--docs", action="store_true", help="write docs/jax/*.json and docs/jax.md's blocks")
-    parser.add_argument("--render", action="store_true", help="only render docs/jax.md's blocks from the JSON")
+    parser.add_argument("--docs", action="store_true", help="write docs/jax/*.json and docs/jax-training.md's blocks")
+    parser.add_argument("--render", action="store_true", help="only render docs/jax-training.md's blocks from the JSON")
     args = parser.parse_args()
     if args.render:
         write_docs()

@@ -137,6 +137,14 @@ def test_backend_jax_refuses_other_algorithms(tmp_path: Path) -> None:
     assert "--algo 'sac' is invalid with --backend jax" in err
 
 
+def test_backend_jax_refuses_residual_agents_in_one_line() -> None:
+    from train.learning.jax_training import check_jax_config
+
+    with pytest.raises(ConfigError, match="^--residual is invalid with --backend jax: residual agents train with") as error:
+        check_jax_config(resolved(backend="jax", residual=True))
+    assert "\n" not in str(error.value)
+
+
 @pytest.mark.slow
 def test_cli_trains_resumes_bit_for_bit_and_evaluates(tmp_path: Path) -> None:
     from train.learning.agents import load_agent
@@ -199,3 +207,16 @@ def test_ctrl_c_keeps_the_last_model_and_says_how_to_resume(tmp_path: Path) -> N
     steps = read_state(run_dir)["timesteps"]
     assert steps > 0 and (run_dir / "model.zip").is_file()
     assert (run_dir / "checkpoints" / f"ppo_{steps}_steps.zip").is_file()
+
+
+def test_each_docs_block_is_what_the_benchmark_renders_from_its_json() -> None:
+    import importlib.util
+    import json
+
+    spec = importlib.util.spec_from_file_location("jax_training_benchmark", ROOT / "benchmarks" / "jax_training.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    written = [(name, module.OUT / file) for name, (file, _) in module.BLOCKS.items() if (module.OUT / file).is_file()]
+    for name, path in written:
+        assert module.docs_block(name) == module.rendered_block(name, json.loads(path.read_text())), name

@@ -257,7 +257,7 @@ def _train_jax(
                 target = min((steps // config.eval_freq + 1) * config.eval_freq,
                              run.last_checkpoint + config.checkpoint_freq, config.total_timesteps)  # fmt: skip
                 n_updates = max(1, -(-(target - steps) // settings.steps_per_update))
-                new_runner, _ = ppo.run(runner, n_updates, config.total_timesteps)
+                new_runner, _ = ppo.run(runner, n_updates, float(config.total_timesteps))
                 runner, steps = new_runner, int(new_runner.updates) * settings.steps_per_update
                 if bar is not None:
                     bar.update(n_updates * settings.steps_per_update)
