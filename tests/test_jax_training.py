@@ -140,7 +140,9 @@ def test_backend_jax_refuses_other_algorithms(tmp_path: Path) -> None:
 def test_backend_jax_refuses_residual_agents_in_one_line() -> None:
     from train.learning.jax_training import check_jax_config
 
-    with pytest.raises(ConfigError, match="^--residual is invalid with --backend jax: residual agents train with") as error:
+    with pytest.raises(
+        ConfigError, match=r"^--residual is invalid with --backend jax: residual agents train with"
+    ) as error:
         check_jax_config(resolved(backend="jax", residual=True))
     assert "\n" not in str(error.value)
 
