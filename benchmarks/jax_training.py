@@ -101,7 +101,7 @@ def speed(threads: int, repeats: int, updates: int, seeds: int) -> dict[str, Any
     import torch
     from stable_baselines3 import PPO
 
-    from train.learning.hyperparams import build_algo_kwargs
+    from train.learning.jax_export import sb3_policy_kwargs
     from train.learning.training import make_training_env
 
     torch.set_num_threads(threads)
@@ -109,7 +109,7 @@ def speed(threads: int, repeats: int, updates: int, seeds: int) -> dict[str, Any
     per_update = settings.steps_per_update
     total = 1e9
     sb3 = PPO("MlpPolicy", make_training_env(config), seed=0, device="cpu", verbose=0,
-              **build_algo_kwargs(config.algo_kwargs))  # fmt: skip
+              **sb3_policy_kwargs(config.algo_kwargs))  # fmt: skip
     sb3.learn(per_update)  # warm-up: the first rollout's allocations
     compile_s: dict[str, float] = {}
     (runner, _), compile_s["one_seed"] = timed(lambda: ppo.run(ppo.init(0), 1, total))
@@ -165,6 +165,7 @@ def learn(seeds: int, eval_every: int, budget_s: float, overrides: dict[str, Any
     scenario = make_scenario("random", n=config.eval_episodes, seed=config.eval_seed, env_kwargs=config.env_keywords())
     evaluate({"ptc": "ptc"}, scenario, optimum="pose")  # the optimum's energies, solved (or cached) before jax starts
     import jax
+    import numpy as np
 
     from train.learning.jax_export import SB3Exporter
     from train.learning.jax_training import export_runner
@@ -186,11 +187,16 @@ def learn(seeds: int, eval_every: int, budget_s: float, overrides: dict[str, Any
         for seed in range(seeds):
             one = jax.tree.map(lambda x, i=seed: x[i], runners)
             model = export_runner(exporter, ppo, one, steps)
-            summary = evaluate({"agent": model}, scenario, optimum="pose")["agent"].summary()
+            result = evaluate({"agent": model}, scenario, optimum="pose", record=True)["agent"]
+            summary, path = result.summary(), result.trajectory or {}
+            turning = float(np.sum(np.square(path["angular_velocity"])))
             row = {"steps": steps, "wall_s": round(time.perf_counter() - wall0, 1),
                    "cpu_s": round(time.process_time() - cpu0, 1), "in_time": summary["success_rate"],
                    "energy_ratio": None if math.isnan(summary["energy_ratio_mean"]) else summary["energy_ratio_mean"],
-                   "final_heading": summary["final_heading_error_mean"]}  # fmt: skip
+                   "final_heading": summary["final_heading_error_mean"], "energy": summary["energy_mean"],
+                   "optimal_energy": summary["optimal_energy_mean"],
+                   "arrival_fraction": summary["arrival_fraction_mean"],
+                   "turning_share": turning / max(turning + float(np.sum(np.square(path["linear_velocity"]))), 1e-12)}  # fmt: skip
             curves[seed].append(row)
             if reached[seed] is None and meets(row):
                 reached[seed] = row
@@ -245,6 +251,11 @@ def render_learn(data: dict[str, Any]) -> list[str]:
         steps = f"{row['steps']:,}" if row else f"not by {last['steps']:,}"
         lines.append(f"{seed:<6}{steps:>17}{last['wall_s']:>9.0f}{last['cpu_s']:>9.0f}{last['in_time']:>9.0%}"
                      f"{last['energy_ratio'] or math.nan:>7.2f}{last['final_heading']:>9.3f}")  # fmt: skip
+    last = [curve[-1] for curve in data["curves"]]
+    lines += ["", "at the last evaluation, median over seeds: energy "
+              f"{statistics.median(r['energy'] for r in last):.2f} (optimum {last[0]['optimal_energy']:.2f}), arrival at "
+              f"{statistics.median(r['arrival_fraction'] for r in last):.0%} of T_con, "
+              f"{statistics.median(r['turning_share'] for r in last):.0%} of the squared commands from turning"]  # fmt: skip
     verdict = "met" if data["met"] else "NOT met"
     lines += ["", f"goal <= {data['goal_s']:.0f} s each: median {data['median_time_s']:.0f} s, {verdict}"]
     return lines
