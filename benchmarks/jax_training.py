@@ -39,6 +39,7 @@ if __name__ == "__main__":
         _threads = int(sys.argv[sys.argv.index("--threads") + 1])
     set_threads(_threads or 1)
 
+import itertools  # noqa: E402
 import json  # noqa: E402
 import math  # noqa: E402
 import platform  # noqa: E402
@@ -216,6 +217,15 @@ def learn(seeds: int, eval_every: int, budget_s: float, overrides: dict[str, Any
     }  # fmt: skip
 
 
+def update_flops(settings: dict[str, Any], observation_size: int = 10, action_size: int = 2) -> float:
+    """Floating-point operations of the updates per env step: n_epochs passes of a forward and a backward pass
+    (taken as 3 forward passes) of the actor and the critic, 2 FLOP per multiply-add."""
+    sizes = [observation_size, *settings["net_arch"]]
+    hidden = sum(a * b for a, b in itertools.pairwise(sizes))  # multiply-adds of one MLP's hidden layers
+    forward = 2 * hidden + sizes[-1] * (action_size + 1)  # actor and critic, their heads
+    return float(settings["n_epochs"] * 3 * 2 * forward)
+
+
 def render_speed(data: dict[str, Any]) -> list[str]:
     fps, seeds = data["median_fps"], data["seeds"]
     names = {"sb3_ppo": "dwr-gym train (SB3 PPO, torch, native vector env)",
@@ -229,7 +239,8 @@ def render_speed(data: dict[str, Any]) -> list[str]:
     compile_s = ", ".join(f"{k} {v:.0f} s" for k, v in data["compile_seconds"].items())
     met = {k: "met" if v else "NOT met" for k, v in data["met"].items()}
     lines += ["", f"compilation (apart from the rates): {compile_s}",
-              f"updates' share of the one-seed time: {data['update_share']:.0%}",
+              f"updates' share of the one-seed time: {data['update_share']:.0%}; their arithmetic: "
+              f"{update_flops(data['settings']) / 1e6:.2f} MFLOP per env step",
               f"goal >= {data['goals']['ratio_to_sb3']:.0f}x SB3: {data['ratio_to_sb3']:.1f}x, {met['ratio_to_sb3']}",
               f"goal >= {data['goals']['steps_per_second']:,.0f} steps/s: {fps['jax_one_seed']:,.0f}, "
               f"{met['steps_per_second']}",
