@@ -79,12 +79,7 @@ def run(args: argparse.Namespace) -> int:
             config = TrainConfig(**given)
             config.validate()
             config = resolve_hyperparams(config, set(given))
-        if config.backend == "jax":
-            from train.learning.jax_training import train_jax
-
-            train_jax(config, command=["dwr-gym", *sys.argv[1:]])
-        else:
-            train(config, command=["dwr-gym", *sys.argv[1:]])
+        train(config, command=["dwr-gym", *sys.argv[1:]])
     except (ConfigError, RunDirError) as error:  # all raised before any training starts
         raise UsageError(str(error)) from None
     except KeyboardInterrupt:
