@@ -77,11 +77,17 @@ def use_compilation_cache() -> None:
 
 
 def make_jax_env(config: TrainConfig) -> tuple[Any, Any]:
-    """The functional env of ``config.env_id`` and its params, gymnax-style (``dwr_gym.jax_env``)."""
+    """The functional env of ``config.env_id`` and its params, gymnax-style (``dwr_gym.jax_env``); a ConfigError
+    naming the extra when jax, flax or optax is missing."""
     try:
+        import flax  # noqa: F401
+        import jax  # noqa: F401
+        import optax  # noqa: F401
+
         from dwr_gym.jax_env import make_gymnax_env
     except ImportError as error:
-        raise ConfigError(f"--backend jax needs jax, flax and optax ({error.name} is missing): {JAX_EXTRA}") from None
+        missing = getattr(error, "name", None) or "jax"
+        raise ConfigError(f"--backend jax needs jax, flax and optax ({missing} is missing): {JAX_EXTRA}") from None
     try:
         return make_gymnax_env(config.env_id, **config.env_keywords())
     except (TypeError, ValueError, NotImplementedError) as error:
