@@ -147,6 +147,14 @@ def test_backend_jax_refuses_residual_agents_in_one_line() -> None:
     assert "\n" not in str(error.value)
 
 
+def test_a_missing_jax_extra_is_one_line_naming_it(monkeypatch: pytest.MonkeyPatch) -> None:
+    from train.learning.jax_training import make_jax_env
+
+    monkeypatch.setitem(sys.modules, "optax", None)  # as if optax were not installed
+    with pytest.raises(ConfigError, match=r"optax is missing\): pip install \"dwr-gym\[jax\]\"$"):
+        make_jax_env(resolved(backend="jax"))
+
+
 @pytest.mark.slow
 def test_cli_trains_resumes_bit_for_bit_and_evaluates(tmp_path: Path) -> None:
     from train.learning.agents import load_agent
