@@ -25,6 +25,9 @@ except PackageNotFoundError:  # running from a source tree that is not installed
 ENV_ID = "DWRPointStabilization-v0"
 ENV_ID_V1 = "DWRPointStabilization-v1"
 GOAL_ENV_ID = "DWRPointStabilizationGoal-v0"
+#: The same tasks on JAX (dwr_gym.jax_env, the ``jax`` extra; docs/jax.md): jax is imported when one is made.
+JAX_ENV_ID = "DWRPointStabilizationJax-v0"
+JAX_ENV_ID_V1 = "DWRPointStabilizationJax-v1"
 #: The keywords that make v1 of the same env class: any T_con in [10, 60] s, starts 0.3-3 m away, and a
 #: reward that pays for arriving by T_con with the heading, charges the energy, and pays nothing for
 #: arriving earlier than needed (no prescribed-time term, shaping that telescopes exactly).
@@ -40,7 +43,7 @@ V1_DEFAULTS: dict[str, object] = {
 
 
 def register_envs() -> None:
-    """Register DWRPointStabilization-v0 and -v1 with Gymnasium unless they are registered already."""
+    """Register DWRPointStabilization-v0 and -v1 (numpy and JAX) with Gymnasium unless they are registered already."""
     for env_id, defaults in ((ENV_ID, {}), (ENV_ID_V1, V1_DEFAULTS)):
         if env_id not in gymnasium.registry:
             gymnasium.register(
@@ -50,6 +53,16 @@ def register_envs() -> None:
                 # The env truncates itself at horizon_factor * T_con, which depends on its keywords, and reports
                 # that number of steps as env.spec.max_episode_steps (see dwr_gym.env.spec_with_horizon).
                 max_episode_steps=None,
+                kwargs=dict(defaults),
+            )
+    for env_id, defaults in ((JAX_ENV_ID, {}), (JAX_ENV_ID_V1, V1_DEFAULTS)):
+        if env_id not in gymnasium.registry:
+            gymnasium.register(
+                id=env_id,
+                entry_point="dwr_gym.jax_env.wrappers:DWRJaxEnv",
+                vector_entry_point="dwr_gym.jax_env.wrappers:DWRJaxVectorEnv",
+                max_episode_steps=None,  # the env truncates itself, as the numpy one
+                disable_env_checker=True,  # the passive checker reads numpy arrays: check through JaxToNumpy
                 kwargs=dict(defaults),
             )
     if GOAL_ENV_ID not in gymnasium.registry:  # the goal-conditioned task for HER (dwr_gym/goal_env.py)
@@ -67,6 +80,8 @@ __all__ = [
     "ENV_ID",
     "ENV_ID_V1",
     "GOAL_ENV_ID",
+    "JAX_ENV_ID",
+    "JAX_ENV_ID_V1",
     "V1_DEFAULTS",
     "DWRPointStabilizationEnv",
     "EnvParams",

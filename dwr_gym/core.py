@@ -51,7 +51,16 @@ def action_space() -> spaces.Box:
 def commands_from_action(
     action: NDArray[np.floating], params: EnvParams, dtype: type[np.floating] = np.float64
 ) -> tuple[Any, Any, Any, Any]:
-    """Clip normalised actions to [-1, 1]: (a_u, a_omega, u [m/s], omega [rad/s]); (N, 2) in ``dtype``, or one action (2,)."""
+    """Clip normalised actions to [-1, 1]: (a_u, a_omega, u [m/s], omega [rad/s]); (N, 2) in ``dtype``, or one action (2,).
+
+    Arrays of another library than numpy (jax's, maybe traced: nothing can be raised) are cast to ``dtype`` and
+    clipped, with NaN read as 0 (the finite action nearest to none) and infinities clipped like any number.
+    """
+    if type(action) is not np.ndarray:  # an array of another library (jax's): (..., 2)
+        xp = model.namespace(action)
+        clipped = xp.clip(xp.nan_to_num(xp.asarray(action, dtype=dtype), nan=0.0), -1.0, 1.0)
+        a_u, a_omega = clipped[..., 0], clipped[..., 1]
+        return a_u, a_omega, a_u * params.u_max, a_omega * params.omega_max
     if action.ndim == 1:
         a_u, a_omega = action.tolist()
         if type(a_u) is not float or type(a_omega) is not float:  # integer or boolean actions
@@ -106,7 +115,8 @@ def transition(
     A ``perturbation`` (robot wheels, disturbances; None is the nominal robot) acts at the two marked places.
     """
     if action_noise is not None:
-        action = np.asarray(action, dtype=np.float64) + params.actuation_noise * action_noise
+        action = (np.asarray(action, dtype=np.float64) if type(action) is np.ndarray else action) + (
+            params.actuation_noise * action_noise)  # fmt: skip
     a_u, a_omega, u, omega = commands_from_action(
         action, params, np.float64 if type(state.x) is float else state.x.dtype
     )
@@ -126,8 +136,10 @@ def transition(
     power = u * u + omega * omega
     state.energy += power * params.dt
     coords = error_coordinates(state.x, state.y, state.psi, params.k)
-    scalar = not isinstance(coords.distance, np.ndarray)  # one robot (as model.namespace decides)
-    xp = model.SCALAR_MATH if scalar else model.ARRAY_MATH
+    scalar = type(coords.distance) is float  # one robot (as model.namespace decides, without its call)
+    xp = model.SCALAR_MATH if scalar else model.namespace(coords.distance)
+    # jax's (maybe traced) arrays: every term computed (a weight may be traced too), no branch on values
+    traced = not scalar and xp is not model.ARRAY_MATH
 
     is_success = coords.distance <= params.goal_tolerance
     if params.heading_tolerance is not None:
@@ -144,7 +156,7 @@ def transition(
     # slower), nor summed. The sum runs in REWARD_TERMS' order.
     progress = params.progress_weight * (state.lyapunov - params.shaping_discount * next_potential)
     reward = progress  # a new array once late is added: the writes below do not touch progress
-    if params.time_weight != 0.0:
+    if traced or params.time_weight != 0.0:
         time = state.step_count * dt if scalar else (state.step_count * dt).astype(state.x.dtype, copy=False)
         time_term = (
             -params.time_weight * dt * d * model.conventional_scaling(time, state.T_con, max_gain=params.time_gain_cap)
@@ -152,12 +164,12 @@ def transition(
         reward = reward + time_term
     else:
         time_term = 0.0 if scalar else np.zeros(d.shape, d.dtype)
-    if params.effort_weight != 0.0:
+    if traced or params.effort_weight != 0.0:
         effort_term = -params.effort_weight * dt * (a_u * a_u + a_omega * a_omega)
         reward = reward + effort_term
     else:
         effort_term = 0.0 if scalar else np.zeros(d.shape, d.dtype)
-    if params.energy_weight != 0.0:
+    if traced or params.energy_weight != 0.0:
         energy_term = -params.energy_weight * dt * power
         reward = reward + energy_term
     else:
@@ -166,9 +178,9 @@ def transition(
     reward = reward + late
     # arrival, heading and arena are 0 but where an episode ends; they are added last, in REWARD_TERMS' order
     # (late, the term between them there, is 0 where arrival and heading are not).
-    ended = terminated if scalar else np.flatnonzero(terminated)
+    ended = terminated if scalar or traced else np.flatnonzero(terminated)
     arrival, heading, arena = terminal_terms(is_success, in_time, out_of_arena, ended, coords.psi, params)
-    if scalar:
+    if scalar or traced:
         reward = reward + arrival + heading + arena
     elif ended.size:
         reward[ended] = reward[ended] + arrival[ended] + heading[ended] + arena[ended]
@@ -178,8 +190,8 @@ def transition(
     truncated = state.step_count >= state.max_steps
     if scalar:
         truncated = truncated and not terminated
-    elif truncated.any():  # rare: the & is skipped in most steps
-        truncated &= ~terminated
+    elif traced or truncated.any():  # rare in numpy: the & is skipped in most steps
+        truncated = truncated & ~terminated
 
     obs = observe(state, coords, params, space, pose_noise)
     if perturbation is not None:  # the measurement side
@@ -192,20 +204,31 @@ def terminal_terms(
 ) -> tuple[Any, Any, Any]:
     """The reward terms paid when an episode ends: (arrival (in time), heading (weight (cos(psi) - 1) on
     arrival), arena (on leaving it)). Floats for one robot (``ended`` is whether its episode ended); for a
-    batch, arrays that are 0 but at the indices ``ended`` of the robots whose episodes ended."""
-    if not isinstance(psi, np.ndarray):  # one robot
-        return (
-            params.arrival_bonus if is_success and in_time else 0.0,
-            params.heading_weight * (math.cos(psi) - 1.0) if is_success else 0.0,
-            -params.arena_penalty if out_of_arena else 0.0,
-        )
+    numpy batch, arrays that are 0 but at the indices ``ended`` of the robots whose episodes ended; for
+    arrays of another library (jax's), ``ended`` is the boolean mask and the terms are computed everywhere
+    (0 where it is False, as arrival and leaving the arena end the episode)."""
+    if type(psi) is float:  # one robot
+        return _paid_at_the_end(is_success, in_time, out_of_arena, psi, params, model.SCALAR_MATH) if ended else (
+            0.0, 0.0, 0.0)  # fmt: skip
+    if type(psi) is not np.ndarray:  # jax's arrays
+        return _paid_at_the_end(is_success, in_time, out_of_arena, psi, params, model.namespace(psi))
     arrival, heading, arena = np.zeros((3, psi.shape[0]), psi.dtype)  # one allocation: 3x faster than three
     if ended.size:
-        success = is_success[ended]
-        arrival[ended] = np.where(success & in_time[ended], params.arrival_bonus, 0.0)
-        heading[ended] = np.where(success, params.heading_weight * (np.cos(psi[ended]) - 1.0), 0.0)
-        arena[ended] = np.where(out_of_arena[ended], -params.arena_penalty, 0.0)
+        arrival[ended], heading[ended], arena[ended] = _paid_at_the_end(
+            is_success[ended], in_time[ended], out_of_arena[ended], psi[ended], params, np
+        )
     return arrival, heading, arena
+
+
+def _paid_at_the_end(
+    is_success: Any, in_time: Any, out_of_arena: Any, psi: Any, params: EnvParams, xp: Any
+) -> tuple[Any, Any, Any]:
+    """(arrival, heading, arena) of :func:`terminal_terms` where episodes end."""
+    return (
+        xp.where(is_success & in_time, params.arrival_bonus, 0.0),
+        xp.where(is_success, params.heading_weight * (xp.cos(psi) - 1.0), 0.0),
+        xp.where(out_of_arena, -params.arena_penalty, 0.0),
+    )
 
 
 def infos(

@@ -152,16 +152,27 @@ ARRAY_MATH: Any = _ArrayMath()
 
 
 def namespace(*values: Any) -> Any:
-    """:data:`ARRAY_MATH` (numpy) if any value is an array, else :data:`SCALAR_MATH`.
+    """:data:`ARRAY_MATH` (numpy) if any value is a numpy array, the array's own namespace if it is an array of
+    another library (the array API's ``__array_namespace__``: ``jax.numpy`` for jax arrays, traced or not),
+    else :data:`SCALAR_MATH`.
 
     The functions of the single env's step test ``type(x) is float`` inline first and call this only
     for arrays: for one robot the call cost more than the function's arithmetic (8 calls were 8 % of
     the step's instructions).
     """
     for value in values:
-        if type(value) is not float and isinstance(value, np.ndarray):  # float first: the single env's case
-            return ARRAY_MATH
+        if type(value) is not float:  # float first: the single env's case
+            if isinstance(value, np.ndarray):
+                return ARRAY_MATH
+            if hasattr(value, "__array_namespace__") and not isinstance(value, np.generic):  # numpy's scalars: math
+                return value.__array_namespace__()
     return SCALAR_MATH
+
+
+def is_traceable(xp: Any) -> bool:
+    """Whether ``xp`` is the namespace of another array library than numpy (jax.numpy): its arrays may be traced
+    by a compiler, so the functions take no Python branch on their values and write no array in place."""
+    return xp is not ARRAY_MATH and xp is not SCALAR_MATH
 
 
 def wrap_angle(angle: ArrayLike) -> FloatArray:
@@ -214,13 +225,15 @@ def sinc(h: ArrayLike) -> FloatArray:
     sin(h) / h elsewhere."""
     h2 = h * h  # type: ignore[operator]
     series = 1.0 + h2 * (-1.0 / 6.0 + h2 * (1.0 / 120.0 + h2 * (-1.0 / 5040.0 + h2 * (1.0 / 362880.0))))
-    if type(h) is float or namespace(h) is SCALAR_MATH:
+    xp = SCALAR_MATH if type(h) is float else namespace(h)
+    if xp is SCALAR_MATH:
         return series if abs(h) <= SINC_SERIES_LIMIT else math.sin(h) / h  # type: ignore[arg-type, operator, return-value]
-    if h2.size and h2.max() > SINC_SERIES_LIMIT * SINC_SERIES_LIMIT:  # (np.max's initial= doubles its cost)
-        large = np.abs(h) > SINC_SERIES_LIMIT
-        safe = np.where(large, h, 1.0)
-        series = np.where(large, np.sin(safe) / safe, series)
-    return series  # type: ignore[no-any-return]
+    if xp is ARRAY_MATH and not (h2.size and h2.max() > SINC_SERIES_LIMIT * SINC_SERIES_LIMIT):  # type: ignore[union-attr]
+        return series  # type: ignore[no-any-return]  # numpy, every |h| small: no sine (np.max's initial= doubles its cost)
+    xp = np if xp is ARRAY_MATH else xp  # numpy's own sine here, as before torch's kernels were added
+    large = xp.abs(h) > SINC_SERIES_LIMIT
+    safe = xp.where(large, h, 1.0)
+    return xp.where(large, xp.sin(safe) / safe, series)  # type: ignore[no-any-return]
 
 
 def unicycle_step_exact(
@@ -357,9 +370,10 @@ def backstepping_delta(angle: ArrayLike) -> FloatArray:
     Written as (x / 2) sinc^2(x / 2), which is the same function without the 0/0 at x = 0.
     """
     half = 0.5 * angle  # type: ignore[operator]
-    if namespace(angle) is SCALAR_MATH:
+    xp = namespace(angle)
+    if xp is SCALAR_MATH:
         return half * (math.sin(half) / half) ** 2 if half != 0.0 else 0.0
-    return half * np.square(np.sinc(half / np.pi))
+    return half * xp.square(xp.sinc(half / np.pi))
 
 
 # ---------------------------------------------------------------------------------------------

@@ -58,7 +58,8 @@ def observe(
 
     With ``pose_noise`` (N, 3) (or (3,)) of standard-normal samples, the features are those of the
     pose measured with noise of standard deviation ``params.observation_noise``. Values are clipped
-    to the space's bounds.
+    to the space's bounds. For arrays of another library than numpy (jax's, maybe traced), the features are
+    computed without writing in place (:func:`features_array_api`), in the space's dtype, with shape (..., 10).
     """
     if pose_noise is not None:
         sigma = params.observation_noise
@@ -67,7 +68,9 @@ def observe(
             model.wrap_angle(state.psi + sigma * pose_noise[..., 2]), params.k,
         )  # fmt: skip
     dist = coords.distance
-    if not isinstance(dist, np.ndarray):  # one robot (as model.namespace decides, without its call)
+    if type(dist) is not np.ndarray and type(dist) is not float:  # jax's arrays (model.namespace's test)
+        return features_array_api(state, coords, params, space, model.namespace(dist))
+    if type(dist) is float:  # one robot (as model.namespace decides, without its call)
         # one robot: cos(alpha) and sin(alpha) of eq. (3) as -x/d and -y/d, (1, 0) at the goal
         cos_alpha, sin_alpha = (-coords.x / dist, -coords.y / dist) if dist > 0.0 else (1.0, 0.0)
         features = np.array(
@@ -97,3 +100,23 @@ def observe(
     features[9] = state.initial_orientation_error
     clip(features, space.low[:, None], space.high[:, None], out=features)  # one pass: 3x maximum then minimum
     return features.T
+
+
+def features_array_api(
+    state: TaskState, coords: ErrorCoordinates, params: EnvParams, space: spaces.Box, xp: object
+) -> object:
+    """The features of :func:`observe` for arrays of any shape (...) of an array-API library (jax.numpy): (..., 10)
+    in ``space.dtype``, with no write in place and no branch on values, so a compiler can trace it."""
+    dtype = space.dtype
+    dist = coords.distance
+    at_goal = dist == 0.0
+    safe = xp.where(at_goal, 1.0, dist)  # type: ignore[attr-defined]
+    heading = xp.asarray(coords.psi, dtype=dtype)  # type: ignore[attr-defined]  # in the features' dtype, as numpy's
+    rows = (
+        dist, xp.where(at_goal, 1.0, -coords.x / safe), xp.where(at_goal, 0.0, -coords.y / safe),  # type: ignore[attr-defined]
+        xp.cos(heading), xp.sin(heading), coords.orientation_error,  # type: ignore[attr-defined]
+        state.step_count * (params.dt / state.T_con), state.T_con, state.initial_distance,
+        state.initial_orientation_error,
+    )  # fmt: skip
+    features = xp.stack([xp.asarray(row, dtype=dtype) for row in rows], axis=-1)  # type: ignore[attr-defined]
+    return xp.clip(features, space.low, space.high)  # type: ignore[attr-defined]

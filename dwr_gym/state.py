@@ -100,13 +100,21 @@ class TaskState:
 
 def sample_start(rng: np.random.Generator, params: EnvParams) -> tuple[float, float, float]:
     """A random start pose in the goal frame: distance and heading in their ranges, bearing uniform."""
-    # Three uniform draws as Generator.uniform(low, high) makes them, low + (high - low) * random(), in one call.
-    (d_low, d_high), (h_low, h_high) = params.start_distance, params.start_heading
-    u_dist, u_bearing, u_heading = rng.random(3).tolist()
-    dist = d_low + (d_high - d_low) * u_dist
-    bearing = -math.pi + (math.pi - -math.pi) * u_bearing
-    heading = h_low + (h_high - h_low) * u_heading
-    return dist * math.cos(bearing), dist * math.sin(bearing), heading
+    return start_from_uniforms(*rng.random(3).tolist(), params, model.SCALAR_MATH)  # three draws in one call
+
+
+def start_from_uniforms(u_dist: Any, u_bearing: Any, u_heading: Any, params: Any, xp: Any) -> tuple[Any, Any, Any]:
+    """The start pose (x, y, psi) in the goal frame that :func:`sample_start` makes of three uniform draws in [0, 1)
+    (floats, or arrays of the namespace ``xp``), each mapped as Generator.uniform(low, high) maps its draw."""
+    dist = uniform_in(params.start_distance, u_dist)
+    bearing = uniform_in((-math.pi, math.pi), u_bearing)
+    return dist * xp.cos(bearing), dist * xp.sin(bearing), uniform_in(params.start_heading, u_heading)
+
+
+def uniform_in(interval: tuple[Any, Any], draw: Any) -> Any:
+    """low + (high - low) * draw: a draw in [0, 1) mapped to [low, high), as numpy's Generator.uniform maps it."""
+    low, high = interval
+    return low + (high - low) * draw
 
 
 def parse_pose(name: str, value: object) -> tuple[float, float, float]:
@@ -121,24 +129,25 @@ def new_state(
 
     ``T_con`` is each episode's prescribed time (a float, or (N,)); None is ``params.T_con``.
     """
-    return _new_state(start, goal, params, T_con)[0]
+    return new_state_and_coordinates(start, goal, params, T_con)[0]
 
 
-def _new_state(
+def new_state_and_coordinates(
     start: tuple[Any, Any, Any], goal: tuple[Any, Any, Any], params: EnvParams, T_con: Any
 ) -> tuple[TaskState, ErrorCoordinates]:
     """:func:`new_state`, and the error coordinates of its poses."""
     xp = model.namespace(*start, *goal)
     x, y, psi = model.to_goal_frame(*start, *goal)
     coords = error_coordinates(x, y, psi, params.k)
-    farthest = coords.distance if xp is model.SCALAR_MATH else float(np.max(coords.distance))
-    if farthest > params.arena_radius:
+    traced = model.is_traceable(xp)  # jax's arrays: the caller drew the starts within the arena (nothing can raise)
+    farthest = coords.distance if xp is model.SCALAR_MATH else 0.0 if traced else float(np.max(coords.distance))
+    if not traced and farthest > params.arena_radius:
         raise ValueError(
             f"start pose is {farthest:.3f} m from the goal, outside the arena: "
             f"expected a distance <= arena_radius={params.arena_radius}"
         )
     zero = 0.0 * coords.distance
-    steps = 0 if xp is model.SCALAR_MATH else np.zeros(coords.distance.shape, np.int64)
+    steps = 0 if xp is model.SCALAR_MATH else (xp.zeros if traced else np.zeros)(coords.distance.shape, int)
     state = TaskState(x, y, psi, goal[0] + zero, goal[1] + zero, goal[2] + zero, steps, zero, coords.distance,
                       coords.orientation_error, model.lyapunov(coords.distance, coords.orientation_error),
                       xp.cos(goal[2]) + zero, xp.sin(goal[2]) + zero, *episode_length(T_con, zero, params, xp))  # fmt: skip
@@ -156,7 +165,7 @@ def reset_robots(
     """Place the robots at ``index`` of a batched state at world poses ``start`` with goals ``goal``
     and prescribed times ``T_con`` (None: ``params.T_con``). Returns a copy of these robots' new state
     (as ``state.subset(index)``) and its error coordinates."""
-    fresh, coords = _new_state(start, goal, params, T_con)
+    fresh, coords = new_state_and_coordinates(start, goal, params, T_con)
     state.assign(index, fresh)
     if fresh.x.dtype != state.x.dtype:  # a float32 state: its robots as it holds them, not as computed in float64
         fresh = state.subset(index)
@@ -172,10 +181,15 @@ def episode_length(T_con: Any, zero: Any, params: EnvParams, xp: Any) -> tuple[A
     if xp is model.SCALAR_MATH:
         T_con = float(T_con)
         return T_con, params.prescribed_steps_of(T_con), params.max_episode_steps_of(T_con)
-    T_con = np.asarray(T_con, dtype=np.float64) + np.zeros(np.shape(zero))
-    prescribed = np.floor(T_con / params.dt + 1e-9).astype(np.int64)  # as EnvParams.prescribed_steps_of
-    steps = np.ceil(params.horizon_factor * T_con / params.dt - 1e-9).astype(np.int64)  # as max_episode_steps_of
-    return T_con.astype(np.asarray(zero).dtype), prescribed, steps
+    # numpy: the counts of the float64 T_con, which a float32 state then holds rounded; jax's arrays: all in their
+    # own dtype (float32 unless jax_enable_x64), so a T_con / dt within float32 rounding of an integer may count
+    # one step fewer than float64 would
+    traced = model.is_traceable(xp)
+    work = zero.dtype if traced else np.float64
+    T_con = xp.asarray(T_con, dtype=work) + xp.zeros(np.shape(zero), work)
+    prescribed = xp.floor(T_con / params.dt + 1e-9).astype(int)  # as EnvParams.prescribed_steps_of
+    steps = xp.ceil(params.horizon_factor * T_con / params.dt - 1e-9).astype(int)  # as max_episode_steps_of
+    return T_con if traced else T_con.astype(np.asarray(zero).dtype), prescribed, steps
 
 
 def sample_T_con(rng: np.random.Generator, params: EnvParams) -> float:

@@ -284,6 +284,10 @@ def train(
     """
     from train.threads import torch_threads
 
+    if config.backend == "jax":  # the jitted PPO (train.learning.jax_training), same contract and run directory
+        from train.learning.jax_training import train_jax
+
+        return train_jax(config, command, on_evaluation)
     config.validate()
     with torch_threads(config.threads):
         return _train(config, command, on_evaluation)

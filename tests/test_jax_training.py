@@ -1,0 +1,232 @@
+"""The jitted PPO of ``dwr-gym train --backend jax``: its policy is SB3's once exported, its advantages are SB3's,
+and its runs are run directories that ``dwr-gym evaluate`` loads, that resume, and that Ctrl-C leaves whole."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+pytest.importorskip("jax")
+pytest.importorskip("flax")
+pytest.importorskip("optax")
+pytest.importorskip("stable_baselines3")
+
+import jax
+import jax.numpy as jnp
+
+from train.learning.config import ConfigError, TrainConfig
+from train.learning.hyperparams import resolve_hyperparams
+from train.learning.jax_policy import PPOSettings, gaussian_entropy, gaussian_log_prob, make_network
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def resolved(**kwargs: Any) -> TrainConfig:
+    config = TrainConfig(num_envs=8, **kwargs)
+    config.validate()
+    return resolve_hyperparams(config, set())
+
+
+def random_params(settings: PPOSettings, seed: int) -> Any:
+    """Network parameters far from the initialisation (biases and log_std included), so every tensor matters."""
+    params = make_network(settings, 2).init(jax.random.PRNGKey(seed), jnp.zeros(10))
+    leaves, tree = jax.tree.flatten(params)
+    keys = jax.random.split(jax.random.PRNGKey(seed + 1), len(leaves))
+    return jax.tree.unflatten(
+        tree, [leaf + 0.4 * jax.random.normal(k, leaf.shape) for leaf, k in zip(leaves, keys, strict=True)]
+    )
+
+
+@pytest.mark.parametrize("normalize", [False, True])
+def test_exported_sb3_policy_acts_as_the_jax_policy(normalize: bool) -> None:
+    import torch
+
+    from train.learning.jax_export import SB3Exporter
+    from train.learning.training import make_training_env
+
+    config = resolved()
+    settings = PPOSettings.from_algo_kwargs(config.algo_kwargs, 8)
+    network = make_network(settings, 2)
+    params = random_params(settings, 0)
+    rng = np.random.default_rng(0)
+    mean, var = (rng.uniform(-2, 2, 10), rng.uniform(0.1, 30, 10)) if normalize else (None, None)
+    model = SB3Exporter(make_training_env(config), config.algo_kwargs).load(params, mean, var, timesteps=7)
+    obs = (rng.normal(size=(400, 10)) * 3).astype(np.float32)
+    scaled = ((obs - mean) / np.sqrt(var + 1e-8)).astype(np.float32) if normalize else obs
+    action_mean, log_std, value = (np.asarray(x) for x in network.apply(params, scaled))
+    expected = np.clip(action_mean, -1.0, 1.0)
+    assert 0.05 < np.mean(np.abs(expected) == 1.0) < 0.95  # some actions clipped, some not
+    actions, _ = model.predict(obs, deterministic=True)
+    np.testing.assert_allclose(actions, expected, atol=1e-5)
+    samples = rng.normal(size=(400, 2)).astype(np.float32)
+    with torch.no_grad():
+        values, log_prob, entropy = model.policy.evaluate_actions(torch.as_tensor(obs), torch.as_tensor(samples))
+    np.testing.assert_allclose(values.numpy()[:, 0], value, atol=1e-4)
+    np.testing.assert_allclose(log_prob.numpy(), gaussian_log_prob(samples, action_mean, log_std), atol=1e-4)
+    np.testing.assert_allclose(entropy.numpy(), np.full(400, gaussian_entropy(log_std)), atol=1e-5)
+    assert model.num_timesteps == 7
+
+
+def test_advantages_are_sb3s_with_the_truncation_bootstrap() -> None:
+    import torch
+    from gymnasium import spaces
+    from stable_baselines3.common.buffers import RolloutBuffer
+
+    from train.learning.jax_ppo import gae
+
+    steps, envs, gamma, lam = 24, 5, 0.97, 0.9
+    rng = np.random.default_rng(1)
+    rewards, values, final_values = (rng.normal(size=(steps, envs)).astype(np.float32) for _ in range(3))
+    terminated, truncated = rng.random((steps, envs)) < 0.1, rng.random((steps, envs)) < 0.1
+    truncated &= ~terminated
+    last_value = rng.normal(size=envs).astype(np.float32)
+    buffer = RolloutBuffer(steps, spaces.Box(-1, 1, (1,)), spaces.Box(-1, 1, (1,)), gae_lambda=lam, gamma=gamma,
+                           n_envs=envs)  # fmt: skip
+    episode_start = np.zeros(envs, bool)
+    for t in range(steps):  # what PPO.collect_rollouts adds for a truncated episode, then the buffer's GAE
+        reward = rewards[t] + gamma * np.where(truncated[t], final_values[t], 0.0)
+        buffer.add(np.zeros((envs, 1)), np.zeros((envs, 1)), reward, episode_start, torch.as_tensor(values[t]),
+                   torch.zeros(envs))  # fmt: skip
+        episode_start = terminated[t] | truncated[t]
+    buffer.compute_returns_and_advantage(torch.as_tensor(last_value), episode_start)
+    advantages, returns = gae(jnp.asarray(rewards), jnp.asarray(values), jnp.asarray(terminated),
+                              jnp.asarray(truncated), jnp.asarray(final_values), jnp.asarray(last_value), gamma, lam)  # fmt: skip
+    np.testing.assert_allclose(np.asarray(advantages), buffer.advantages, rtol=1e-5, atol=1e-5)
+    np.testing.assert_allclose(np.asarray(returns), buffer.returns, rtol=1e-5, atol=1e-5)
+
+
+def test_settings_read_the_yaml_and_refuse_what_they_do_not_implement() -> None:
+    config = resolved()
+    settings = PPOSettings.from_algo_kwargs(config.algo_kwargs, 256)
+    assert (settings.n_steps, settings.batch_size, settings.n_epochs, settings.gamma) == (64, 1024, 4, 0.999)
+    assert settings.net_arch == (64, 64) and settings.activation == "tanh" and settings.minibatches == 16
+    with pytest.raises(ConfigError, match=r"\['use_sde'\] are not implemented by --backend jax"):
+        PPOSettings.from_algo_kwargs({**config.algo_kwargs, "use_sde": True}, 256)
+    with pytest.raises(ConfigError, match="batch_size=1000 is invalid for --backend jax"):
+        PPOSettings.from_algo_kwargs({**config.algo_kwargs, "batch_size": 1000}, 256)
+    linear = PPOSettings.from_algo_kwargs({**config.algo_kwargs, "learning_rate": "lin_1e-3"}, 256)
+    assert linear.linear_schedule and linear.learning_rate == 1e-3
+
+
+def cli(*args: str, **kwargs: Any) -> subprocess.Popen[str]:
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "OMP_NUM_THREADS": "1"}
+    return subprocess.Popen([sys.executable, "-m", "train.cli", *args], cwd=ROOT, env=env, text=True,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, **kwargs)  # fmt: skip
+
+
+TINY = ("train", "--backend", "jax", "--num-envs", "8", "--eval-episodes", "4", "--no-progress", "--hyperparams",
+        "n_steps=8", "batch_size=32", "n_epochs=1")  # fmt: skip
+
+
+def finish(process: subprocess.Popen[str], timeout: float = 300) -> tuple[int, str, str]:
+    out, err = process.communicate(timeout=timeout)
+    return process.returncode, out, err
+
+
+def test_backend_jax_refuses_other_algorithms(tmp_path: Path) -> None:
+    code, _, err = finish(cli("train", "--backend", "jax", "--algo", "sac", "--run-dir", str(tmp_path / "r")))
+    assert code == 2 and len(err.strip().splitlines()) == 1
+    assert "--algo 'sac' is invalid with --backend jax" in err
+
+
+def test_backend_jax_refuses_residual_agents_in_one_line() -> None:
+    from train.learning.jax_training import check_jax_config
+
+    with pytest.raises(
+        ConfigError, match=r"^--residual is invalid with --backend jax: residual agents train with"
+    ) as error:
+        check_jax_config(resolved(backend="jax", residual=True))
+    assert "\n" not in str(error.value)
+
+
+def test_a_missing_jax_extra_is_one_line_naming_it(monkeypatch: pytest.MonkeyPatch) -> None:
+    from train.learning.jax_training import make_jax_env
+
+    monkeypatch.setitem(sys.modules, "optax", None)  # as if optax were not installed
+    with pytest.raises(ConfigError, match=r"optax is missing\): pip install \"dwr-gym\[jax\]\"$"):
+        make_jax_env(resolved(backend="jax"))
+
+
+@pytest.mark.slow
+def test_cli_trains_resumes_bit_for_bit_and_evaluates(tmp_path: Path) -> None:
+    from train.learning.agents import load_agent
+    from train.learning.runs import read_state
+
+    straight, split = tmp_path / "straight", tmp_path / "split"
+    common = ("--eval-freq", "64", "--checkpoint-freq", "128")
+    code, out, err = finish(cli(*TINY, *common, "--total-timesteps", "192", "--run-dir", str(straight)))
+    assert code == 0, err
+    code, _, err = finish(cli(*TINY, *common, "--total-timesteps", "128", "--run-dir", str(split)))
+    assert code == 0, err
+    code, _, err = finish(cli("train", "--resume", str(split), "--total-timesteps", "192", "--no-progress"))
+    assert code == 0, err
+    assert read_state(split)["timesteps"] == 192 and read_state(split)["finished"]
+    rows = (split / "evaluations.csv").read_text().splitlines()
+    assert [int(row.split(",")[0]) for row in rows[1:]] == [0, 64, 128, 192]
+    assert (split / "checkpoints" / "ppo_128_steps.zip").is_file()
+    _, resumed = load_agent(split)
+    _, uninterrupted = load_agent(straight)
+    for a, b in zip(resumed.policy.state_dict().values(), uninterrupted.policy.state_dict().values(), strict=True):
+        assert np.array_equal(a.numpy(), b.numpy())  # the resumed run is the uninterrupted one, bit for bit
+    import yaml
+
+    saved = yaml.safe_load((split / "config.yaml").read_text())
+    assert saved["learned_from"] == "reward" and saved["runtime"] == [] and saved["config"]["backend"] == "jax"
+    code, out, err = finish(
+        cli(
+            "evaluate",
+            "--agents",
+            str(split),
+            "--n",
+            "3",
+            "--scenarios",
+            "random",
+            "--controllers",
+            "ptc",
+            "--optimum",
+            "none",
+            "--no-progress",
+        )
+    )
+    assert code == 0, err
+    assert "split" in out and "ptc" in out
+
+
+@pytest.mark.slow
+def test_ctrl_c_keeps_the_last_model_and_says_how_to_resume(tmp_path: Path) -> None:
+    from train.learning.runs import read_state
+
+    run_dir = tmp_path / "run"
+    process = cli(*TINY, "--eval-freq", "64", "--total-timesteps", "1000000000", "--run-dir", str(run_dir))
+    deadline = time.time() + 240
+    while not (run_dir / "evaluations.csv").is_file() or len((run_dir / "evaluations.csv").read_text().split()) < 3:
+        assert process.poll() is None and time.time() < deadline, process.communicate()
+        time.sleep(0.5)
+    process.send_signal(signal.SIGINT)
+    code, _, err = finish(process, 120)
+    assert code == 130, err
+    assert "resume with: dwr-gym train --resume" in err
+    steps = read_state(run_dir)["timesteps"]
+    assert steps > 0 and (run_dir / "model.zip").is_file()
+    assert (run_dir / "checkpoints" / f"ppo_{steps}_steps.zip").is_file()
+
+
+def test_each_docs_block_is_what_the_benchmark_renders_from_its_json() -> None:
+    import importlib.util
+    import json
+
+    spec = importlib.util.spec_from_file_location("jax_training_benchmark", ROOT / "benchmarks" / "jax_training.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    written = [(name, module.OUT / file) for name, (file, _) in module.BLOCKS.items() if (module.OUT / file).is_file()]
+    for name, path in written:
+        assert module.docs_block(name) == module.rendered_block(name, json.loads(path.read_text())), name

@@ -1,0 +1,180 @@
+"""The policy of the jitted PPO (``dwr-gym train --backend jax``): stable-baselines3's PPO ``MlpPolicy`` in flax,
+and its hyperparameters under the names of train/hyperparams/ppo.yml.
+
+The network is the one SB3 builds for ``PPO("MlpPolicy", env, policy_kwargs=dict(net_arch=[64, 64]))``: separate
+actor and critic MLPs of ``net_arch`` with ``activation_fn`` (tanh), a linear mean head, a state-independent
+``log_std`` and a linear value head, orthogonally initialised with SB3's gains (sqrt(2) for the hidden layers,
+0.01 for the mean, 1 for the value), biases zero. So :mod:`train.learning.jax_export` can copy the weights into an
+SB3 model tensor for tensor.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+from typing import Any
+
+from train.learning.config import ConfigError
+
+#: SB3 PPO hyperparameters the jitted trainer implements, with SB3's defaults.
+SB3_PPO_DEFAULTS: dict[str, Any] = {
+    "n_steps": 2048, "batch_size": 64, "n_epochs": 10, "gamma": 0.99, "gae_lambda": 0.95, "learning_rate": 3e-4,
+    "ent_coef": 0.0, "clip_range": 0.2, "vf_coef": 0.5, "max_grad_norm": 0.5, "normalize_advantage": True,
+}  # fmt: skip
+#: Keys of the YAML that change nothing in the jitted trainer (``policy`` must be MlpPolicy, checked upstream).
+IGNORED_KEYS = ("policy", "verbose", "stats_window_size", "tensorboard_log")
+POLICY_KEYS = ("net_arch", "activation_fn", "log_std_init", "ortho_init")
+#: ``policy_kwargs`` key (ours, not SB3's) that turns on observation normalisation; folded into the first
+#: layers on export, so the exported model needs no wrapper.
+NORMALIZE_KEY = "normalize_observations"
+
+
+@dataclass(frozen=True)
+class PPOSettings:
+    """The hyperparameters of one jitted PPO run, named as in train/hyperparams/ppo.yml (SB3's names)."""
+
+    n_envs: int = 256
+    """Robots simulated side by side (``--num-envs``)."""
+    n_steps: int = 64
+    """Steps each robot takes per rollout; one update learns from n_envs * n_steps transitions."""
+    batch_size: int = 1024
+    """Minibatch size of the gradient steps."""
+    n_epochs: int = 4
+    """Passes over each rollout."""
+    gamma: float = 0.99
+    gae_lambda: float = 0.95
+    learning_rate: float = 3e-4
+    """Adam's step size (eps 1e-5, as SB3); with ``linear_schedule`` it decays linearly to 0 over the budget."""
+    linear_schedule: bool = False
+    """True for rl-zoo3's ``learning_rate: lin_<value>``."""
+    ent_coef: float = 0.0
+    clip_range: float = 0.2
+    vf_coef: float = 0.5
+    max_grad_norm: float = 0.5
+    normalize_advantage: bool = True
+    net_arch: tuple[int, ...] = (64, 64)
+    activation: str = "tanh"
+    """Hidden activation: the lower-case name of policy_kwargs' ``activation_fn`` (nn.Tanh: tanh)."""
+    log_std_init: float = 0.0
+    ortho_init: bool = True
+    normalize_observations: bool = False
+    """Scale observations by a running mean and standard deviation (as VecNormalize, without its clipping);
+    exported by folding the statistics into the first layers."""
+
+    @property
+    def steps_per_update(self) -> int:
+        return self.n_envs * self.n_steps
+
+    @property
+    def minibatch_size(self) -> int:
+        """batch_size, or the whole rollout where it is smaller (as SB3 then takes one minibatch of it all)."""
+        return min(self.batch_size, self.steps_per_update)
+
+    @property
+    def minibatches(self) -> int:
+        return self.steps_per_update // self.minibatch_size
+
+    @classmethod
+    def from_algo_kwargs(cls, algo_kwargs: dict[str, Any], n_envs: int) -> PPOSettings:
+        """The settings of resolved hyperparameters (:func:`train.learning.hyperparams.resolve_hyperparams`);
+        a hyperparameter the jitted trainer does not implement is a ConfigError naming it."""
+        kwargs = {k: v for k, v in algo_kwargs.items() if k not in IGNORED_KEYS}
+        policy = dict(kwargs.pop("policy_kwargs", None) or {})
+        unknown = sorted(set(kwargs) - set(SB3_PPO_DEFAULTS))
+        if unknown:
+            raise ConfigError(f"hyperparameter(s) {unknown} are not implemented by --backend jax; it implements "
+                              f"{', '.join(SB3_PPO_DEFAULTS)} and policy_kwargs {', '.join(POLICY_KEYS)}")  # fmt: skip
+        unknown = sorted(set(policy) - set(POLICY_KEYS) - {NORMALIZE_KEY})
+        if unknown:
+            raise ConfigError(f"policy_kwargs {unknown} are not implemented by --backend jax; it implements "
+                              f"{', '.join((*POLICY_KEYS, NORMALIZE_KEY))}")  # fmt: skip
+        values = {**SB3_PPO_DEFAULTS, **kwargs}
+        rate = values.pop("learning_rate")
+        linear = isinstance(rate, str)
+        arch = policy.get("net_arch", [64, 64])
+        if isinstance(arch, dict):
+            if arch.get("pi") != arch.get("vf"):
+                raise ConfigError(f"policy_kwargs net_arch={arch!r} is invalid for --backend jax: pi and vf must match")
+            arch = arch["pi"]
+        activation = str(policy.get("activation_fn", "nn.Tanh")).split(".")[-1].lower()
+        if activation not in ACTIVATIONS:
+            raise ConfigError(f"policy_kwargs activation_fn={policy['activation_fn']!r} is invalid for --backend "
+                              f"jax: expected one of {', '.join('nn.' + a.title() for a in ACTIVATIONS)}")  # fmt: skip
+        settings = cls(
+            n_envs=int(n_envs), n_steps=int(values["n_steps"]), batch_size=int(values["batch_size"]),
+            n_epochs=int(values["n_epochs"]), gamma=float(values["gamma"]), gae_lambda=float(values["gae_lambda"]),
+            learning_rate=float(rate[4:]) if linear else float(rate), linear_schedule=linear,
+            ent_coef=float(values["ent_coef"]), clip_range=float(values["clip_range"]),
+            vf_coef=float(values["vf_coef"]), max_grad_norm=float(values["max_grad_norm"]),
+            normalize_advantage=bool(values["normalize_advantage"]), net_arch=tuple(int(s) for s in arch),
+            activation=activation, log_std_init=float(policy.get("log_std_init", 0.0)),
+            ortho_init=bool(policy.get("ortho_init", True)),
+            normalize_observations=bool(policy.get(NORMALIZE_KEY, False)),
+        )  # fmt: skip
+        settings.check()
+        return settings
+
+    def check(self) -> None:
+        """Raise ConfigError unless a rollout splits into whole minibatches."""
+        if self.steps_per_update % self.minibatch_size:
+            raise ConfigError(
+                f"batch_size={self.batch_size} is invalid for --backend jax: it must divide n_steps * n_envs = "
+                f"{self.n_steps} * {self.n_envs} = {self.steps_per_update} (the minibatches are a reshape)"
+            )
+
+    def as_dict(self) -> dict[str, Any]:
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
+
+ACTIVATIONS = ("tanh", "relu", "elu", "leakyrelu", "silu", "gelu", "sigmoid")
+
+
+def activation_function(name: str) -> Any:
+    import flax.linen as nn
+
+    return {"tanh": nn.tanh, "relu": nn.relu, "elu": nn.elu, "leakyrelu": nn.leaky_relu, "silu": nn.silu,
+            "gelu": lambda x: nn.gelu(x, approximate=False), "sigmoid": nn.sigmoid}[name]  # fmt: skip
+
+
+def make_network(settings: PPOSettings, action_dim: int) -> Any:
+    """The flax module ``ActorCritic``: obs (..., n) -> (mean (..., action_dim), log_std (action_dim,), value (...)).
+
+    Its parameters are named ``policy_<i>``, ``value_<i>`` (hidden layers), ``action`` (the mean head),
+    ``value`` (the value head) and ``log_std``, the names :mod:`train.learning.jax_export` maps onto SB3's.
+    """
+    import flax.linen as nn
+    import jax.numpy as jnp
+
+    def dense(size: int, gain: float, name: str) -> nn.Dense:
+        init = nn.initializers.orthogonal(gain) if settings.ortho_init else nn.initializers.lecun_normal()
+        return nn.Dense(size, kernel_init=init, bias_init=nn.initializers.zeros, name=name)
+
+    activation = activation_function(settings.activation)
+
+    class ActorCritic(nn.Module):
+        @nn.compact
+        def __call__(self, obs: Any) -> tuple[Any, Any, Any]:
+            actor, critic = obs, obs
+            for i, size in enumerate(settings.net_arch):
+                actor = activation(dense(size, math.sqrt(2.0), f"policy_{i}")(actor))
+                critic = activation(dense(size, math.sqrt(2.0), f"value_{i}")(critic))
+            mean = dense(action_dim, 0.01, "action")(actor)
+            value = dense(1, 1.0, "value")(critic)[..., 0]
+            log_std = self.param("log_std", nn.initializers.constant(settings.log_std_init), (action_dim,))
+            return mean, log_std, jnp.asarray(value)
+
+    return ActorCritic()
+
+
+def gaussian_log_prob(actions: Any, mean: Any, log_std: Any) -> Any:
+    """log N(actions; mean, exp(log_std)^2), summed over the action dimensions (SB3's DiagGaussianDistribution)."""
+    import jax.numpy as jnp
+
+    z = (actions - mean) / jnp.exp(log_std)
+    return jnp.sum(-0.5 * z**2 - log_std - 0.5 * math.log(2.0 * math.pi), axis=-1)
+
+
+def gaussian_entropy(log_std: Any) -> Any:
+    import jax.numpy as jnp
+
+    return jnp.sum(log_std + 0.5 * (1.0 + math.log(2.0 * math.pi)), axis=-1)
