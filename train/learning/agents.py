@@ -52,7 +52,15 @@ def load_agent(path: str | Path, part: str = "whole") -> tuple[str, Any]:
     except (ConfigError, ValueError, KeyError, OSError) as error:
         raise AgentLoadError(f"agent {str(path)!r} could not be loaded: {error}") from error
     label = run_dir.name.replace("_", "-") if path.is_dir() else f"{run_dir.name}/{model_path.stem}"
-    policy = as_policy(model, config)
+    normalizer = None
+    if config.normalize_obs:
+        from train.learning.wrappers import load_obs_norm
+
+        try:
+            normalizer = load_obs_norm(model, model_path)
+        except (OSError, KeyError, ValueError) as error:
+            raise AgentLoadError(f"agent {str(path)!r} could not be loaded: {error}") from error
+    policy = as_policy(model, config, normalizer)
     if part == "network":
         return f"{label} (network alone)", policy
     handover = load_extra(run_dir).get("handover")

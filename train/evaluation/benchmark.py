@@ -1,0 +1,73 @@
+"""The evaluation of ``dwr-gym benchmark`` (issue 32): one fixed nominal set and the four disturbed sets.
+
+The nominal set is :data:`EVAL_EPISODES` starts of ``DWRPointStabilization-v1`` (0.3-3 m away, T_con drawn in
+[10, 60] s) drawn with :data:`EVAL_SEED`, a seed no training run uses; the disturbed sets are the same starts on
+the imperfect robots of :mod:`train.evaluation.disturbance_sets`. Every policy (anything with
+stable-baselines3's ``predict``) is scored by :data:`METRICS`: the in-time rate, the energy over the optimum of
+each episode that arrived in time (:mod:`train.evaluation.optimum`, cached), the final heading error and the
+energy.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from train.env_ids import TASK_ENV_ID, env_keywords
+from train.evaluation.disturbance_sets import ROBUSTNESS_SETS
+from train.evaluation.evaluate import evaluate_sets
+from train.evaluation.rollout import Policy
+
+EVAL_SEED = 3232
+"""Seed of the benchmark's evaluation starts (issue 32): kept apart from every training and evaluation seed."""
+EVAL_EPISODES = 1000
+DISTURBED_EPISODES = 200
+"""Episodes per disturbed set: the first of the nominal set's starts, on the imperfect robot."""
+METRICS: dict[str, tuple[str, str]] = {
+    "in_time": ("success_rate", "in time"),
+    "energy_ratio": ("energy_ratio_mean", "E/opt"),
+    "final_heading": ("final_heading_error_mean", "final heading [rad]"),
+    "energy": ("energy_mean", "energy"),
+}
+"""Benchmark metric -> (key of RolloutResult.summary, label). E/opt is the mean over the in-time episodes."""
+SETS: tuple[str, ...] = ("random", *ROBUSTNESS_SETS)
+
+
+def metrics_of(summary: dict[str, float]) -> dict[str, float | None]:
+    """The benchmark's metrics of a rollout summary; None where undefined (E/opt with no episode in time)."""
+    out: dict[str, float | None] = {}
+    for name, (key, _) in METRICS.items():
+        value = float(summary.get(key, math.nan))
+        out[name] = value if math.isfinite(value) else None
+    return out
+
+
+def evaluate_policy(
+    policy: Policy | str,
+    env_id: str = TASK_ENV_ID,
+    *,
+    n: int = EVAL_EPISODES,
+    n_disturbed: int = DISTURBED_EPISODES,
+    seed: int = EVAL_SEED,
+    sets: tuple[str, ...] = SETS,
+    progress: bool = False,
+) -> dict[str, dict[str, float | None]]:
+    """{set: metrics} of ``policy`` (or a controller's name) on the nominal set (``n`` episodes) and the disturbed ones (``n_disturbed``)."""
+    if n < 1 or n_disturbed < 1:
+        raise ValueError(f"n={n!r} and n_disturbed={n_disturbed!r} are invalid: expected integers >= 1")
+    kwargs = env_keywords(env_id, {})
+    results: dict[str, dict[str, float | None]] = {}
+    for name in sets:
+        size = n if name == "random" else n_disturbed
+        rows = evaluate_sets({"agent": policy}, [name], size, seed, kwargs, progress=progress, optimum="pose")
+        results[name] = metrics_of(rows[0])
+    return results
+
+
+def reference_controllers(names: tuple[str, ...], env_id: str = TASK_ENV_ID, **kwargs: Any) -> dict[str, Any]:
+    """{controller: {set: metrics}} of analytic controllers (names of :mod:`baselines`) on the benchmark's sets."""
+    return {name: evaluate_policy(name, env_id, **kwargs) for name in names}
+
+
+__all__ = ["DISTURBED_EPISODES", "EVAL_EPISODES", "EVAL_SEED", "METRICS", "SETS", "evaluate_policy", "metrics_of",
+           "reference_controllers"]  # fmt: skip

@@ -1,0 +1,159 @@
+"""Aggregates of ``dwr-gym benchmark`` over seeds, as the field reports RL (Agarwal et al. 2021, rliable):
+interquartile means (IQM) with 95 % stratified-bootstrap confidence intervals, learning curves (IQM and band)
+against env steps and against wall-clock seconds, and the tables the docs show.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from train.evaluation.benchmark import METRICS, SETS
+
+BOOTSTRAP_REPS = 2000
+CURVE_POINTS = 40
+
+
+def iqm_interval(values: list[float], seed: int = 0, reps: int = BOOTSTRAP_REPS) -> dict[str, Any]:
+    """IQM of per-seed values and its 95 % stratified-bootstrap interval (rliable); NaN values are dropped."""
+    from rliable import library, metrics
+
+    data = np.array([v for v in values if v is not None and math.isfinite(v)], dtype=np.float64)
+    if data.size == 0:
+        return {"iqm": None, "low": None, "high": None, "n": 0}
+    if data.size == 1:
+        return {"iqm": float(data[0]), "low": float(data[0]), "high": float(data[0]), "n": 1}
+    point, interval = library.get_interval_estimates(
+        {"x": data.reshape(-1, 1)}, lambda x: np.array([metrics.aggregate_iqm(x)]), reps=reps,
+        random_state=np.random.RandomState(seed),
+    )  # fmt: skip
+    return {"iqm": float(point["x"][0]), "low": float(interval["x"][0, 0]), "high": float(interval["x"][1, 0]),
+            "n": int(data.size)}  # fmt: skip
+
+
+def _iqm_rows(matrix: np.ndarray) -> np.ndarray:
+    """IQM over seeds (rows) of each column, ignoring NaN."""
+    from scipy.stats import trim_mean
+
+    return np.array([trim_mean(col[np.isfinite(col)], 0.25) if np.isfinite(col).any() else np.nan for col in matrix.T])
+
+
+def curve_band(curves: list[list[dict[str, float]]], x: str, y: str, seed: int = 0) -> dict[str, list[float]]:
+    """IQM over seeds of ``y`` against ``x`` (each seed's curve interpolated to a common grid), with a 95 %
+    bootstrap band over seeds (at most the shortest run's extent)."""
+    curves = [c for c in curves if c]
+    if not curves:
+        return {"x": [], "iqm": [], "low": [], "high": []}
+    end = min(c[-1][x] for c in curves)
+    grid = np.linspace(0.0, end, CURVE_POINTS) if end > 0 else np.zeros(1)
+    matrix = np.array([np.interp(grid, [r[x] for r in c], [r[y] for r in c]) for c in curves])
+    rng = np.random.default_rng(seed)
+    boots = np.array([_iqm_rows(matrix[rng.integers(0, len(matrix), len(matrix))]) for _ in range(200)])
+    low, high = np.nanpercentile(boots, [2.5, 97.5], axis=0) if len(matrix) > 1 else (matrix[0], matrix[0])
+    return {"x": grid.tolist(), "iqm": _iqm_rows(matrix).tolist(), "low": np.asarray(low).tolist(),
+            "high": np.asarray(high).tolist()}  # fmt: skip
+
+
+def aggregate(results: list[dict[str, Any]]) -> dict[str, Any]:
+    """{entry: {"seeds", "sets": {set: {metric: IQM interval}}, "per_seed", "curves", "seconds"}}."""
+    out: dict[str, Any] = {}
+    for name in dict.fromkeys(r["entry"] for r in results):
+        runs = sorted((r for r in results if r["entry"] == name), key=lambda r: r["seed"])
+        sets = {s: {m: iqm_interval([r["sets"][s][m] for r in runs if s in r["sets"]]) for m in METRICS}
+                for s in SETS if any(s in r["sets"] for r in runs)}  # fmt: skip
+        curves = [r["curve"] for r in runs]
+        out[name] = {
+            "seeds": [r["seed"] for r in runs],
+            "learned_from": runs[0].get("learned_from", "reward"),
+            "seconds": iqm_interval([r["seconds"] for r in runs]),
+            "sets": sets,
+            "per_seed": {s: {m: [r["sets"][s][m] for r in runs] for m in METRICS} for s in sets},
+            "curves": {
+                x: {y: curve_band(curves, x, y) for y in ("in_time", "energy", "final_heading")}
+                for x in ("env_steps", "wall_time")
+            },
+        }
+    return out
+
+
+def best_seed(results: list[dict[str, Any]], name: str) -> int:
+    """The seed of ``name`` with the most episodes in time on the nominal set, then the lowest E/opt."""
+    runs = [r for r in results if r["entry"] == name]
+
+    def key(r: dict[str, Any]) -> tuple[float, float]:
+        metrics = r["sets"]["random"]
+        return (-(metrics["in_time"] or 0.0), metrics["energy_ratio"] if metrics["energy_ratio"] is not None else 1e9)
+
+    return int(min(runs, key=key)["seed"])
+
+
+def _cell(interval: dict[str, Any], digits: int) -> str:
+    if interval["iqm"] is None:
+        return "-"
+    return f"{interval['iqm']:.{digits}f} [{interval['low']:.{digits}f}, {interval['high']:.{digits}f}]"
+
+
+def table(summary: dict[str, Any], references: dict[str, Any] | None = None, set_name: str = "random") -> str:
+    """The markdown table of one set: IQM [95 % CI] of each metric per entry, then the reference controllers."""
+    lines = ["| agent | seeds | in time | E/opt | final heading [rad] | energy | training [s] |",
+             "|---|---|---|---|---|---|---|"]  # fmt: skip
+    for name, entry in summary.items():
+        m = entry["sets"].get(set_name)
+        if m is None:
+            continue
+        lines.append(f"| {name} | {len(entry['seeds'])} | {_cell(m['in_time'], 3)} | {_cell(m['energy_ratio'], 2)} | "
+                     f"{_cell(m['final_heading'], 2)} | {_cell(m['energy'], 2)} | "
+                     f"{entry['seconds']['iqm']:.0f} |")  # fmt: skip
+    for name, sets in (references or {}).items():
+        m = sets.get(set_name)
+        if m is None:
+            continue
+        ratio = "-" if m["energy_ratio"] is None else f"{m['energy_ratio']:.2f}"
+        lines.append(f"| {name} (controller) | - | {m['in_time']:.3f} | {ratio} | {m['final_heading']:.2f} | "
+                     f"{m['energy']:.2f} | - |")  # fmt: skip
+    return "\n".join(lines)
+
+
+def disturbed_table(summary: dict[str, Any], references: dict[str, Any] | None = None) -> str:
+    """In-time IQM per disturbed set and entry."""
+    names = [s for s in SETS if s != "random"]
+    lines = ["| agent | " + " | ".join(f"{s}: in time" for s in names) + " |", "|---" * (len(names) + 1) + "|"]
+    for name, entry in summary.items():
+        cells = [_cell(entry["sets"][s]["in_time"], 2) if s in entry["sets"] else "-" for s in names]
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    for name, sets in (references or {}).items():
+        cells = [f"{sets[s]['in_time']:.2f}" if s in sets else "-" for s in names]
+        lines.append(f"| {name} (controller) | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def plot_curves(summary: dict[str, Any], path: Path, x: str) -> None:
+    """Learning curves (IQM over seeds and its 95 % band) of the in-time rate and the energy against ``x``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.6))
+    for name, entry in summary.items():
+        for ax, y in zip(axes, ("in_time", "energy"), strict=True):
+            band = entry["curves"][x][y]
+            if not band["x"]:
+                continue
+            line = ax.plot(band["x"], band["iqm"], label=f"{name} ({len(entry['seeds'])} seeds)")[0]
+            ax.fill_between(band["x"], band["low"], band["high"], color=line.get_color(), alpha=0.2)
+    for ax, label in zip(axes, ("in time (IQM, 95 % CI)", "energy (IQM, 95 % CI)"), strict=True):
+        ax.set_xlabel("env steps" if x == "env_steps" else "wall-clock seconds (training, evaluations included)")
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=7)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
+__all__ = ["aggregate", "best_seed", "curve_band", "disturbed_table", "iqm_interval", "plot_curves", "table"]
