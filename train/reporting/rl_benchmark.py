@@ -156,4 +156,28 @@ def plot_curves(summary: dict[str, Any], path: Path, x: str) -> None:
     plt.close(fig)
 
 
-__all__ = ["aggregate", "best_seed", "curve_band", "disturbed_table", "iqm_interval", "plot_curves", "table"]
+def diagnosis_table(data: dict[str, Any]) -> str:
+    """The table of benchmarks/rl_diagnosis.py: PTC with exploration noise, what the noise's energy costs."""
+    lines = ["| exploration noise sigma | in time | energy | E/opt | return | noise's energy cost per s | over the "
+             "episode |", "|---|---|---|---|---|---|---|"]  # fmt: skip
+    for r in data["rows"]:
+        ratio = "-" if r["energy_ratio"] is None else f"{r['energy_ratio']:.2f}"
+        lines.append(f"| {r['sigma']:.2f} | {r['in_time']:.3f} | {r['energy']:.2f} | {ratio} | {r['return']:.1f} | "
+                     f"{r['noise_cost_per_second']:.3f} | {r['noise_cost_per_second'] * r['episode_seconds']:.1f} |")  # fmt: skip
+    lines.append(f"\n*PTC with Gaussian noise on its normalised actions, {data['n']} episodes of the benchmark's "
+                 f"nominal set (seed {data['seed']}); the optimum's mean energy {data['rows'][0]['optimal_energy']:.2f}, "
+                 f"i.e. a reward of {-data['energy_weight'] * data['rows'][0]['optimal_energy']:.2f}; the arrival bonus "
+                 f"{data['arrival_bonus']:.0f}.*\n")  # fmt: skip
+    return "\n".join(lines)
+
+
+__all__ = [
+    "aggregate",
+    "best_seed",
+    "curve_band",
+    "diagnosis_table",
+    "disturbed_table",
+    "iqm_interval",
+    "plot_curves",
+    "table",
+]
