@@ -55,12 +55,28 @@ def parse_entry(text: str) -> Entry:
     if not rest and name not in ENTRIES:
         raise ConfigError(f"agent {text!r} is invalid: expected one of {', '.join(ENTRIES)}, or NAME:KEY=VALUE,...")
     options = dict(ENTRIES[base]) if base else {}
-    for item in filter(None, rest.split(",")):
+    for item in filter(None, _split_top_level(rest)):
         key, sep, value = item.partition("=")
         if not sep or key not in TrainConfig.__dataclass_fields__:
             raise ConfigError(f"agent {text!r}: {item!r} is invalid: expected KEY=VALUE with KEY a train option")
-        options[key] = yaml.safe_load(value)
+        try:
+            options[key] = yaml.safe_load(value)
+        except yaml.YAMLError:
+            raise ConfigError(f"agent {text!r}: {item!r} is invalid: its value is not YAML") from None
     return Entry(name, options)
+
+
+def _split_top_level(text: str) -> list[str]:
+    """``text`` split at the commas outside brackets and braces."""
+    items, depth, current = [], 0, ""
+    for char in text:
+        depth += (char in "[{(") - (char in "]})")
+        if char == "," and depth == 0:
+            items.append(current)
+            current = ""
+        else:
+            current += char
+    return [*items, current]
 
 
 def train_config(entry: Entry, seed: int, run_dir: Path, budget: dict[str, Any]) -> TrainConfig:

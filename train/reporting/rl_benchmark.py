@@ -18,20 +18,21 @@ CURVE_POINTS = 40
 
 
 def iqm_interval(values: list[float], seed: int = 0, reps: int = BOOTSTRAP_REPS) -> dict[str, Any]:
-    """IQM of per-seed values and its 95 % stratified-bootstrap interval (rliable); NaN values are dropped."""
-    from rliable import library, metrics
+    """IQM of per-seed values (rliable's ``aggregate_iqm``) and its 95 % stratified-bootstrap percentile interval
+    (the runs resampled with replacement, ``reps`` times, as rliable's ``StratifiedBootstrap`` does for one task;
+    written here because ``rliable.library`` needs ``arch``, which does not import with pandas 3). NaN and None
+    values are dropped."""
+    from rliable import metrics
 
     data = np.array([v for v in values if v is not None and math.isfinite(v)], dtype=np.float64)
     if data.size == 0:
         return {"iqm": None, "low": None, "high": None, "n": 0}
-    if data.size == 1:
-        return {"iqm": float(data[0]), "low": float(data[0]), "high": float(data[0]), "n": 1}
-    point, interval = library.get_interval_estimates(
-        {"x": data.reshape(-1, 1)}, lambda x: np.array([metrics.aggregate_iqm(x)]), reps=reps,
-        random_state=np.random.RandomState(seed),
-    )  # fmt: skip
-    return {"iqm": float(point["x"][0]), "low": float(interval["x"][0, 0]), "high": float(interval["x"][1, 0]),
-            "n": int(data.size)}  # fmt: skip
+    point = float(metrics.aggregate_iqm(data.reshape(-1, 1)))
+    rng = np.random.default_rng(seed)
+    samples = data[rng.integers(0, data.size, (reps, data.size))]
+    boots = np.array([metrics.aggregate_iqm(sample.reshape(-1, 1)) for sample in samples])
+    low, high = np.percentile(boots, [2.5, 97.5])
+    return {"iqm": point, "low": float(low), "high": float(high), "n": int(data.size)}
 
 
 def _iqm_rows(matrix: np.ndarray) -> np.ndarray:
