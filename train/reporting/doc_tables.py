@@ -208,7 +208,24 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "robust-goal": ("docs/robust/goal.json", robust_goal_table),
     "robust-filter-rates": ("docs/robust/filter_rates.json", filter_rates_table),
     "robust-headline": ("docs/compare/comparison.json", lambda rows: robust_headline(rows)),
+    "rl-benchmark": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "random")),
+    "rl-benchmark-disturbed": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "disturbed")),
+    "rl-diagnosis": ("docs/rl_benchmark/diagnosis.json", lambda data: rl_table(data, "diagnosis")),
+    "rl-levers": ("docs/rl_benchmark/levers.json", lambda data: rl_table(data, "levers")),
 }
+
+
+def rl_table(data: dict[str, Any], kind: str) -> str:
+    """The tables of docs/rl-benchmark.md (train.reporting.rl_benchmark)."""
+    from train.reporting import rl_benchmark
+
+    if kind == "diagnosis":
+        return rl_benchmark.diagnosis_table(data)
+    if kind == "levers":
+        return rl_benchmark.levers_table(data)
+    if kind == "disturbed":
+        return rl_benchmark.disturbed_table(data["summary"], data["references"])
+    return rl_benchmark.table(data["summary"], data["references"])
 
 
 def robust_headline(rows: list[dict[str, Any]]) -> str:

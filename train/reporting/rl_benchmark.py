@@ -172,6 +172,19 @@ def diagnosis_table(data: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def levers_table(data: dict[str, Any]) -> str:
+    """Per lever: env steps and seconds reached, the best and the last evaluation (in time, energy, heading)."""
+    lines = ["| lever (one seed) | env steps | seconds | best in time (energy) | last in time | last energy | "
+             "last heading [rad] |", "|---|---|---|---|---|---|---|"]  # fmt: skip
+    for lever, entry in data["levers"].items():
+        rows = entry["curve"]
+        best, last = max(rows, key=lambda r: r["in_time"]), rows[-1]
+        lines.append(f"| {lever} | {last['env_steps']:,} | {last['wall_time']:.0f} | {best['in_time']:.2f} "
+                     f"({best['energy']:.2f}) | {last['in_time']:.2f} | {last['energy']:.2f} | "
+                     f"{last['final_heading']:.2f} |")  # fmt: skip
+    return "\n".join(lines)
+
+
 __all__ = [
     "aggregate",
     "best_seed",
@@ -179,6 +192,7 @@ __all__ = [
     "diagnosis_table",
     "disturbed_table",
     "iqm_interval",
+    "levers_table",
     "plot_curves",
     "table",
 ]
