@@ -14,50 +14,24 @@ import argparse
 import csv
 import json
 import os
+import shlex
 import subprocess
 import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 
-LEVERS: dict[str, list[str]] = {
-    "ppo (defaults)": ["--eval-freq", "100000"],
-    "ppo, normalised obs and reward": ["--eval-freq", "100000", "--normalize-obs", "--normalize-reward"],
-    "ppo, action repeat 5, normalised": [
-        "--eval-freq",
-        "20000",
-        "--action-repeat",
-        "5",
-        "--normalize-obs",
-        "--normalize-reward",
-    ],  # fmt: skip
-    "ppo, action repeat 10, normalised": [
-        "--eval-freq",
-        "10000",
-        "--action-repeat",
-        "10",
-        "--normalize-obs",
-        "--normalize-reward",
-    ],  # fmt: skip
-    "ppo, sigma0 exp(-2), normalised": [
-        "--eval-freq",
-        "100000",
-        "--normalize-obs",
-        "--normalize-reward",
-        "--hyperparams",
-        "policy_kwargs=dict(net_arch=[64, 64], log_std_init=-2)",
-    ],
-    "residual ppo on ptc (defaults)": ["--eval-freq", "65536", "--residual", "--expert", "ptc"],
-    "residual ppo on ptc, sigma0 exp(-3)": [
-        "--eval-freq",
-        "65536",
-        "--residual",
-        "--expert",
-        "ptc",
-        "--hyperparams",
-        "policy_kwargs=dict(net_arch=[64, 64], log_std_init=-3)",
-    ],
-    "residual ppo on pt-astolfi (defaults)": ["--eval-freq", "65536", "--residual", "--expert", "pt-astolfi"],
+NORM = "--normalize-obs --normalize-reward"
+LOW_STD = "--hyperparams 'policy_kwargs=dict(net_arch=[64, 64], log_std_init={})'"
+LEVERS: dict[str, str] = {
+    "ppo (defaults)": "--eval-freq 100000",
+    "ppo, normalised obs and reward": f"--eval-freq 100000 {NORM}",
+    "ppo, action repeat 5, normalised": f"--eval-freq 20000 --action-repeat 5 {NORM}",
+    "ppo, action repeat 10, normalised": f"--eval-freq 10000 --action-repeat 10 {NORM}",
+    "ppo, sigma0 exp(-2), normalised": f"--eval-freq 100000 {NORM} {LOW_STD.format(-2)}",
+    "residual ppo on ptc (defaults)": "--eval-freq 65536 --residual --expert ptc",
+    "residual ppo on ptc, sigma0 exp(-3)": f"--eval-freq 65536 --residual --expert ptc {LOW_STD.format(-3)}",
+    "residual ppo on pt-astolfi (defaults)": "--eval-freq 65536 --residual --expert pt-astolfi",
 }
 """Lever -> options of dwr-gym train; the action repeat's --eval-freq counts decisions (K env steps each)."""
 DIRS = {"ppo (defaults)": "A_default", "ppo, normalised obs and reward": "D_norm",
@@ -67,7 +41,8 @@ DIRS = {"ppo (defaults)": "A_default", "ppo, normalised obs and reward": "D_norm
         "residual ppo on pt-astolfi (defaults)": "R_astolfi"}  # fmt: skip
 
 
-def repeat_of(options: list[str]) -> int:
+def repeat_of(text: str) -> int:
+    options = shlex.split(text)
     return int(options[options.index("--action-repeat") + 1]) if "--action-repeat" in options else 1
 
 
@@ -92,7 +67,7 @@ def main(argv: list[str] | None = None) -> int:
         if not args.collect:
             command = [sys.executable, "-m", "train.cli", "train", "--run-dir", str(run_dir), "--overwrite",
                        "--no-progress", "--threads", "1", "--total-timesteps", "100000000",
-                       "--time-limit", str(args.seconds), *options]  # fmt: skip
+                       "--time-limit", str(args.seconds), *shlex.split(options)]  # fmt: skip
             subprocess.run(command, check=True, cwd=ROOT)
         if (run_dir / "evaluations.csv").is_file():
             data["levers"][lever] = {"options": options, "curve": curve(run_dir, repeat_of(options))}
