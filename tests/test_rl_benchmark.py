@@ -129,3 +129,11 @@ def test_the_protocol_trains_evaluates_and_aggregates_any_policy_over_seeds(tmp_
 def test_the_command_refuses_an_unknown_agent_in_one_line(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["benchmark", "--agents", "nonsense", "--out", "/nonexistent/x"]) == 2
     assert len(capsys.readouterr().err.strip().splitlines()) == 1
+
+
+def test_a_sweep_searches_the_initial_exploration_noise_inside_policy_kwargs(tmp_path: Path) -> None:
+    from train.learning.sweep import trial_config
+
+    config = trial_config({"algo": "ppo", "residual": True}, {"log_std_init": -3.0, "learning_rate": 1e-4}, 0, tmp_path)
+    assert config.algo_kwargs["policy_kwargs"] == {"net_arch": [64, 64], "log_std_init": -3.0}
+    assert config.algo_kwargs["learning_rate"] == 1e-4
