@@ -92,7 +92,7 @@ def train_config(entry: Entry, seed: int, run_dir: Path, budget: dict[str, Any])
     repeat = int(options.get("action_repeat", 1))
     config = TrainConfig(**options, seed=seed, run_dir=str(run_dir), progress=False,
                          eval_seed=EVAL_SEED, eval_episodes=int(budget.get("eval_episodes", EVAL_EPISODES)))  # fmt: skip
-    if budget.get("env_steps"):
+    if budget.get("env_steps") and "total_timesteps" not in entry.options:  # an entry's own budget wins
         config.total_timesteps = max(1, int(budget["env_steps"]) // repeat)
     if budget.get("eval_freq"):
         config.eval_freq = max(1, int(budget["eval_freq"]) // repeat)
@@ -101,8 +101,27 @@ def train_config(entry: Entry, seed: int, run_dir: Path, budget: dict[str, Any])
     if overrides:
         config.hyperparam_overrides = dict(overrides)
     config.validate()
-    explicit = {"total_timesteps"} if budget.get("env_steps") else set()
+    explicit = {"total_timesteps"} if budget.get("env_steps") or "total_timesteps" in entry.options else set()
     return resolve_hyperparams(config, explicit)
+
+
+def train_command(entry: Entry, config: TrainConfig) -> list[str]:
+    """The ``dwr-gym train`` command that trains this run alone (config.yaml's recipe, which
+    benchmarks/retrain_pretrained.py runs again)."""
+    command = ["dwr-gym", "train", "--seed", str(config.seed), "--total-timesteps", str(config.total_timesteps),
+               "--eval-freq", str(config.eval_freq), "--checkpoint-freq", str(config.checkpoint_freq),
+               "--eval-episodes", str(config.eval_episodes), "--eval-seed", str(config.eval_seed)]  # fmt: skip
+    if config.time_limit is not None:
+        command += ["--time-limit", str(config.time_limit)]
+    for key, value in entry.options.items():
+        flag = "--" + key.replace("_", "-")
+        if key == "hyperparams" and isinstance(value, dict):
+            command += [flag, *(f"{k}={v}" for k, v in value.items())]
+        elif isinstance(value, bool):
+            command += [flag] if value else []
+        else:
+            command += [flag, str(value)]
+    return [*command, "--run-dir", str(config.run_dir)]
 
 
 def run_one(entry: Entry, seed: int, out: Path, budget: dict[str, Any], progress: bool = False) -> dict[str, Any]:
@@ -129,7 +148,7 @@ def run_one(entry: Entry, seed: int, out: Path, budget: dict[str, Any], progress
         elif not state.is_file():
             config.overwrite = True
         if not (state.is_file() and json.loads(state.read_text()).get("finished")):
-            train(config, command=["dwr-gym", "benchmark", entry.name, f"seed={seed}"])
+            train(config, command=train_command(entry, config))
         _, policy = load_agent(run_dir)
         repeat, config_dict = config.action_repeat, config.to_dict()
     train_seconds = time.time() - start
@@ -173,4 +192,4 @@ def run_benchmark(
         return [future.result() for future in futures]
 
 
-__all__ = ["ENTRIES", "Entry", "parse_entry", "read_curve", "run_benchmark", "run_one", "train_config"]
+__all__ = ["ENTRIES", "Entry", "parse_entry", "read_curve", "run_benchmark", "run_one", "train_command", "train_config"]
