@@ -154,7 +154,10 @@ def run_one(entry: Entry, seed: int, out: Path, budget: dict[str, Any], progress
     train_seconds = time.time() - start
     sets = evaluate_policy(policy, n=int(budget.get("eval_episodes", EVAL_EPISODES)),
                            n_disturbed=int(budget.get("disturbed_episodes", DISTURBED_EPISODES)), progress=progress)  # fmt: skip
+    state_path = run_dir / "run_state.json"
+    steps = json.loads(state_path.read_text()).get("timesteps", 0) * repeat if state_path.is_file() else None
     result = {"entry": entry.name, "seed": seed, "learned_from": entry.learned_from, "action_repeat": repeat,
+              "env_steps": steps,
               "seconds": round(train_seconds, 1), "sets": sets, "curve": read_curve(run_dir, repeat),
               "config": config_dict}  # fmt: skip
     result_path.parent.mkdir(parents=True, exist_ok=True)

@@ -209,6 +209,7 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "robust-filter-rates": ("docs/robust/filter_rates.json", filter_rates_table),
     "robust-headline": ("docs/compare/comparison.json", lambda rows: robust_headline(rows)),
     "rl-benchmark": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "random")),
+    "rl-benchmark-readme": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "readme")),
     "rl-benchmark-disturbed": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "disturbed")),
     "rl-diagnosis": ("docs/rl_benchmark/diagnosis.json", lambda data: rl_table(data, "diagnosis")),
     "rl-levers": ("docs/rl_benchmark/levers.json", lambda data: rl_table(data, "levers")),
@@ -223,6 +224,10 @@ def rl_table(data: dict[str, Any], kind: str) -> str:
         return rl_benchmark.diagnosis_table(data)
     if kind == "levers":
         return rl_benchmark.levers_table(data)
+    if kind == "readme":
+        return rl_benchmark.table(
+            data["summary"], data["references"], columns=("in_time", "energy_ratio", "final_heading")
+        )
     if kind == "disturbed":
         return rl_benchmark.disturbed_table(data["summary"], data["references"])
     return rl_benchmark.table(data["summary"], data["references"])

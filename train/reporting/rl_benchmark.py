@@ -70,6 +70,7 @@ def aggregate(results: list[dict[str, Any]]) -> dict[str, Any]:
             "seeds": [r["seed"] for r in runs],
             "learned_from": runs[0].get("learned_from", "reward"),
             "seconds": iqm_interval([r["seconds"] for r in runs]),
+            "env_steps": iqm_interval([r.get("env_steps") or math.nan for r in runs]),
             "sets": sets,
             "per_seed": {s: {m: [r["sets"][s][m] for r in runs] for m in METRICS} for s in sets},
             "curves": {
@@ -97,24 +98,38 @@ def _cell(interval: dict[str, Any], digits: int) -> str:
     return f"{interval['iqm']:.{digits}f} [{interval['low']:.{digits}f}, {interval['high']:.{digits}f}]"
 
 
-def table(summary: dict[str, Any], references: dict[str, Any] | None = None, set_name: str = "random") -> str:
-    """The markdown table of one set: IQM [95 % CI] of each metric per entry, then the reference controllers."""
-    lines = ["| agent | seeds | in time | E/opt | final heading [rad] | energy | training [s] |",
-             "|---|---|---|---|---|---|---|"]  # fmt: skip
+COLUMNS: dict[str, tuple[str, int]] = {
+    "in_time": ("in time", 3),
+    "energy_ratio": ("E/opt", 2),
+    "final_heading": ("final heading [rad]", 2),
+    "energy": ("energy", 2),
+}
+
+
+def table(
+    summary: dict[str, Any],
+    references: dict[str, Any] | None = None,
+    set_name: str = "random",
+    columns: tuple[str, ...] = tuple(COLUMNS),
+) -> str:
+    """The markdown table of one set: IQM [95 % CI] of each metric per entry (with its env steps and training
+    seconds, IQM over seeds), then the reference controllers."""
+    head = " | ".join(COLUMNS[c][0] for c in columns)
+    lines = [f"| agent | seeds | env steps | training [s] | {head} |", "|---" * (len(columns) + 4) + "|"]
     for name, entry in summary.items():
         m = entry["sets"].get(set_name)
         if m is None:
             continue
-        lines.append(f"| {name} | {len(entry['seeds'])} | {_cell(m['in_time'], 3)} | {_cell(m['energy_ratio'], 2)} | "
-                     f"{_cell(m['final_heading'], 2)} | {_cell(m['energy'], 2)} | "
-                     f"{entry['seconds']['iqm']:.0f} |")  # fmt: skip
+        cells = " | ".join(_cell(m[c], COLUMNS[c][1]) for c in columns)
+        steps = entry.get("env_steps", {}).get("iqm")
+        steps_text = "-" if steps is None else f"{steps:,.0f}"
+        lines.append(f"| {name} | {len(entry['seeds'])} | {steps_text} | {entry['seconds']['iqm']:.0f} | {cells} |")
     for name, sets in (references or {}).items():
         m = sets.get(set_name)
         if m is None:
             continue
-        ratio = "-" if m["energy_ratio"] is None else f"{m['energy_ratio']:.2f}"
-        lines.append(f"| {name} (controller) | - | {m['in_time']:.3f} | {ratio} | {m['final_heading']:.2f} | "
-                     f"{m['energy']:.2f} | - |")  # fmt: skip
+        cells = " | ".join("-" if m[c] is None else f"{m[c]:.{COLUMNS[c][1]}f}" for c in columns)
+        lines.append(f"| {name} (controller) | - | - | - | {cells} |")
     return "\n".join(lines)
 
 
