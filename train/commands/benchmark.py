@@ -61,6 +61,10 @@ def run(args: argparse.Namespace) -> int:
         results = run_benchmark(entries, list(range(args.seeds)), out, budget, jobs=args.jobs)
     except ConfigError as error:
         raise UsageError(str(error)) from error
+    for result in results:  # results written before the env steps were recorded: read them from the run
+        state = out / "runs" / f"{result['entry']}-seed{result['seed']}" / "run_state.json"
+        if result.get("env_steps") is None and state.is_file():
+            result["env_steps"] = json.loads(state.read_text()).get("timesteps", 0) * result.get("action_repeat", 1)
     data = report(results, out, budget, tuple(args.references))
     if args.docs:
         report(results, DOCS_DIR, budget, tuple(args.references), data)
