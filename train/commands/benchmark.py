@@ -32,6 +32,8 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--eval-freq", type=count, default=100_000, help="env steps between evaluations (default: 100000)")
     p.add_argument("--eval-episodes", type=count, default=1000, help="nominal evaluation episodes (default: 1000)")
     p.add_argument("--disturbed-episodes", type=count, default=200, help="episodes per disturbed set (default: 200)")
+    p.add_argument("--optimum-episodes", type=count, default=200,
+                   help="nominal episodes whose optimum E/opt is measured on (0: all; default: 200)")  # fmt: skip
     p.add_argument("--references", nargs="*", default=["ptc", "pt-astolfi"], metavar="CONTROLLER",
                    help="controllers evaluated beside the agents (default: ptc pt-astolfi)")  # fmt: skip
     p.add_argument("--jobs", type=count, default=1, help="runs in parallel processes (default: 1)")
@@ -55,7 +57,8 @@ def run(args: argparse.Namespace) -> int:
     except ConfigError as error:
         raise UsageError(str(error)) from error
     budget = {"env_steps": args.env_steps, "time_limit": args.time_limit, "eval_freq": args.eval_freq,
-              "eval_episodes": args.eval_episodes, "disturbed_episodes": args.disturbed_episodes}  # fmt: skip
+              "eval_episodes": args.eval_episodes, "disturbed_episodes": args.disturbed_episodes,
+              "optimum_episodes": args.optimum_episodes}  # fmt: skip
     out = Path(args.out)
     try:
         results = run_benchmark(entries, list(range(args.seeds)), out, budget, jobs=args.jobs)
@@ -83,7 +86,8 @@ def report(
     from train.reporting.rl_benchmark import aggregate, best_seed, disturbed_table, plot_curves, table
 
     if data is None:
-        refs = reference_controllers(references, n=budget["eval_episodes"], n_disturbed=budget["disturbed_episodes"])
+        refs = reference_controllers(references, n=budget["eval_episodes"], n_disturbed=budget["disturbed_episodes"],
+                                     n_optimum=budget.get("optimum_episodes") or None)  # fmt: skip
         summary = aggregate(results)
         data = {"budget": budget, "machine": machine(), "summary": summary, "references": refs,
                 "best_seed": {name: best_seed(results, name) for name in summary}}  # fmt: skip

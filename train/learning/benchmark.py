@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from train.evaluation.benchmark import DISTURBED_EPISODES, EVAL_EPISODES, EVAL_SEED, evaluate_policy
+from train.evaluation.benchmark import DISTURBED_EPISODES, EVAL_EPISODES, EVAL_SEED, OPTIMUM_EPISODES, evaluate_policy
 from train.learning.config import ConfigError, TrainConfig
 
 #: The shipped entries: the options of ``dwr-gym train`` each one trains with (on top of train/hyperparams/).
@@ -159,7 +159,8 @@ def run_one(entry: Entry, seed: int, out: Path, budget: dict[str, Any], progress
         repeat, config_dict = config.action_repeat, config.to_dict()
     train_seconds = time.time() - start
     sets = evaluate_policy(policy, n=int(budget.get("eval_episodes", EVAL_EPISODES)),
-                           n_disturbed=int(budget.get("disturbed_episodes", DISTURBED_EPISODES)), progress=progress)  # fmt: skip
+                           n_disturbed=int(budget.get("disturbed_episodes", DISTURBED_EPISODES)),
+                           n_optimum=budget.get("optimum_episodes", OPTIMUM_EPISODES) or None, progress=progress)  # fmt: skip
     state_path = run_dir / "run_state.json"
     steps = json.loads(state_path.read_text()).get("timesteps", 0) * repeat if state_path.is_file() else None
     result = {"entry": entry.name, "seed": seed, "learned_from": entry.learned_from, "action_repeat": repeat,
