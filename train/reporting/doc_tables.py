@@ -209,6 +209,8 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "robust-filter-rates": ("docs/robust/filter_rates.json", filter_rates_table),
     "robust-headline": ("docs/compare/comparison.json", lambda rows: robust_headline(rows)),
     "rl-benchmark": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "random")),
+    "rl-residual": ("docs/rl_benchmark/residual.json", lambda data: rl_table(data, "residual")),
+    "rl-goals": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "goals")),
     "rl-benchmark-readme": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "readme")),
     "rl-benchmark-disturbed": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "disturbed")),
     "rl-diagnosis": ("docs/rl_benchmark/diagnosis.json", lambda data: rl_table(data, "diagnosis")),
@@ -224,6 +226,10 @@ def rl_table(data: dict[str, Any], kind: str) -> str:
         return rl_benchmark.diagnosis_table(data)
     if kind == "levers":
         return rl_benchmark.levers_table(data)
+    if kind == "residual":
+        return rl_benchmark.residual_table(data)
+    if kind == "goals":
+        return rl_benchmark.goals_table(data["summary"])
     if kind == "readme":
         return rl_benchmark.table(
             data["summary"], data["references"], columns=("in_time", "energy_ratio", "final_heading")

@@ -132,6 +132,36 @@ def table(
     return "\n".join(lines)
 
 
+GOALS = {
+    "from the reward alone": (("ppo", "ppo-jax", "sac", "td3", "tqc", "crossq"), 0.99, 1.5, 0.1),
+    "residual RL on PTC": (("residual-ppo",), 0.995, 1.6, 0.15),
+}
+"""Issue 32's goals: (entries, in time >=, E/opt <=, final heading <= [rad]), IQM over >= 5 seeds on nominal v1."""
+
+
+def goals_table(summary: dict[str, Any]) -> str:
+    """Each goal of issue 32, the best entry for it (most in time) and whether each figure is met."""
+    lines = ["| goal | best agent | seeds | in time | E/opt | final heading [rad] | training [s] (30 min = 1,800) |",
+             "|---|---|---|---|---|---|---|"]  # fmt: skip
+
+    def verdict(value: float | None, target: float, above: bool) -> str:
+        if value is None:
+            return f"- (goal {'>=' if above else '<='} {target:g}): not reached"
+        met = value >= target if above else value <= target
+        return f"{value:.3f} ({'>=' if above else '<='} {target:g}): {'met' if met else 'not met'}"
+
+    for goal, (names, in_time, ratio, heading) in GOALS.items():
+        found = [n for n in names if n in summary and "random" in summary[n]["sets"]]
+        if not found:
+            continue
+        best = max(found, key=lambda n: summary[n]["sets"]["random"]["in_time"]["iqm"] or 0.0)
+        entry, m = summary[best], summary[best]["sets"]["random"]
+        lines.append(f"| {goal} | {best} | {len(entry['seeds'])} | {verdict(m['in_time']['iqm'], in_time, True)} | "
+                     f"{verdict(m['energy_ratio']['iqm'], ratio, False)} | "
+                     f"{verdict(m['final_heading']['iqm'], heading, False)} | {entry['seconds']['iqm']:.0f} |")  # fmt: skip
+    return "\n".join(lines)
+
+
 def disturbed_table(summary: dict[str, Any], references: dict[str, Any] | None = None) -> str:
     """In-time IQM per disturbed set and entry."""
     names = [s for s in SETS if s != "random"]
@@ -199,6 +229,23 @@ def levers_table(data: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def residual_table(data: dict[str, Any]) -> str:
+    """benchmarks/rl_residual.py: each residual agent beside its expert, and where its corrections act."""
+    lines = ["| policy | in time | E/opt | final heading [rad] | energy |", "|---|---|---|---|---|"]
+    for name, entry in data["agents"].items():
+        for label, m in ((f"{name} (residual)", entry["agent"]), (f"{entry['expert']} alone", entry["expert_alone"])):
+            ratio = "-" if m["energy_ratio"] is None else f"{m['energy_ratio']:.2f}"
+            lines.append(f"| {label} | {m['in_time']:.3f} | {ratio} | {m['final_heading']:.2f} | {m['energy']:.3f} |")
+    lines += ["", "| residual agent | share of T_con elapsed | steps | mean abs correction of u [m/s] | of omega [rad/s] |",
+              "|---|---|---|---|---|"]  # fmt: skip
+    for name, entry in data["agents"].items():
+        for b in entry["by_time_fraction"]:
+            du = "-" if b["du"] is None else f"{b['du']:.4f}"
+            dw = "-" if b["domega"] is None else f"{b['domega']:.4f}"
+            lines.append(f"| {name} | {b['low']:.2f}-{b['high']:.2f} | {b['steps']:,} | {du} | {dw} |")
+    return "\n".join(lines) + f"\n\n*{data['n']} episodes of the benchmark's nominal set (seed {data['seed']}).*\n"
+
+
 __all__ = [
     "aggregate",
     "best_seed",
@@ -208,5 +255,6 @@ __all__ = [
     "iqm_interval",
     "levers_table",
     "plot_curves",
+    "residual_table",
     "table",
 ]
