@@ -137,3 +137,18 @@ def test_a_sweep_searches_the_initial_exploration_noise_inside_policy_kwargs(tmp
     config = trial_config({"algo": "ppo", "residual": True}, {"log_std_init": -3.0, "learning_rate": 1e-4}, 0, tmp_path)
     assert config.algo_kwargs["policy_kwargs"] == {"net_arch": [64, 64], "log_std_init": -3.0}
     assert config.algo_kwargs["learning_rate"] == 1e-4
+
+
+def test_every_shipped_agent_says_what_it_learned_from_and_what_acts_beside_it() -> None:
+    import yaml
+
+    from train.learning.agents import PRETRAINED, pretrained_paths
+    from train.learning.config import LEARNED_FROM
+
+    assert set(pretrained_paths()) == set(PRETRAINED)
+    for name, path in PRETRAINED.items():
+        data = yaml.safe_load((path / "config.yaml").read_text())
+        assert data["learned_from"] in LEARNED_FROM, name
+        assert isinstance(data["runtime"], list), name
+        residual = data["config"].get("residual", False)
+        assert residual == any(item.startswith("expert: ") for item in data["runtime"]), name

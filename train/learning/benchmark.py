@@ -94,7 +94,7 @@ def train_config(entry: Entry, seed: int, run_dir: Path, budget: dict[str, Any])
                          eval_seed=EVAL_SEED, eval_episodes=int(budget.get("eval_episodes", EVAL_EPISODES)))  # fmt: skip
     if budget.get("env_steps") and "total_timesteps" not in entry.options:  # an entry's own budget wins
         config.total_timesteps = max(1, int(budget["env_steps"]) // repeat)
-    if budget.get("eval_freq"):
+    if budget.get("eval_freq") and "eval_freq" not in entry.options:
         config.eval_freq = max(1, int(budget["eval_freq"]) // repeat)
         config.checkpoint_freq = config.eval_freq
     config.time_limit = budget.get("time_limit")

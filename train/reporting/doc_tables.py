@@ -38,6 +38,11 @@ POLICY_NAMES = {
     "dagger-handover": "`dagger-handover` (v1)",
     "robust-pt": "`robust-pt` (3)",
     "robust": "`robust` agent (v1)",
+    "ppo-v1": "`ppo_v1` (v1, reward)",
+    "sac-v1": "`sac_v1` (v1, reward)",
+    "tqc-v1": "`tqc_v1` (v1, reward)",
+    "residual-ppo-v1": "`residual_ppo_v1` (v1, reward, on PTC)",
+    "residual-ppo-astolfi-v1": "`residual_ppo_astolfi_v1` (v1, reward, on `pt-astolfi`)",
 }
 
 
