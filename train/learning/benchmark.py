@@ -115,6 +115,8 @@ def train_command(entry: Entry, config: TrainConfig) -> list[str]:
         command += ["--time-limit", str(config.time_limit)]
     for key, value in entry.options.items():
         flag = "--" + key.replace("_", "-")
+        if key in ("total_timesteps", "eval_freq", "checkpoint_freq", "eval_episodes", "eval_seed", "time_limit"):
+            continue  # given above, from the config
         if key == "hyperparams" and isinstance(value, dict):
             command += [flag, *(f"{k}={v}" for k, v in value.items())]
         elif isinstance(value, bool):
