@@ -39,6 +39,11 @@ def add_parser(sub: Any) -> None:
                    help="controllers evaluated beside the agents (default: ptc pt-astolfi)")  # fmt: skip
     p.add_argument("--jobs", type=count, default=1, help="runs in parallel processes (default: 1)")
     p.add_argument("--out", default="results/rl-benchmark", help="output directory (default: results/rl-benchmark)")
+    p.add_argument(
+        "--report-only",
+        action="store_true",
+        help="train nothing: aggregate the results already in --out (e.g. of an interrupted benchmark)",
+    )
     p.add_argument("--docs", action="store_true", help=f"also write the JSON and figures to {DOCS_DIR}/ and "
                    "regenerate the docs' tables")  # fmt: skip
     p.set_defaults(func=run)
@@ -61,10 +66,16 @@ def run(args: argparse.Namespace) -> int:
               "eval_episodes": args.eval_episodes, "disturbed_episodes": args.disturbed_episodes,
               "optimum_episodes": args.optimum_episodes}  # fmt: skip
     out = Path(args.out)
-    try:
-        results = run_benchmark(entries, list(range(args.seeds)), out, budget, jobs=args.jobs)
-    except ConfigError as error:
-        raise UsageError(str(error)) from error
+    if args.report_only:
+        results = [json.loads(path.read_text()) for entry in entries for seed in range(args.seeds)
+                   if (path := out / "results" / f"{entry.name}-seed{seed}.json").is_file()]  # fmt: skip
+        if not results:
+            raise UsageError(f"--out {str(out)!r} holds no results of these agents: run without --report-only")
+    else:
+        try:
+            results = run_benchmark(entries, list(range(args.seeds)), out, budget, jobs=args.jobs)
+        except ConfigError as error:
+            raise UsageError(str(error)) from error
     for result in results:  # results written before the env steps were recorded: read them from the run
         state = out / "runs" / f"{result['entry']}-seed{result['seed']}" / "run_state.json"
         if result.get("env_steps") is None and state.is_file():
