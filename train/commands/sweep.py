@@ -27,8 +27,12 @@ def add_parser(sub: Any) -> None:
     """The ``sweep`` subcommand."""
     p = sub.add_parser("sweep", help="seeds and hyperparameter searches on Ray Tune (local, or a cluster)",
                        description="Each trial runs the training of `dwr-gym train`; needs the extra [sweep].")  # fmt: skip
-    p.add_argument("--algo", default="ppo", help="algorithm: ppo, sac or td3 (default: ppo)")
+    p.add_argument("--algo", default="ppo", help="algorithm: ppo, sac, td3, tqc or crossq (default: ppo)")
     p.add_argument("--residual", action="store_true", help="residual agents on the PTC expert")
+    p.add_argument("--time-limit", type=float, help="stop each run after this many seconds (default: none)")
+    p.add_argument("--option", action="append", default=[], metavar="KEY=VALUE",
+                   help="an option of dwr-gym train for every run, e.g. action_repeat=5 or normalize_obs=true; "
+                   "repeatable")  # fmt: skip
     p.add_argument("--total-timesteps", type=count, help=f"env steps per run (default: {BUDGET_HELP['n_timesteps']})")
     p.add_argument("--num-envs", type=count, help=f"robots per vector env (default: {BUDGET_HELP['n_envs']})")
     add_env_arguments(p, "heading_weight=5")
@@ -97,10 +101,19 @@ def _run(args: argparse.Namespace) -> int:
     out = Path(args.out).resolve()
     base = {"algo": args.algo, "residual": args.residual, "total_timesteps": args.total_timesteps,
             "num_envs": args.num_envs, "env_id": args.env, "env_kwargs": parse_env_kwargs(args.env_kwargs),
-            "eval_freq": args.eval_freq, "eval_episodes": args.eval_episodes, "threads": args.threads}  # fmt: skip
+            "eval_freq": args.eval_freq, "eval_episodes": args.eval_episodes, "threads": args.threads,
+            "time_limit": args.time_limit}  # fmt: skip
     base = {key: value for key, value in base.items() if value is not None}  # unset: the YAML's, else the defaults
     if args.hyperparams:
         base["hyperparams"] = str(Path(args.hyperparams).resolve())
+    for item in args.option:
+        key, sep, value = item.partition("=")
+        if not sep or key not in TrainConfig.__dataclass_fields__ or key in base:
+            raise UsageError(f"--option {item!r} is invalid: expected KEY=VALUE with KEY an option of dwr-gym train "
+                             "not set by another flag")  # fmt: skip
+        import yaml
+
+        base[key] = yaml.safe_load(value)
     try:
         for name in ("seeds", "num_samples"):
             if getattr(args, name) < 1:

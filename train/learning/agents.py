@@ -14,6 +14,12 @@ PRETRAINED = {
     "dagger": PRETRAINED_DIR / "dagger",
     "dagger-handover": PRETRAINED_DIR / "dagger_handover",
     "robust": PRETRAINED_DIR / "robust",
+    # learned from v1's reward by `dwr-gym benchmark` (issue 32, docs/rl-benchmark.md): the best seed of each
+    "ppo-v1": PRETRAINED_DIR / "ppo_v1",
+    "sac-v1": PRETRAINED_DIR / "sac_v1",
+    "tqc-v1": PRETRAINED_DIR / "tqc_v1",
+    "residual-ppo-v1": PRETRAINED_DIR / "residual_ppo_v1",
+    "residual-ppo-astolfi-v1": PRETRAINED_DIR / "residual_ppo_astolfi_v1",
 }
 
 
@@ -52,7 +58,15 @@ def load_agent(path: str | Path, part: str = "whole") -> tuple[str, Any]:
     except (ConfigError, ValueError, KeyError, OSError) as error:
         raise AgentLoadError(f"agent {str(path)!r} could not be loaded: {error}") from error
     label = run_dir.name.replace("_", "-") if path.is_dir() else f"{run_dir.name}/{model_path.stem}"
-    policy = as_policy(model, config)
+    normalizer = None
+    if config.normalize_obs:
+        from train.learning.wrappers import load_obs_norm
+
+        try:
+            normalizer = load_obs_norm(model, model_path)
+        except (OSError, KeyError, ValueError) as error:
+            raise AgentLoadError(f"agent {str(path)!r} could not be loaded: {error}") from error
+    policy = as_policy(model, config, normalizer)
     if part == "network":
         return f"{label} (network alone)", policy
     handover = load_extra(run_dir).get("handover")

@@ -14,7 +14,7 @@ from typing import Any
 from dwr_gym.validation import as_bool, as_choice, as_float, as_int
 from train.env_ids import ENV_HELP, TASK_ENV_ID, UNRECORDED_ENV_ID, check_env_id, env_keywords
 
-ALGORITHMS: tuple[str, ...] = ("ppo", "sac", "td3")
+ALGORITHMS: tuple[str, ...] = ("ppo", "sac", "td3", "tqc", "crossq")
 BACKENDS: tuple[str, ...] = ("sb3", "jax")
 """Training libraries: stable-baselines3 on torch, or the jitted PPO on the JAX functional env (PPO only).
 Both write the same run directory, whose model.zip loads as a stable-baselines3 model."""
@@ -45,7 +45,7 @@ def option(default: Any, help: str, **kwargs: Any) -> Any:
 class TrainConfig:
     """Everything a training run needs; written beside the model as config.yaml so it can be re-run exactly."""
 
-    algo: str = option("ppo", "algorithm: ppo, sac or td3")
+    algo: str = option("ppo", "algorithm: ppo, sac, td3, tqc or crossq (the last two from sb3-contrib)")
     backend: str = option("sb3", "training library: sb3 (stable-baselines3 on torch) or jax (jitted PPO, extra 'jax')")
     threads: int | None = option(
         None, "torch threads for training and evaluation", shown_default="1 (our commands only)", metavar="N"
@@ -61,6 +61,9 @@ class TrainConfig:
     residual: bool = option(False, "learn a residual on the expert: action = clip(expert + scale * residual)")
     residual_scale: float = option(0.5, "scale of the residual action, in (0, 2]")
     expert: str = option("ptc", "controller under the residual: any of evaluate --controllers")
+    action_repeat: int = option(1, "hold each action for this many control periods (train.learning.wrappers)")
+    normalize_obs: bool = option(False, "normalise observations (VecNormalize; statistics saved beside the model)")
+    normalize_reward: bool = option(False, "scale rewards by the running deviation of the return (training only)")
     env_kwargs: dict[str, Any] = field(
         default_factory=dict, metadata={"help": "env keywords KEY=VALUE, e.g. T_con=25 heading_weight=5"}
     )
@@ -69,6 +72,9 @@ class TrainConfig:
     )
     hyperparam_overrides: dict[str, Any] = field(
         default_factory=dict, metadata={"help": "hyperparameters given as KEY=VALUE on the command line", "cli": False}
+    )
+    time_limit: float | None = option(
+        None, "stop after this many seconds of training (saved as a finished run)", shown_default="none", metavar="S"
     )
     eval_freq: int = option(200_000, "evaluate every this many env steps on a fixed seeded scenario set")
     eval_episodes: int = option(100, "size of the fixed random scenario set used for evaluation")
@@ -121,14 +127,17 @@ class TrainConfig:
         if self.num_envs is not None:
             self.num_envs = as_int("--num-envs", self.num_envs, 1, MAX_TRAIN_ENVS, text=True)
         self.seed = as_int("--seed", self.seed, 0, 2**32 - 1, text=True)
+        self.action_repeat = as_int("--action-repeat", self.action_repeat, 1, 100, text=True)
         self.eval_seed = as_int("--eval-seed", self.eval_seed, 0, 2**32 - 1, text=True)
+        if self.time_limit is not None:
+            self.time_limit = as_float("--time-limit", self.time_limit, 0.0, 1e9, low_inclusive=False, text=True)
         self.eval_freq = as_int("--eval-freq", self.eval_freq, 1, MAX_TIMESTEPS, text=True)
         self.eval_episodes = as_int("--eval-episodes", self.eval_episodes, 1, 100_000, text=True)
         self.checkpoint_freq = as_int("--checkpoint-freq", self.checkpoint_freq, 1, MAX_TIMESTEPS, text=True)
         self.residual_scale = as_float(
             "--residual-scale", self.residual_scale, 0.0, 2.0, low_inclusive=False, text=True
         )
-        for name in ("residual", "overwrite", "progress"):
+        for name in ("residual", "overwrite", "progress", "normalize_obs", "normalize_reward"):
             setattr(self, name, as_bool(f"--{name}", getattr(self, name)))
         if not isinstance(self.env_kwargs, dict) or not isinstance(self.hyperparam_overrides, dict):
             raise ValueError("env_kwargs and hyperparam_overrides must be mappings")

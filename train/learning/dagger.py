@@ -347,10 +347,12 @@ def _run(config: DaggerConfig, run_dir: Path, command: list[str]) -> Path:
         if round_ < config.dagger_rounds:
             data = concatenate([data, dagger_samples(model, config, params, rng)])
     model.save(run_dir / MODEL_FILE)
-    extra: dict[str, Any] = {"dagger": dataclasses.asdict(config), "command": command}
+    extra: dict[str, Any] = {"dagger": dataclasses.asdict(config), "command": command, "learned_from": "expert",
+                             "runtime": []}  # fmt: skip
     if config.handover_expert:
         extra["handover"], tried = select_handover(model, config, params)
         extra["handover_tried"] = tried
+        extra["runtime"] = [f"handover: {extra['handover']['expert']}"]
         print(f"hand-over: {extra['handover']}", flush=True)
     train_config = TrainConfig(algo="ppo", total_timesteps=1, num_envs=4, seed=config.seed,
                                env_id=config.env_id, env_kwargs=dict(config.env_kwargs), run_dir=str(run_dir), progress=False)  # fmt: skip
@@ -402,6 +404,7 @@ def add_handover(run_dir: Path, expert: str, eval_episodes: int) -> None:
     params = train_config.env_params()
     model = PPO.load(run_dir / MODEL_FILE, device="cpu")
     extra["handover"], extra["handover_tried"] = select_handover(model, config, params)
+    extra["learned_from"], extra["runtime"] = "expert", [f"handover: {extra['handover']['expert']}"]
     extra.pop("config", None)
     extra.pop("dwr_gym_version", None)
     save_config(train_config, run_dir, extra)

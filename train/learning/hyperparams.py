@@ -166,7 +166,8 @@ def resolve_hyperparams(config: TrainConfig, explicit: set[str]) -> TrainConfig:
 
 ACTIVATIONS = ("nn.Tanh", "nn.ReLU", "nn.ELU", "nn.LeakyReLU", "nn.SiLU", "nn.GELU", "nn.Sigmoid")
 _INT_KEYS = {"n_steps": 1, "batch_size": 1, "n_epochs": 1, "buffer_size": 1, "learning_starts": 0,
-             "gradient_steps": -1, "target_update_interval": 1, "policy_delay": 1, "stats_window_size": 1}  # fmt: skip
+             "gradient_steps": -1, "target_update_interval": 1, "policy_delay": 1, "stats_window_size": 1,
+             "top_quantiles_to_drop_per_net": 0}  # fmt: skip
 _FLOAT_KEYS = {"gamma": (0.0, 1.0), "gae_lambda": (0.0, 1.0), "tau": (0.0, 1.0), "ent_coef": (0.0, 1e6),
                "vf_coef": (0.0, 1e6), "max_grad_norm": (0.0, 1e6), "clip_range": (0.0, 1e6),
                "action_noise_sigma": (0.0, 10.0), "target_policy_noise": (0.0, 10.0),
@@ -207,6 +208,12 @@ def algorithm_class(algo: str) -> Any:
     """The stable-baselines3 class of ``algo``."""
     import stable_baselines3
 
+    if algo in ("tqc", "crossq"):
+        try:
+            import sb3_contrib
+        except ImportError as error:
+            raise ConfigError(f'--algo {algo} needs sb3-contrib: pip install "dwr-gym[train]"') from error
+        return {"tqc": sb3_contrib.TQC, "crossq": sb3_contrib.CrossQ}[algo]
     return {"ppo": stable_baselines3.PPO, "sac": stable_baselines3.SAC, "td3": stable_baselines3.TD3}[algo]
 
 

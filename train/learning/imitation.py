@@ -176,7 +176,8 @@ def _imitate(config: ImitationConfig, run_dir: Path, progress: bool) -> Path:
     imitation = {**asdict(config), "net_arch": list(config.net_arch), "T_con_range": list(config.T_con_range),
                  "start_distance": list(config.start_distance)}  # fmt: skip
     data = {"config": train_config.to_dict(), "imitation": imitation,
-            "demonstrations": stats, "wall_time": round(time.perf_counter() - began, 1)}  # fmt: skip
+            "demonstrations": stats, "wall_time": round(time.perf_counter() - began, 1), "learned_from": "expert",
+            "runtime": []}  # fmt: skip
     (run_dir / "config.yaml").write_text(yaml.safe_dump(data, sort_keys=False))
     plot_imitation_curve(csv_path, run_dir / "learning_curve.png")
     return run_dir

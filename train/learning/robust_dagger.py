@@ -237,7 +237,8 @@ def save(
 
     model.save(run_dir / MODEL_FILE)
     extra: dict[str, Any] = {"robust_dagger": dataclasses.asdict(config), "command": command,
-                             "robust_agent": {"plan_arrival": config.plan_arrival}}  # fmt: skip
+                             "robust_agent": {"plan_arrival": config.plan_arrival}, "learned_from": "expert",
+                             "runtime": ["planner", "finish"]}  # fmt: skip
     train_config = TrainConfig(algo="ppo", total_timesteps=1, num_envs=4, seed=config.seed, env_id=config.env_id,
                                env_kwargs=dict(config.env_kwargs), run_dir=str(run_dir), progress=False)  # fmt: skip
     save_config(train_config, run_dir, extra)

@@ -25,6 +25,8 @@ SEARCHES = ("grid", "random", "optuna")
 DISTRIBUTIONS = ("uniform", "loguniform", "int")
 METRICS = ("return_mean", "success_rate", "energy_mean", "arrival_time_mean", "final_distance_mean")
 PARAMS_FILE = "sweep_params.json"
+POLICY_KWARGS = ("log_std_init", "net_arch")
+"""Searchable keys that go into ``policy_kwargs`` (``--param log_std_init=uniform:-4:-1``)."""
 TABLE_COLUMNS = ("success_rate", "return_mean", "energy_mean", "arrival_time_mean")
 
 
@@ -112,7 +114,11 @@ def trial_config(base: dict[str, Any], hp: dict[str, Any], seed: int, run_dir: P
     config = TrainConfig(**{**base, "seed": seed, "run_dir": str(run_dir), "progress": False})
     config.validate()  # the options first (the env id chooses the hyperparameters' section)
     config = resolve_hyperparams(config, set(base))
+    hp = dict(hp)
+    inner = {key: hp.pop(key) for key in POLICY_KWARGS if key in hp}
     config.algo_kwargs.update(hp)
+    if inner:  # searched keys of policy_kwargs (e.g. log_std_init), merged into the resolved ones
+        config.algo_kwargs["policy_kwargs"] = {**(config.algo_kwargs.get("policy_kwargs") or {}), **inner}
     check_algo_kwargs(config.algo, config.algo_kwargs)
     config.validate()
     return config

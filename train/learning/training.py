@@ -94,16 +94,43 @@ def make_training_env(config: TrainConfig) -> Any:
     venv: Any = make_sb3_vec_env(config.num_envs, seed=config.seed, **config.env_keywords())
     if config.residual:
         venv = ResidualVecEnv(venv, make_expert(config), config.residual_scale)
+    if config.action_repeat > 1:
+        from train.learning.wrappers import ActionRepeatVecEnv
+
+        venv = ActionRepeatVecEnv(venv, config.action_repeat)
+    if config.normalize_obs or config.normalize_reward:
+        from stable_baselines3.common.vec_env import VecNormalize
+
+        gamma = float(config.algo_kwargs.get("gamma", 0.99))
+        venv = VecNormalize(venv, norm_obs=config.normalize_obs, norm_reward=config.normalize_reward, gamma=gamma)
     return venv
 
 
-def as_policy(model: Any, config: TrainConfig) -> Any:
-    """The policy that acts in the env: the model itself, or the model's residual on the expert."""
+def as_policy(model: Any, config: TrainConfig, normalizer: Any = None) -> Any:
+    """The policy that acts in the env: the model (on observations normalised by ``normalizer``, a
+    :class:`~train.learning.wrappers.NormalizedPolicy` or ``VecNormalize``, when trained so), its action held for
+    ``action_repeat`` periods, alone or as the residual on the expert (see :func:`make_training_env`)."""
+    policy: Any = model
+    if config.normalize_obs:
+        from train.learning.wrappers import LiveNormalizedPolicy
+
+        if normalizer is None:
+            raise ValueError("an agent trained with normalize_obs needs its observation statistics")
+        policy = LiveNormalizedPolicy(model, normalizer)
+    if config.action_repeat > 1:
+        from train.learning.wrappers import ActionRepeatPolicy
+
+        policy = ActionRepeatPolicy(policy, config.env_params().dt, config.action_repeat)
     if not config.residual:
-        return model
+        return policy
     from train.learning.residual import ResidualPolicy
 
-    return ResidualPolicy(model, make_expert(config), config.residual_scale)
+    return ResidualPolicy(policy, make_expert(config), config.residual_scale)
+
+
+def runtime_of(config: TrainConfig) -> list[str]:
+    """What acts beside the network at run time (config.yaml's ``runtime``): the expert under a residual."""
+    return [f"expert: {config.expert}"] if config.residual else []
 
 
 class InterruptRequestedError(Exception):
@@ -155,6 +182,8 @@ def make_run_callback(
         def _on_step(self) -> bool:
             if self.stop_now:  # a second Ctrl-C: stop after this env step, between steps where the state is whole
                 return False
+            if config.time_limit is not None and self.wall_time() >= config.time_limit:
+                return False  # --time-limit: stop here; train() saves the run as finished
             if self.num_timesteps // config.eval_freq > max(self.last_eval, 0) // config.eval_freq:
                 self.evaluate()
             return True
@@ -178,21 +207,31 @@ def make_run_callback(
 
             steps = self.num_timesteps
             (run_dir / "checkpoints").mkdir(exist_ok=True)
-            self.model.save(run_dir / "checkpoints" / f"{config.algo}_{steps}_steps.zip")
+            self.save(run_dir / "checkpoints" / f"{config.algo}_{steps}_steps.zip")
             if hasattr(self.model, "replay_buffer") and self.model.replay_buffer is not None:
                 self.model.save_replay_buffer(run_dir / "replay_buffer.pkl")
             generators = {"torch": torch.get_rng_state(), "numpy": np.random.get_state(), "random": random.getstate()}
             with (run_dir / RESUME_FILE).open("wb") as handle:
                 pickle.dump({"timesteps": steps, "env": env_snapshot(env), "generators": generators}, handle)
-            self.model.save(run_dir / MODEL_FILE)
+            self.save(run_dir / MODEL_FILE)
             self.last_checkpoint = steps
             write_state(run_dir, {"timesteps": steps, "wall_time": self.wall_time(), "best": self.best_row,
                                   "best_score": self.best[2], "last_eval": self.last_eval,
                                   "finished": finished})  # fmt: skip  # best_score: the best's return, as before
 
+        def save(self, path: Path) -> None:
+            """The model, and beside it the observation statistics when it was trained on normalised ones."""
+            from train.learning.wrappers import save_obs_norm
+
+            self.model.save(path)
+            save_obs_norm(env, path)
+
         def evaluate(self) -> None:
             """Evaluate now; best_model.zip is replaced where :func:`task_score` ranks this model higher."""
-            summary = rollout(as_policy(self.model, config), params, scenario.starts, scenario.goals,
+            from train.learning.wrappers import find_vec_normalize
+
+            policy = as_policy(self.model, config, find_vec_normalize(env))
+            summary = rollout(policy, params, scenario.starts, scenario.goals,
                               T_con=scenario.T_cons, env_kwargs=scenario.env_kwargs).summary()  # fmt: skip
             row = {"timesteps": self.num_timesteps, "wall_time": self.wall_time(),
                    **{k: summary[k] for k in EVAL_FIELDS[2:]}}  # fmt: skip
@@ -204,7 +243,7 @@ def make_run_callback(
             score = task_score(row)
             if score > self.best:
                 self.best, self.best_row = score, {k: row[k] for k in ("timesteps", *EVAL_FIELDS[2:])}
-                self.model.save(run_dir / "best_model.zip")
+                self.save(run_dir / "best_model.zip")
             if on_evaluation is not None:
                 on_evaluation(row)
 
@@ -341,7 +380,8 @@ def _train(
                 from train.learning.residual import zero_init_last_layer
 
                 zero_init_last_layer(model)
-        save_config(config, run_dir, {"command": command or sys.argv})
+        save_config(config, run_dir, {"command": command or sys.argv, "learned_from": "reward",
+                                      "runtime": runtime_of(config)})  # fmt: skip
         callback = make_run_callback(config, run_dir, env, state, on_evaluation)
         remaining = config.total_timesteps - model.num_timesteps
         bar = make_progress_callback(steps_to_run(config, model.num_timesteps)) if config.progress else None

@@ -38,6 +38,11 @@ POLICY_NAMES = {
     "dagger-handover": "`dagger-handover` (v1)",
     "robust-pt": "`robust-pt` (3)",
     "robust": "`robust` agent (v1)",
+    "ppo-v1": "`ppo_v1` (v1, reward)",
+    "sac-v1": "`sac_v1` (v1, reward)",
+    "tqc-v1": "`tqc_v1` (v1, reward)",
+    "residual-ppo-v1": "`residual_ppo_v1` (v1, reward, on PTC)",
+    "residual-ppo-astolfi-v1": "`residual_ppo_astolfi_v1` (v1, reward, on `pt-astolfi`)",
 }
 
 
@@ -208,7 +213,35 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "robust-goal": ("docs/robust/goal.json", robust_goal_table),
     "robust-filter-rates": ("docs/robust/filter_rates.json", filter_rates_table),
     "robust-headline": ("docs/compare/comparison.json", lambda rows: robust_headline(rows)),
+    "rl-benchmark": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "random")),
+    "rl-residual": ("docs/rl_benchmark/residual.json", lambda data: rl_table(data, "residual")),
+    "rl-goals": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "goals")),
+    "rl-benchmark-readme": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "readme")),
+    "rl-benchmark-disturbed": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "disturbed")),
+    "rl-diagnosis": ("docs/rl_benchmark/diagnosis.json", lambda data: rl_table(data, "diagnosis")),
+    "rl-levers": ("docs/rl_benchmark/levers.json", lambda data: rl_table(data, "levers")),
 }
+
+
+def rl_table(data: dict[str, Any], kind: str) -> str:
+    """The tables of docs/rl-benchmark.md (train.reporting.rl_benchmark)."""
+    from train.reporting import rl_benchmark
+
+    if kind == "diagnosis":
+        return rl_benchmark.diagnosis_table(data)
+    if kind == "levers":
+        return rl_benchmark.levers_table(data)
+    if kind == "residual":
+        return rl_benchmark.residual_table(data)
+    if kind == "goals":
+        return rl_benchmark.goals_table(data["summary"])
+    if kind == "readme":
+        return rl_benchmark.table(
+            data["summary"], data["references"], columns=("in_time", "energy_ratio", "final_heading")
+        )
+    if kind == "disturbed":
+        return rl_benchmark.disturbed_table(data["summary"], data["references"])
+    return rl_benchmark.table(data["summary"], data["references"])
 
 
 def robust_headline(rows: list[dict[str, Any]]) -> str:

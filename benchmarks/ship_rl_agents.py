@@ -1,0 +1,77 @@
+"""Copy the best seed of each agent of a ``dwr-gym benchmark`` into train/pretrained/ (issue 32).
+
+The best seed is the one ``benchmark.json`` names (most episodes in time on the nominal set, then the lowest
+E/opt). Each shipped directory gets the run's config.yaml (its ``command`` is the ``dwr-gym train`` recipe that
+benchmarks/retrain_pretrained.py runs again; ``learned_from: reward``; ``runtime``), model.zip, the observation statistics if any, evaluations.csv and
+learning_curve.png.
+
+    python benchmarks/ship_rl_agents.py results/rl-benchmark
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shutil
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+#: benchmark entry -> directory under train/pretrained/ (the names of train.learning.agents.PRETRAINED).
+SHIPPED = {"ppo": "ppo_v1", "sac": "sac_v1", "tqc": "tqc_v1", "residual-ppo": "residual_ppo_v1",
+           "residual-ppo-astolfi": "residual_ppo_astolfi_v1"}  # fmt: skip
+
+
+def plot_curve(evaluations: Path, target: Path, title: str) -> None:
+    import csv
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    with evaluations.open() as handle:
+        rows = list(csv.DictReader(handle))
+    steps = [int(r["timesteps"]) for r in rows]
+    fig, axes = plt.subplots(1, 2, figsize=(7, 2.6))
+    axes[0].plot(steps, [float(r["success_rate"]) for r in rows], marker="o")
+    axes[0].set_ylabel("in time")
+    axes[1].plot(steps, [float(r["energy_mean"]) for r in rows], marker="o")
+    axes[1].set_ylabel("energy")
+    for ax in axes:
+        ax.set_xlabel("agent steps")
+        ax.grid(alpha=0.3)
+    fig.suptitle(title, fontsize=9)
+    fig.tight_layout()
+    fig.savefig(target, dpi=70)
+    plt.close(fig)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("out", help="the --out of dwr-gym benchmark")
+    args = parser.parse_args(argv)
+    out = Path(args.out)
+    data = json.loads((out / "benchmark.json").read_text())
+    for entry, directory in SHIPPED.items():
+        if entry not in data["best_seed"]:
+            continue
+        seed = data["best_seed"][entry]
+        run = out / "runs" / f"{entry}-seed{seed}"
+        target = ROOT / "train" / "pretrained" / directory
+        shutil.rmtree(target, ignore_errors=True)
+        target.mkdir(parents=True)
+        shutil.copy(run / "config.yaml", target / "config.yaml")
+        shutil.copy(run / "evaluations.csv", target / "evaluations.csv")
+        shutil.copy(run / "model.zip", target / "model.zip")
+        if (run / "model_obs_norm.npz").is_file():
+            shutil.copy(run / "model_obs_norm.npz", target / "model_obs_norm.npz")
+        plot_curve(run / "evaluations.csv", target / "learning_curve.png", f"{entry}, seed {seed} (dwr-gym benchmark)")
+        print(f"shipped {run} as {target}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,154 @@
+"""The RL options of dwr-gym train (action repeat, normalisation, TQC/CrossQ) and the benchmark protocol (issue 32)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from train.cli import main
+from train.learning.benchmark import Entry, parse_entry, run_benchmark
+from train.learning.config import ConfigError
+from train.learning.wrappers import ActionRepeatPolicy, ActionRepeatVecEnv
+from train.reporting.rl_benchmark import aggregate, iqm_interval, table
+
+TINY_PPO = "num_envs=4,hyperparams={n_steps: 32, batch_size: 64}"
+
+
+def test_a_held_action_is_the_env_stepped_k_times_with_it_and_the_rewards_summed() -> None:
+    from dwr_gym.sb3 import make_sb3_vec_env
+
+    held, plain = ActionRepeatVecEnv(make_sb3_vec_env(3, seed=5), 4), make_sb3_vec_env(3, seed=5)
+    held.reset(), plain.reset()
+    action = np.array([[0.3, -0.2], [1.0, 1.0], [-0.5, 0.1]], dtype=np.float32)
+    obs, reward, done, _ = held.step(action)
+    total = np.zeros(3)
+    for _ in range(4):
+        plain_obs, r, _, _ = plain.step(action)
+        total += r
+    np.testing.assert_allclose(obs, plain_obs)
+    np.testing.assert_allclose(reward, total, rtol=1e-5)
+    assert not done.any()
+
+
+def test_the_repeat_policy_decides_only_every_k_periods() -> None:
+    class Counter:
+        calls = 0
+
+        def predict(self, obs, state=None, episode_start=None, deterministic=True):
+            Counter.calls += 1
+            return np.full((len(obs), 2), float(Counter.calls), dtype=np.float32), state
+
+    policy = ActionRepeatPolicy(Counter(), dt=0.05, repeat=3)
+    obs = np.zeros((2, 10), dtype=np.float32)
+    obs[:, 7] = 20.0  # T_con
+    actions = []
+    for step in range(7):
+        obs[:, 6] = step * 0.05 / 20.0  # time fraction
+        actions.append(policy.predict(obs)[0][0, 0])
+    assert actions == [1.0, 1.0, 1.0, 4.0, 4.0, 4.0, 7.0]
+
+
+def test_an_agent_trained_on_normalised_observations_acts_on_raw_ones_after_loading(tmp_path: Path) -> None:
+    from stable_baselines3 import PPO
+
+    from train.learning.agents import load_agent
+    from train.learning.runs import AgentLoadError
+
+    run = tmp_path / "run"
+    argv = ["train", "--total-timesteps", "128", "--num-envs", "4", "--hyperparams", "n_steps=32", "batch_size=64",
+            "--normalize-obs", "--action-repeat", "2", "--eval-freq", "1000", "--eval-episodes", "2",
+            "--run-dir", str(run), "--no-progress"]  # fmt: skip
+    assert main(argv) == 0
+    stats = np.load(run / "model_obs_norm.npz")
+    assert stats["var"].shape == (10,) and not np.allclose(stats["mean"], 0.0)
+    obs = np.random.default_rng(0).uniform(0.1, 1.0, (5, 10)).astype(np.float32)
+    model = PPO.load(run / "model.zip", device="cpu")
+    normalised = np.clip((obs - stats["mean"]) / np.sqrt(stats["var"] + stats["eps"]), -stats["clip"], stats["clip"])
+    _, policy = load_agent(run)
+    np.testing.assert_allclose(
+        policy.predict(obs)[0], model.predict(normalised.astype(np.float32), deterministic=True)[0], rtol=1e-6
+    )
+    (run / "model_obs_norm.npz").unlink()
+    with pytest.raises(AgentLoadError, match="normalize-obs"):
+        load_agent(run)
+
+
+@pytest.mark.parametrize("algo", ["tqc", "crossq"])
+def test_tqc_and_crossq_train_and_load(algo: str, tmp_path: Path) -> None:
+    from train.learning.agents import load_agent
+
+    run = tmp_path / algo
+    argv = ["train", "--algo", algo, "--total-timesteps", "64", "--num-envs", "4", "--hyperparams",
+            "learning_starts=16", "batch_size=16", "--eval-freq", "1000", "--eval-episodes", "2",
+            "--run-dir", str(run), "--no-progress"]  # fmt: skip
+    assert main(argv) == 0
+    assert load_agent(run)[1].predict(np.zeros((2, 10), dtype=np.float32))[0].shape == (2, 2)
+
+
+def test_agent_specs_are_parsed_or_refused_in_one_line() -> None:
+    entry = parse_entry("ppo-rep5:action_repeat=5,normalize_obs=true")
+    assert entry.options == {"algo": "ppo", "action_repeat": 5, "normalize_obs": True}
+    assert parse_entry("residual-ppo").options["expert"] == "ptc"
+    for bad in ("nonsense", "ppo:no_such_option=1", "ppo:action_repeat"):
+        with pytest.raises(ConfigError, match="invalid"):
+            parse_entry(bad)
+
+
+def test_iqm_is_the_mean_of_the_middle_half_with_an_interval_around_it() -> None:
+    result = iqm_interval([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0])
+    assert result["iqm"] == pytest.approx(3.5)
+    assert result["low"] < 3.5 < result["high"] and result["n"] == 8
+    assert iqm_interval([None, float("nan")])["iqm"] is None
+
+
+def test_the_protocol_trains_evaluates_and_aggregates_any_policy_over_seeds(tmp_path: Path) -> None:
+    from baselines.expert import ExpertPolicy
+    from baselines.registry import make_controller
+
+    def make(seed: int, run_dir: Path) -> ExpertPolicy:  # a user's "algorithm": anything with predict(obs)
+        return ExpertPolicy(make_controller("ptc"), 0.5, 2.0)
+
+    entries = [Entry("my-ptc", make=make), parse_entry(f"tiny:algo=ppo,{TINY_PPO}")]
+    budget = {"env_steps": 128, "eval_freq": 64, "eval_episodes": 4, "disturbed_episodes": 2}
+    results = run_benchmark(entries, [0, 1], tmp_path, budget)
+    assert [(r["entry"], r["seed"]) for r in results] == [("my-ptc", 0), ("my-ptc", 1), ("tiny", 0), ("tiny", 1)]
+    assert set(results[0]["sets"]) == {"random", "disturbed", "fault", "delay", "noise"}
+    assert results[0]["sets"]["random"]["in_time"] == 1.0 and results[0]["sets"]["random"]["energy_ratio"] > 1.0
+    assert len(results[2]["curve"]) >= 2 and results[2]["curve"][-1]["env_steps"] >= 128
+    summary = aggregate(results)
+    assert summary["my-ptc"]["sets"]["random"]["in_time"]["iqm"] == 1.0
+    assert "| my-ptc | 2 | - |" in table(summary) and "| 1.000 [1.000, 1.000] |" in table(summary)
+    # a finished run is not run again: the results are read back
+    (tmp_path / "results" / "tiny-seed0.json").write_text(json.dumps({**results[2], "seconds": -1.0}))
+    assert run_benchmark(entries[1:], [0], tmp_path, budget)[0]["seconds"] == -1.0
+
+
+def test_the_command_refuses_an_unknown_agent_in_one_line(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["benchmark", "--agents", "nonsense", "--out", "/nonexistent/x"]) == 2
+    assert len(capsys.readouterr().err.strip().splitlines()) == 1
+
+
+def test_a_sweep_searches_the_initial_exploration_noise_inside_policy_kwargs(tmp_path: Path) -> None:
+    from train.learning.sweep import trial_config
+
+    config = trial_config({"algo": "ppo", "residual": True}, {"log_std_init": -3.0, "learning_rate": 1e-4}, 0, tmp_path)
+    assert config.algo_kwargs["policy_kwargs"] == {"net_arch": [64, 64], "log_std_init": -3.0}
+    assert config.algo_kwargs["learning_rate"] == 1e-4
+
+
+def test_every_shipped_agent_says_what_it_learned_from_and_what_acts_beside_it() -> None:
+    import yaml
+
+    from train.learning.agents import PRETRAINED, pretrained_paths
+    from train.learning.config import LEARNED_FROM
+
+    assert set(pretrained_paths()) == set(PRETRAINED)
+    for name, path in PRETRAINED.items():
+        data = yaml.safe_load((path / "config.yaml").read_text())
+        assert data["learned_from"] in LEARNED_FROM, name
+        assert isinstance(data["runtime"], list), name
+        residual = data["config"].get("residual", False)
+        assert residual == any(item.startswith("expert: ") for item in data["runtime"]), name

@@ -1,0 +1,119 @@
+"""``dwr-gym benchmark``: agents x seeds trained from v1's reward, evaluated on fixed sets, aggregated with rliable
+(issue 32; docs/rl-benchmark.md)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+from pathlib import Path
+from typing import Any
+
+from train.commands.shared import UsageError, count
+
+DOCS_DIR = Path("docs/rl_benchmark")
+
+
+def add_parser(sub: Any) -> None:
+    """The ``benchmark`` subcommand."""
+    from train.learning.benchmark import ENTRIES
+
+    p = sub.add_parser("benchmark", help="RL protocol: agents x seeds, IQM with 95 %% CIs (rliable), learning curves",
+                       description="Train each agent with each seed on DWRPointStabilization-v1's reward, evaluate "
+                       "the learning curve on a fixed set and the final agent on the nominal and disturbed sets, and "
+                       "aggregate over seeds (IQM, stratified bootstrap).")  # fmt: skip
+    p.add_argument("--agents", nargs="+", default=["ppo", "sac", "tqc", "residual-ppo"], metavar="AGENT",
+                   help=f"entries: {', '.join(ENTRIES)}, or NAME:KEY=VALUE,... with options of dwr-gym train "
+                   "(default: ppo sac tqc residual-ppo)")  # fmt: skip
+    p.add_argument("--seeds", type=count, default=5, help="seeds per agent: 0 .. N-1 (default: 5)")
+    p.add_argument("--env-steps", type=count, help="env steps per run (default: each algorithm's own budget)")
+    p.add_argument("--time-limit", type=float, help="stop each run after this many seconds (default: none)")
+    p.add_argument("--eval-freq", type=count, default=100_000, help="env steps between evaluations (default: 100000)")
+    p.add_argument("--eval-episodes", type=count, default=1000, help="nominal evaluation episodes (default: 1000)")
+    p.add_argument("--disturbed-episodes", type=count, default=200, help="episodes per disturbed set (default: 200)")
+    p.add_argument("--optimum-episodes", type=count, default=50,
+                   help="E/opt on the nominal set's draw of this many episodes, none on the disturbed sets (0: every "
+                   "episode of every set; default: 50)")  # fmt: skip
+    p.add_argument("--references", nargs="*", default=["ptc", "pt-astolfi"], metavar="CONTROLLER",
+                   help="controllers evaluated beside the agents (default: ptc pt-astolfi)")  # fmt: skip
+    p.add_argument("--jobs", type=count, default=1, help="runs in parallel processes (default: 1)")
+    p.add_argument("--out", default="results/rl-benchmark", help="output directory (default: results/rl-benchmark)")
+    p.add_argument(
+        "--report-only",
+        action="store_true",
+        help="train nothing: aggregate the results already in --out (e.g. of an interrupted benchmark)",
+    )
+    p.add_argument("--docs", action="store_true", help=f"also write the JSON and figures to {DOCS_DIR}/ and "
+                   "regenerate the docs' tables")  # fmt: skip
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run every (agent, seed) not yet done in --out, then aggregate and write benchmark.json and the figures."""
+    from train.learning.benchmark import parse_entry, run_benchmark
+    from train.learning.config import ConfigError
+
+    if args.seeds < 1 or args.jobs < 1 or args.eval_episodes < 1 or args.disturbed_episodes < 1:
+        raise UsageError("--seeds, --jobs, --eval-episodes and --disturbed-episodes must be >= 1")
+    if args.time_limit is not None and not args.time_limit > 0:
+        raise UsageError(f"--time-limit {args.time_limit!r} is invalid: expected seconds > 0")
+    try:
+        entries = [parse_entry(text) for text in args.agents]
+    except ConfigError as error:
+        raise UsageError(str(error)) from error
+    budget = {"env_steps": args.env_steps, "time_limit": args.time_limit, "eval_freq": args.eval_freq,
+              "eval_episodes": args.eval_episodes, "disturbed_episodes": args.disturbed_episodes,
+              "optimum_episodes": args.optimum_episodes}  # fmt: skip
+    out = Path(args.out)
+    if args.report_only:
+        results = [json.loads(path.read_text()) for entry in entries for seed in range(args.seeds)
+                   if (path := out / "results" / f"{entry.name}-seed{seed}.json").is_file()]  # fmt: skip
+        if not results:
+            raise UsageError(f"--out {str(out)!r} holds no results of these agents: run without --report-only")
+    else:
+        try:
+            results = run_benchmark(entries, list(range(args.seeds)), out, budget, jobs=args.jobs)
+        except ConfigError as error:
+            raise UsageError(str(error)) from error
+    for result in results:  # results written before the env steps were recorded: read them from the run
+        state = out / "runs" / f"{result['entry']}-seed{result['seed']}" / "run_state.json"
+        if result.get("env_steps") is None and state.is_file():
+            result["env_steps"] = json.loads(state.read_text()).get("timesteps", 0) * result.get("action_repeat", 1)
+    data = report(results, out, budget, tuple(args.references))
+    if args.docs:
+        report(results, DOCS_DIR, budget, tuple(args.references), data)
+        from train.reporting.doc_tables import main as regenerate_tables
+
+        regenerate_tables([])
+    return 0
+
+
+def report(
+    results: list[dict[str, Any]], out: Path, budget: dict[str, Any], references: tuple[str, ...],
+    data: dict[str, Any] | None = None,
+) -> dict[str, Any]:  # fmt: skip
+    """Aggregate, print the tables, and write benchmark.json and the two figures of learning curves in ``out``."""
+    from train.evaluation.benchmark import reference_controllers
+    from train.reporting.rl_benchmark import aggregate, best_seed, disturbed_table, plot_curves, table
+
+    if data is None:
+        refs = reference_controllers(references, n=budget["eval_episodes"], n_disturbed=budget["disturbed_episodes"],
+                                     n_optimum=budget.get("optimum_episodes") or None)  # fmt: skip
+        summary = aggregate(results)
+        data = {"budget": budget, "machine": machine(), "summary": summary, "references": refs,
+                "best_seed": {name: best_seed(results, name) for name in summary}}  # fmt: skip
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "benchmark.json").write_text(json.dumps(data, indent=1))
+    plot_curves(data["summary"], out / "curves_steps.png", "env_steps")
+    plot_curves(data["summary"], out / "curves_wall.png", "wall_time")
+    print(table(data["summary"], data["references"]))
+    print(disturbed_table(data["summary"], data["references"]))
+    print(f"wrote {out / 'benchmark.json'}, {out / 'curves_steps.png'}, {out / 'curves_wall.png'}")
+    return data
+
+
+def machine() -> str:
+    """The machine the benchmark ran on, in one line."""
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    return f"{platform.machine()}, {os.cpu_count()} cores, load average {load:.1f} (1 min, at the end)"

@@ -1,0 +1,207 @@
+"""``dwr-gym benchmark`` (issue 32): train every agent x seed from v1's reward, evaluate, and keep the results.
+
+An *entry* is a name and either the options of ``dwr-gym train`` (:data:`ENTRIES`, or ``NAME:KEY=VALUE,...``
+on the command line) or, from Python, any function ``make(seed, run_dir) -> policy`` whose policy has
+stable-baselines3's ``predict`` (:class:`Entry`). Each (entry, seed) trains in ``<out>/runs/<name>-seed<seed>``
+(its learning curve: ``evaluations.csv`` on the benchmark's nominal set) and is evaluated once finished on the
+nominal and disturbed sets (:mod:`train.evaluation.benchmark`); the result is ``<out>/results/<name>-seed<seed>.json``.
+A run whose result exists is not run again, so an interrupted benchmark continues where it stopped.
+:mod:`train.reporting.rl_benchmark` aggregates the results over seeds.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from train.evaluation.benchmark import DISTURBED_EPISODES, EVAL_EPISODES, EVAL_SEED, OPTIMUM_EPISODES, evaluate_policy
+from train.learning.config import ConfigError, TrainConfig
+
+#: The shipped entries: the options of ``dwr-gym train`` each one trains with (on top of train/hyperparams/).
+ENTRIES: dict[str, dict[str, Any]] = {
+    "ppo": {"algo": "ppo"},
+    "ppo-jax": {"algo": "ppo", "backend": "jax"},
+    "sac": {"algo": "sac"},
+    "td3": {"algo": "td3"},
+    "tqc": {"algo": "tqc"},
+    "crossq": {"algo": "crossq"},
+    "residual-ppo": {"algo": "ppo", "residual": True, "expert": "ptc"},
+    "residual-ppo-astolfi": {"algo": "ppo", "residual": True, "expert": "pt-astolfi"},
+}
+RESULTS_DIR, RUNS_DIR = "results", "runs"
+
+
+@dataclass
+class Entry:
+    """One agent of the benchmark: ``options`` of ``dwr-gym train``, or ``make(seed, run_dir) -> policy``."""
+
+    name: str
+    options: dict[str, Any] = field(default_factory=dict)
+    make: Callable[[int, Path], Any] | None = None
+    learned_from: str = "reward"
+
+
+def parse_entry(text: str) -> Entry:
+    """``NAME`` (one of :data:`ENTRIES`) or ``NAME:KEY=VALUE,KEY=VALUE`` (options of ``dwr-gym train`` on top of
+    NAME's, or on plain PPO when NAME is new), e.g. ``ppo-rep5:action_repeat=5,normalize_obs=true``."""
+    import yaml
+
+    name, _, rest = text.partition(":")
+    base = name if name in ENTRIES else name.split("-")[0] if name.split("-")[0] in ENTRIES else None
+    if not rest and name not in ENTRIES:
+        raise ConfigError(f"agent {text!r} is invalid: expected one of {', '.join(ENTRIES)}, or NAME:KEY=VALUE,...")
+    options = dict(ENTRIES[base]) if base else {}
+    for item in filter(None, _split_top_level(rest)):
+        key, sep, value = item.partition("=")
+        if not sep or key not in TrainConfig.__dataclass_fields__:
+            raise ConfigError(f"agent {text!r}: {item!r} is invalid: expected KEY=VALUE with KEY a train option")
+        try:
+            options[key] = yaml.safe_load(value)
+        except yaml.YAMLError:
+            raise ConfigError(f"agent {text!r}: {item!r} is invalid: its value is not YAML") from None
+    return Entry(name, options)
+
+
+def _split_top_level(text: str) -> list[str]:
+    """``text`` split at the commas outside brackets and braces."""
+    items, depth, current = [], 0, ""
+    for char in text:
+        depth += (char in "[{(") - (char in "]})")
+        if char == "," and depth == 0:
+            items.append(current)
+            current = ""
+        else:
+            current += char
+    return [*items, current]
+
+
+def train_config(entry: Entry, seed: int, run_dir: Path, budget: dict[str, Any]) -> TrainConfig:
+    """The TrainConfig of one run: the entry's options, the budget, the seed, and evaluation on the nominal set.
+
+    ``budget``: ``env_steps`` (env steps; with an action repeat of K the agent decides env_steps / K times),
+    ``time_limit`` (seconds), ``eval_freq`` (env steps) and ``eval_episodes``.
+    """
+    from train.learning.hyperparams import resolve_hyperparams
+
+    options = {**entry.options}
+    overrides = options.pop("hyperparams", None)
+    repeat = int(options.get("action_repeat", 1))
+    config = TrainConfig(**options, seed=seed, run_dir=str(run_dir), progress=False,
+                         eval_seed=EVAL_SEED, eval_episodes=int(budget.get("eval_episodes", EVAL_EPISODES)))  # fmt: skip
+    if budget.get("env_steps") and "total_timesteps" not in entry.options:  # an entry's own budget wins
+        config.total_timesteps = max(1, int(budget["env_steps"]) // repeat)
+    if budget.get("eval_freq") and "eval_freq" not in entry.options:
+        config.eval_freq = max(1, int(budget["eval_freq"]) // repeat)
+        config.checkpoint_freq = config.eval_freq
+    config.time_limit = budget.get("time_limit")
+    if overrides:
+        config.hyperparam_overrides = dict(overrides)
+    config.validate()
+    explicit = {"total_timesteps"} if budget.get("env_steps") or "total_timesteps" in entry.options else set()
+    return resolve_hyperparams(config, explicit)
+
+
+def train_command(entry: Entry, config: TrainConfig) -> list[str]:
+    """The ``dwr-gym train`` command that trains this run alone (config.yaml's recipe, which
+    benchmarks/retrain_pretrained.py runs again)."""
+    command = ["dwr-gym", "train", "--seed", str(config.seed), "--total-timesteps", str(config.total_timesteps),
+               "--eval-freq", str(config.eval_freq), "--checkpoint-freq", str(config.checkpoint_freq),
+               "--eval-episodes", str(config.eval_episodes), "--eval-seed", str(config.eval_seed)]  # fmt: skip
+    if config.time_limit is not None:
+        command += ["--time-limit", str(config.time_limit)]
+    for key, value in entry.options.items():
+        flag = "--" + key.replace("_", "-")
+        if key in ("total_timesteps", "eval_freq", "checkpoint_freq", "eval_episodes", "eval_seed", "time_limit"):
+            continue  # given above, from the config
+        if key == "hyperparams" and isinstance(value, dict):
+            command += [flag, *(f"{k}={v}" for k, v in value.items())]
+        elif isinstance(value, bool):
+            command += [flag] if value else []
+        else:
+            command += [flag, str(value)]
+    return [*command, "--run-dir", str(config.run_dir)]
+
+
+def run_one(entry: Entry, seed: int, out: Path, budget: dict[str, Any], progress: bool = False) -> dict[str, Any]:
+    """Train (or make) and evaluate one (entry, seed); returns and writes its result JSON."""
+    result_path = out / RESULTS_DIR / f"{entry.name}-seed{seed}.json"
+    if result_path.is_file():
+        return json.loads(result_path.read_text())
+    run_dir = out / RUNS_DIR / f"{entry.name}-seed{seed}"
+    start = time.time()
+    if entry.make is not None:
+        run_dir.mkdir(parents=True, exist_ok=True)
+        policy, repeat, config_dict = entry.make(seed, run_dir), 1, {}
+    else:
+        import torch
+
+        from train.learning.agents import load_agent
+        from train.learning.training import train
+
+        config = train_config(entry, seed, run_dir, budget)
+        torch.set_num_threads(config.threads or 1)
+        state = run_dir / "run_state.json"
+        if state.is_file() and not json.loads(state.read_text()).get("finished"):
+            config.resume = str(run_dir)  # an interrupted run continues
+        elif not state.is_file():
+            config.overwrite = True
+        if not (state.is_file() and json.loads(state.read_text()).get("finished")):
+            trainer = train
+            if config.backend == "jax":  # the jitted PPO (train.learning.jax_training), where it is installed
+                try:
+                    from train.learning.jax_training import train_jax as trainer
+                except ImportError as error:
+                    raise ConfigError(f"agent {entry.name!r} needs the jax backend: {error}") from error
+            trainer(config, command=train_command(entry, config))
+        _, policy = load_agent(run_dir)
+        repeat, config_dict = config.action_repeat, config.to_dict()
+    train_seconds = time.time() - start
+    sets = evaluate_policy(policy, n=int(budget.get("eval_episodes", EVAL_EPISODES)),
+                           n_disturbed=int(budget.get("disturbed_episodes", DISTURBED_EPISODES)),
+                           n_optimum=budget.get("optimum_episodes", OPTIMUM_EPISODES) or None, progress=progress)  # fmt: skip
+    state_path = run_dir / "run_state.json"
+    steps = json.loads(state_path.read_text()).get("timesteps", 0) * repeat if state_path.is_file() else None
+    result = {"entry": entry.name, "seed": seed, "learned_from": entry.learned_from, "action_repeat": repeat,
+              "env_steps": steps,
+              "seconds": round(train_seconds, 1), "sets": sets, "curve": read_curve(run_dir, repeat),
+              "config": config_dict}  # fmt: skip
+    result_path.parent.mkdir(parents=True, exist_ok=True)
+    result_path.write_text(json.dumps(result, indent=1, default=str))
+    return result
+
+
+def read_curve(run_dir: Path, repeat: int = 1) -> list[dict[str, float]]:
+    """A run's learning curve (evaluations.csv) as rows of env steps, wall seconds and the benchmark's metrics."""
+    import csv
+
+    path = run_dir / "evaluations.csv"
+    if not path.is_file():
+        return []
+    with path.open() as handle:
+        rows = list(csv.DictReader(handle))
+    return [{"env_steps": int(row["timesteps"]) * repeat, "wall_time": float(row["wall_time"]),
+             "in_time": float(row["success_rate"]), "final_heading": float(row["final_heading_error_mean"]),
+             "energy": float(row["energy_mean"])} for row in rows]  # fmt: skip
+
+
+def run_benchmark(
+    entries: list[Entry], seeds: list[int], out: Path, budget: dict[str, Any], jobs: int = 1, progress: bool = False
+) -> list[dict[str, Any]]:
+    """Every (entry, seed), in ``jobs`` processes; the results in the order of entries then seeds."""
+    out.mkdir(parents=True, exist_ok=True)
+    work = [(entry, seed) for entry in entries for seed in seeds]
+    if jobs <= 1 or any(entry.make is not None for entry in entries):
+        return [run_one(entry, seed, out, budget, progress) for entry, seed in work]
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    with ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("spawn")) as pool:
+        futures = [pool.submit(run_one, entry, seed, out, budget) for entry, seed in work]
+        return [future.result() for future in futures]
+
+
+__all__ = ["ENTRIES", "Entry", "parse_entry", "read_curve", "run_benchmark", "run_one", "train_command", "train_config"]

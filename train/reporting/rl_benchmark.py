@@ -1,0 +1,260 @@
+"""Aggregates of ``dwr-gym benchmark`` over seeds, as the field reports RL (Agarwal et al. 2021, rliable):
+interquartile means (IQM) with 95 % stratified-bootstrap confidence intervals, learning curves (IQM and band)
+against env steps and against wall-clock seconds, and the tables the docs show.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from train.evaluation.benchmark import METRICS, SETS
+
+BOOTSTRAP_REPS = 2000
+CURVE_POINTS = 40
+
+
+def iqm_interval(values: list[float], seed: int = 0, reps: int = BOOTSTRAP_REPS) -> dict[str, Any]:
+    """IQM of per-seed values (rliable's ``aggregate_iqm``) and its 95 % stratified-bootstrap percentile interval
+    (the runs resampled with replacement, ``reps`` times, as rliable's ``StratifiedBootstrap`` does for one task;
+    written here because ``rliable.library`` needs ``arch``, which does not import with pandas 3). NaN and None
+    values are dropped."""
+    from rliable import metrics
+
+    data = np.array([v for v in values if v is not None and math.isfinite(v)], dtype=np.float64)
+    if data.size == 0:
+        return {"iqm": None, "low": None, "high": None, "n": 0}
+    point = float(metrics.aggregate_iqm(data.reshape(-1, 1)))
+    rng = np.random.default_rng(seed)
+    boots = trimmed_means(data[rng.integers(0, data.size, (reps, data.size))])
+    low, high = np.percentile(boots, [2.5, 97.5])
+    return {"iqm": point, "low": float(low), "high": float(high), "n": int(data.size)}
+
+
+def trimmed_means(samples: np.ndarray) -> np.ndarray:
+    """The IQM of each row, vectorised: scipy's ``trim_mean(row, 0.25)``, which rliable's ``aggregate_iqm`` is."""
+    cut = int(0.25 * samples.shape[1])
+    return np.sort(samples, axis=1)[:, cut : samples.shape[1] - cut].mean(axis=1)
+
+
+def curve_band(curves: list[list[dict[str, float]]], x: str, y: str, seed: int = 0) -> dict[str, list[float]]:
+    """IQM over seeds of ``y`` against ``x`` (each seed's curve interpolated to a common grid), with a 95 %
+    bootstrap band over seeds (at most the shortest run's extent)."""
+    curves = [c for c in curves if c]
+    if not curves:
+        return {"x": [], "iqm": [], "low": [], "high": []}
+    end = min(c[-1][x] for c in curves)
+    grid = np.linspace(0.0, end, CURVE_POINTS) if end > 0 else np.zeros(1)
+    matrix = np.array([np.interp(grid, [r[x] for r in c], [r[y] for r in c]) for c in curves])
+    rng = np.random.default_rng(seed)
+    samples = matrix[rng.integers(0, len(matrix), (BOOTSTRAP_REPS, len(matrix)))]  # (reps, seeds, points)
+    cut = int(0.25 * len(matrix))
+    boots = np.sort(samples, axis=1)[:, cut : len(matrix) - cut].mean(axis=1)
+    low, high = np.percentile(boots, [2.5, 97.5], axis=0)
+    return {"x": grid.tolist(), "iqm": trimmed_means(matrix.T).tolist(), "low": low.tolist(), "high": high.tolist()}
+
+
+def aggregate(results: list[dict[str, Any]]) -> dict[str, Any]:
+    """{entry: {"seeds", "sets": {set: {metric: IQM interval}}, "per_seed", "curves", "seconds"}}."""
+    out: dict[str, Any] = {}
+    for name in dict.fromkeys(r["entry"] for r in results):
+        runs = sorted((r for r in results if r["entry"] == name), key=lambda r: r["seed"])
+        sets = {s: {m: iqm_interval([r["sets"][s][m] for r in runs if s in r["sets"]]) for m in METRICS}
+                for s in SETS if any(s in r["sets"] for r in runs)}  # fmt: skip
+        curves = [r["curve"] for r in runs]
+        out[name] = {
+            "seeds": [r["seed"] for r in runs],
+            "learned_from": runs[0].get("learned_from", "reward"),
+            "seconds": iqm_interval([r["seconds"] for r in runs]),
+            "env_steps": iqm_interval([r.get("env_steps") or math.nan for r in runs]),
+            "sets": sets,
+            "per_seed": {s: {m: [r["sets"][s][m] for r in runs] for m in METRICS} for s in sets},
+            "curves": {
+                x: {y: curve_band(curves, x, y) for y in ("in_time", "energy", "final_heading")}
+                for x in ("env_steps", "wall_time")
+            },
+        }
+    return out
+
+
+def best_seed(results: list[dict[str, Any]], name: str) -> int:
+    """The seed of ``name`` with the most episodes in time on the nominal set, then the lowest E/opt."""
+    runs = [r for r in results if r["entry"] == name]
+
+    def key(r: dict[str, Any]) -> tuple[float, float]:
+        metrics = r["sets"]["random"]
+        return (-(metrics["in_time"] or 0.0), metrics["energy_ratio"] if metrics["energy_ratio"] is not None else 1e9)
+
+    return int(min(runs, key=key)["seed"])
+
+
+def _cell(interval: dict[str, Any], digits: int) -> str:
+    if interval["iqm"] is None:
+        return "-"
+    return f"{interval['iqm']:.{digits}f} [{interval['low']:.{digits}f}, {interval['high']:.{digits}f}]"
+
+
+COLUMNS: dict[str, tuple[str, int]] = {
+    "in_time": ("in time", 3),
+    "energy_ratio": ("E/opt", 2),
+    "final_heading": ("final heading [rad]", 2),
+    "energy": ("energy", 2),
+}
+
+
+def table(
+    summary: dict[str, Any],
+    references: dict[str, Any] | None = None,
+    set_name: str = "random",
+    columns: tuple[str, ...] = tuple(COLUMNS),
+) -> str:
+    """The markdown table of one set: IQM [95 % CI] of each metric per entry (with its env steps and training
+    seconds, IQM over seeds), then the reference controllers."""
+    head = " | ".join(COLUMNS[c][0] for c in columns)
+    lines = [f"| agent | seeds | env steps | training [s] | {head} |", "|---" * (len(columns) + 4) + "|"]
+    for name, entry in summary.items():
+        m = entry["sets"].get(set_name)
+        if m is None:
+            continue
+        cells = " | ".join(_cell(m[c], COLUMNS[c][1]) for c in columns)
+        steps = entry.get("env_steps", {}).get("iqm")
+        steps_text = "-" if steps is None else f"{steps:,.0f}"
+        lines.append(f"| {name} | {len(entry['seeds'])} | {steps_text} | {entry['seconds']['iqm']:.0f} | {cells} |")
+    for name, sets in (references or {}).items():
+        m = sets.get(set_name)
+        if m is None:
+            continue
+        cells = " | ".join("-" if m[c] is None else f"{m[c]:.{COLUMNS[c][1]}f}" for c in columns)
+        lines.append(f"| {name} (controller) | - | - | - | {cells} |")
+    return "\n".join(lines)
+
+
+GOALS = {
+    "from the reward alone": (("ppo", "ppo-jax", "sac", "td3", "tqc", "crossq"), 0.99, 1.5, 0.1),
+    "residual RL on PTC": (("residual-ppo",), 0.995, 1.6, 0.15),
+}
+"""Issue 32's goals: (entries, in time >=, E/opt <=, final heading <= [rad]), IQM over >= 5 seeds on nominal v1."""
+
+
+def goals_table(summary: dict[str, Any]) -> str:
+    """Each goal of issue 32, the best entry for it (most in time) and whether each figure is met."""
+    lines = ["| goal | best agent | seeds | in time | E/opt | final heading [rad] | training [s] (30 min = 1,800) |",
+             "|---|---|---|---|---|---|---|"]  # fmt: skip
+
+    def verdict(value: float | None, target: float, above: bool) -> str:
+        if value is None:
+            return f"- (goal {'>=' if above else '<='} {target:g}): not reached"
+        met = value >= target if above else value <= target
+        return f"{value:.3f} ({'>=' if above else '<='} {target:g}): {'met' if met else 'not met'}"
+
+    for goal, (names, in_time, ratio, heading) in GOALS.items():
+        found = [n for n in names if n in summary and "random" in summary[n]["sets"]]
+        if not found:
+            continue
+        best = max(found, key=lambda n: summary[n]["sets"]["random"]["in_time"]["iqm"] or 0.0)
+        entry, m = summary[best], summary[best]["sets"]["random"]
+        lines.append(f"| {goal} | {best} | {len(entry['seeds'])} | {verdict(m['in_time']['iqm'], in_time, True)} | "
+                     f"{verdict(m['energy_ratio']['iqm'], ratio, False)} | "
+                     f"{verdict(m['final_heading']['iqm'], heading, False)} | {entry['seconds']['iqm']:.0f} |")  # fmt: skip
+    return "\n".join(lines)
+
+
+def disturbed_table(summary: dict[str, Any], references: dict[str, Any] | None = None) -> str:
+    """In-time IQM per disturbed set and entry."""
+    names = [s for s in SETS if s != "random"]
+    lines = ["| agent | " + " | ".join(f"{s}: in time" for s in names) + " |", "|---" * (len(names) + 1) + "|"]
+    for name, entry in summary.items():
+        cells = [_cell(entry["sets"][s]["in_time"], 2) if s in entry["sets"] else "-" for s in names]
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    for name, sets in (references or {}).items():
+        cells = [f"{sets[s]['in_time']:.2f}" if s in sets else "-" for s in names]
+        lines.append(f"| {name} (controller) | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def plot_curves(summary: dict[str, Any], path: Path, x: str) -> None:
+    """Learning curves (IQM over seeds and its 95 % band) of the in-time rate and the energy against ``x``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.6))
+    for name, entry in summary.items():
+        for ax, y in zip(axes, ("in_time", "energy"), strict=True):
+            band = entry["curves"][x][y]
+            if not band["x"]:
+                continue
+            line = ax.plot(band["x"], band["iqm"], label=f"{name} ({len(entry['seeds'])} seeds)")[0]
+            ax.fill_between(band["x"], band["low"], band["high"], color=line.get_color(), alpha=0.2)
+    for ax, label in zip(axes, ("in time (IQM, 95 % CI)", "energy (IQM, 95 % CI)"), strict=True):
+        ax.set_xlabel("env steps" if x == "env_steps" else "wall-clock seconds (training, evaluations included)")
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=7)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
+def diagnosis_table(data: dict[str, Any]) -> str:
+    """The table of benchmarks/rl_diagnosis.py: PTC with exploration noise, what the noise's energy costs."""
+    lines = ["| exploration noise sigma | in time | energy | E/opt | return | noise's energy cost per s | over the "
+             "episode |", "|---|---|---|---|---|---|---|"]  # fmt: skip
+    for r in data["rows"]:
+        ratio = "-" if r["energy_ratio"] is None else f"{r['energy_ratio']:.2f}"
+        lines.append(f"| {r['sigma']:.2f} | {r['in_time']:.3f} | {r['energy']:.2f} | {ratio} | {r['return']:.1f} | "
+                     f"{r['noise_cost_per_second']:.3f} | {r['noise_cost_per_second'] * r['episode_seconds']:.1f} |")  # fmt: skip
+    lines.append(f"\n*PTC with Gaussian noise on its normalised actions, {data['n']} episodes of the benchmark's "
+                 f"nominal set (seed {data['seed']}); the optimum's mean energy {data['rows'][0]['optimal_energy']:.2f}, "
+                 f"i.e. a reward of {-data['energy_weight'] * data['rows'][0]['optimal_energy']:.2f}; the arrival bonus "
+                 f"{data['arrival_bonus']:.0f}.*\n")  # fmt: skip
+    return "\n".join(lines)
+
+
+def levers_table(data: dict[str, Any]) -> str:
+    """Per lever: env steps and seconds reached, the best and the last evaluation (in time, energy, heading)."""
+    lines = ["| lever (one seed) | env steps | seconds | best in time (energy) | last in time | last energy | "
+             "last heading [rad] |", "|---|---|---|---|---|---|---|"]  # fmt: skip
+    for lever, entry in data["levers"].items():
+        rows = entry["curve"]
+        best, last = max(rows, key=lambda r: r["in_time"]), rows[-1]
+        lines.append(f"| {lever} | {last['env_steps']:,} | {last['wall_time']:.0f} | {best['in_time']:.2f} "
+                     f"({best['energy']:.2f}) | {last['in_time']:.2f} | {last['energy']:.2f} | "
+                     f"{last['final_heading']:.2f} |")  # fmt: skip
+    return "\n".join(lines)
+
+
+def residual_table(data: dict[str, Any]) -> str:
+    """benchmarks/rl_residual.py: each residual agent beside its expert, and where its corrections act."""
+    lines = ["| policy | in time | E/opt | final heading [rad] | energy |", "|---|---|---|---|---|"]
+    for name, entry in data["agents"].items():
+        for label, m in ((f"{name} (residual)", entry["agent"]), (f"{entry['expert']} alone", entry["expert_alone"])):
+            ratio = "-" if m["energy_ratio"] is None else f"{m['energy_ratio']:.2f}"
+            lines.append(f"| {label} | {m['in_time']:.3f} | {ratio} | {m['final_heading']:.2f} | {m['energy']:.3f} |")
+    lines += ["", "| residual agent | share of T_con elapsed | steps | mean abs correction of u [m/s] | of omega [rad/s] |",
+              "|---|---|---|---|---|"]  # fmt: skip
+    for name, entry in data["agents"].items():
+        for b in entry["by_time_fraction"]:
+            du = "-" if b["du"] is None else f"{b['du']:.4f}"
+            dw = "-" if b["domega"] is None else f"{b['domega']:.4f}"
+            lines.append(f"| {name} | {b['low']:.2f}-{b['high']:.2f} | {b['steps']:,} | {du} | {dw} |")
+    return "\n".join(lines) + f"\n\n*{data['n']} episodes of the benchmark's nominal set (seed {data['seed']}).*\n"
+
+
+__all__ = [
+    "aggregate",
+    "best_seed",
+    "curve_band",
+    "diagnosis_table",
+    "disturbed_table",
+    "iqm_interval",
+    "levers_table",
+    "plot_curves",
+    "residual_table",
+    "table",
+]
