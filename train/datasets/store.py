@@ -182,6 +182,16 @@ def episode_metadata(dataset: Any) -> list[dict[str, Any]]:
     return list(dataset.storage.get_episode_metadata(range(dataset.total_episodes)))
 
 
+def dataset_env(dataset: Any) -> tuple[str, dict[str, Any]]:
+    """(env id, env keywords as objects) of the env a dataset was collected on."""
+    from dwr_gym.serialization import env_kwargs_from_json
+
+    spec = dataset.spec.env_spec
+    if spec is None:
+        raise DatasetError(f"dataset {dataset.spec.dataset_id!r} is invalid here: it stores no env spec")
+    return spec.id, env_kwargs_from_json(dict(spec.kwargs))
+
+
 def transitions(dataset: Any) -> dict[str, NDArray[Any]]:
     """All steps of the dataset as flat arrays: observations, actions, rewards, next_observations, terminals,
     timeouts (the arrays offline RL libraries take)."""
@@ -197,5 +207,5 @@ def transitions(dataset: Any) -> dict[str, NDArray[Any]]:
     return {k: np.concatenate(v) for k, v in parts.items()}
 
 
-__all__ = ["DATASET_ID", "DatasetError", "check_dataset_id", "datasets_root", "episode_metadata", "load_dataset",
+__all__ = ["DATASET_ID", "DatasetError", "check_dataset_id", "dataset_env", "datasets_root", "episode_metadata", "load_dataset",
            "require_minari", "transitions", "write_dataset"]  # fmt: skip
