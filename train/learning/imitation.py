@@ -24,6 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dwr_gym import core
+from dwr_gym.disturbances import split_env_kwargs
 from dwr_gym.params import EnvParams
 from train.env_ids import ENV_HELP, TASK_ENV_ID, env_keywords
 from train.learning.config import option
@@ -156,7 +157,7 @@ def imitate(config: ImitationConfig, run_dir: Path, progress: bool = True) -> Pa
     optimizer = torch.optim.Adam(policy.parameters(), lr=config.learning_rate)
     inputs = torch.as_tensor(observations)
     targets = torch.as_tensor(actions)
-    params = EnvParams.from_kwargs(**kwargs)
+    params = EnvParams.from_kwargs(**split_env_kwargs(kwargs)[0])  # a dataset's env may have disturbances
     scenario = make_scenario("random", n=config.eval_episodes, seed=config.eval_seed, env_kwargs=kwargs)
     csv_path = run_dir / "evaluations.csv"
     with csv_path.open("w", newline="") as handle:
