@@ -137,7 +137,7 @@ def test_recover_environment_gives_back_the_env_with_its_disturbances(imperfecti
 
 
 def test_env_keywords_without_a_json_form_are_a_clear_error() -> None:
-    with pytest.raises(ValueError, match="env keyword dt=.*no JSON form"):
+    with pytest.raises(ValueError, match=r"env keyword dt=.*no JSON form"):
         env_kwargs_to_json({"dt": object()})
     kwargs = {"disturbances": [VelocityBias(linear=0.1)], "disturbance_distribution": None, "T_con": 20.0}
     assert env_kwargs_from_json(env_kwargs_to_json(kwargs)) == {**kwargs, "disturbances": kwargs["disturbances"]}
@@ -145,14 +145,16 @@ def test_env_keywords_without_a_json_form_are_a_clear_error() -> None:
 
 def test_an_existing_id_is_refused_and_replaced_only_with_overwrite() -> None:
     written("dwr-gym/same-v0", episodes=2)
-    with pytest.raises(DatasetError, match="exists.*--overwrite"):
+    with pytest.raises(DatasetError, match=r"exists.*--overwrite"):
         written("dwr-gym/same-v0", episodes=3)
     assert load_dataset("dwr-gym/same-v0").total_episodes == 2
     written("dwr-gym/same-v0", episodes=3, overwrite=True)
     assert load_dataset("dwr-gym/same-v0").total_episodes == 3
 
 
-def test_an_interrupted_write_leaves_no_dataset_under_the_id(datasets_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_an_interrupted_write_leaves_no_dataset_under_the_id(
+    datasets_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     from minari.dataset._storages.arrow_storage import ArrowStorage
 
     def interrupted(*args: object, **kwargs: object) -> None:
