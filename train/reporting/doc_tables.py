@@ -20,6 +20,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from train.reporting import dataset_tables
+
 ROOT = Path(__file__).resolve().parents[2]
 MARKER = re.compile(r"(<!-- table: (?P<name>[\w-]+) -->\n)(?P<body>.*?)(<!-- /table -->)", re.DOTALL)
 
@@ -208,6 +210,9 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "robust-goal": ("docs/robust/goal.json", robust_goal_table),
     "robust-filter-rates": ("docs/robust/filter_rates.json", filter_rates_table),
     "robust-headline": ("docs/compare/comparison.json", lambda rows: robust_headline(rows)),
+    "datasets-suite": ("docs/datasets/suite.json", lambda data: dataset_tables.suite_table(data)),
+    "datasets-baselines": ("docs/datasets/suite.json", lambda data: dataset_tables.baselines_table(data)),
+    "datasets-speed": ("docs/datasets/speed.json", lambda data: dataset_tables.speed_table(data)),
 }
 
 
