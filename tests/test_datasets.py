@@ -218,6 +218,7 @@ def test_the_command_writes_a_dataset_that_imitate_clones(
     dataset = load_dataset("dwr-gym/cli-v0")
     assert dataset.total_episodes == 6
     assert dataset.spec.env_spec.kwargs["disturbances"] == [{"type": "InputDelay", "steps": 4}]
+    assert episode_metadata(dataset)[5]["disturbance"] == {"disturbances": [{"type": "InputDelay", "steps": 4}]}
     assert cli.main(argv) == 2  # the id exists now
     run = tmp_path / "bc"
     assert cli.main(["imitate", "--dataset", "dwr-gym/cli-v0", "--epochs", "1", "--eval-episodes", "2",

@@ -147,8 +147,12 @@ def build_dataset(request: DatasetRequest, policy: Policy, progress: bool = Fals
     episodes = collect(policy, request.env_kwargs, request.episodes, seed=request.seed, num_envs=request.num_envs,
                        progress=progress, description=f"{request.policy_name}: episodes")  # fmt: skip
     _close(policy)
+    json_kwargs = env_kwargs_to_json(request.env_kwargs)
+    fixed = {k: v for k, v in json_kwargs.items() if k in IMPERFECTIONS and k != "disturbance_distribution"}
     for meta in episodes.metadata:
         meta["policy"] = request.policy_name
+        if meta["disturbance"] is None and fixed:  # the same robot in every episode: the env's keywords of it
+            meta["disturbance"] = fixed
     missing = add_optimum(episodes, request.env_kwargs, progress) if request.optimum else len(episodes.metadata)
     ref_min, ref_max = reference_scores(request.env_id, request.env_kwargs, request.ref_episodes, progress)
     stats = statistics(episodes)
