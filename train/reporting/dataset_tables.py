@@ -65,7 +65,7 @@ def baselines_table(data: dict[str, Any]) -> str:
     return "\n".join(lines) + (
         f"\n\n*`dwr-gym evaluate --scenarios random disturbed --n {data['n']}` (the `optimal` controller on the "
         f"first {sizes[-1]} of the {sizes[0]} disturbed episodes); behaviour cloning: `dwr-gym imitate --dataset ID "
-        f"--epochs {data['epochs']}`; in time: arrived with the heading by T_con; E/opt: energy / the optimum's on "
+        f"--epochs {data['epochs']}`; in time: arrived by T_con (within the goal tolerance, as the env counts it); E/opt: energy / the optimum's on "
         "the same episode, over the episodes in time.*\n"
     )
 
