@@ -34,9 +34,9 @@ SUITE: tuple[tuple[str, str, dict[str, Any], int, str], ...] = (
     ("robust-pt-nominal", "robust-pt", {}, 300, "the robust expert on the nominal robot"),
     ("robust-pt-disturbed", "robust-pt", {"disturbance_distribution": {}}, 300,
      "the robust expert, a robot drawn per episode (DisturbanceDistribution())"),
-    ("ptc-nominal", "ptc", {}, 1000, "the paper's law (16)-(19)"),
-    ("random", "random", {}, 1000, "uniform random actions"),
-    ("medium", "medium", {}, 1000, f"PPO after {MEDIUM_STEPS:,} of its default 2,048,000 steps (dwr-gym train)"),
+    ("ptc-nominal", "ptc", {}, 300, "the paper's law (16)-(19)"),
+    ("random", "random", {}, 300, "uniform random actions"),
+    ("medium", "medium", {}, 300, f"PPO after {MEDIUM_STEPS:,} of its default 2,048,000 steps (dwr-gym train)"),
 )  # fmt: skip
 #: The datasets behaviour cloning is trained on, and the one TD3+BC is.
 CLONED = ("optimal-nominal", "robust-pt-nominal", "robust-pt-disturbed", "ptc-nominal")
@@ -61,21 +61,29 @@ def medium_agent(work: Path) -> Path:
 
 def build(work: Path, episodes_scale: float) -> list[dict[str, Any]]:
     from train.datasets import make_dataset
+    from train.datasets.store import dataset_exists
     from train.learning.agents import load_agent
 
     rows = []
+    done = work / "summaries"  # each dataset's summary once written: a second run goes on where one stopped
+    done.mkdir(parents=True, exist_ok=True)
     for name, policy, kwargs, episodes, what in SUITE:
+        if (done / f"{name}.json").is_file() and dataset_exists(f"{NAMESPACE}/{name}-v0"):
+            rows.append(json.loads((done / f"{name}.json").read_text()))
+            continue
         began = time.perf_counter()
         acting: Any = load_agent(medium_agent(work))[1] if policy == "medium" else policy
         summary = make_dataset(f"{NAMESPACE}/{name}-v0", acting, max(1, round(episodes * episodes_scale)),
                                env_kwargs=kwargs, seed=0, overwrite=True, progress=True)  # fmt: skip
         summary.update(name=name, what=what, policy=policy, build_seconds=round(time.perf_counter() - began, 1))
+        summary.pop("path", None)  # the machine's own path
+        (done / f"{name}.json").write_text(json.dumps(summary))
         print(json.dumps(summary), flush=True)
         rows.append(summary)
     return rows
 
 
-def baselines(work: Path, d3rlpy_python: str | None, epochs: int, n: int) -> list[dict[str, Any]]:
+def baselines(work: Path, d3rlpy_python: str | None, epochs: int, n: int, steps: int) -> list[dict[str, Any]]:
     """BC (and TD3+BC) on the suite, evaluated by dwr-gym evaluate beside the policies that made the data."""
     agents = []
     for name in CLONED:
@@ -88,7 +96,7 @@ def baselines(work: Path, d3rlpy_python: str | None, epochs: int, n: int) -> lis
         run = work / f"td3bc-{OFFLINE_RL}"
         if not (run / "model.zip").is_file():
             subprocess.run([d3rlpy_python, str(ROOT / "benchmarks" / "offline_d3rlpy.py"),
-                            f"{NAMESPACE}/{OFFLINE_RL}-v0", str(run)], check=True, cwd=ROOT,
+                            f"{NAMESPACE}/{OFFLINE_RL}-v0", str(run), "--steps", str(steps)], check=True, cwd=ROOT,
                            env={**os.environ, "PYTHONPATH": str(ROOT)})  # fmt: skip
         agents.append(str(run))
     out = work / "evaluate"
@@ -103,22 +111,22 @@ def main(argv: list[str] | None = None) -> int:
                         help="where the medium PPO run, the cloned agents and the evaluation go")  # fmt: skip
     parser.add_argument("--d3rlpy-python", default=None, help="an interpreter with d3rlpy, for TD3+BC")
     parser.add_argument("--episodes-scale", type=float, default=1.0, help="scale every dataset's episodes")
-    parser.add_argument("--epochs", type=int, default=30, help="behaviour cloning's epochs")
-    parser.add_argument("--n", type=int, default=200, help="evaluation episodes per scenario set")
+    parser.add_argument("--epochs", type=int, default=20, help="behaviour cloning's epochs")
+    parser.add_argument("--td3bc-steps", type=int, default=3000, help="TD3+BC's gradient steps")
+    parser.add_argument("--n", type=int, default=100, help="evaluation episodes per scenario set")
     parser.add_argument("--out", type=Path, default=OUT)
     args = parser.parse_args(argv)
     args.work.mkdir(parents=True, exist_ok=True)
     began = time.perf_counter()
     datasets = build(args.work, args.episodes_scale)
-    rows = baselines(args.work, args.d3rlpy_python, args.epochs, args.n)
+    rows = baselines(args.work, args.d3rlpy_python, args.epochs, args.n, args.td3bc_steps)
     from train.reporting.results import json_safe
 
     result = {"datasets": datasets, "evaluation": rows, "epochs": args.epochs, "n": args.n,
+              "td3bc_steps": args.td3bc_steps if args.d3rlpy_python else None,
               "cores": os.cpu_count(), "seconds": round(time.perf_counter() - began),
               "command": "OMP_NUM_THREADS=1 python benchmarks/datasets_suite.py"
               + (" --d3rlpy-python PYTHON" if args.d3rlpy_python else "")}  # fmt: skip
-    for row in result["datasets"]:
-        row.pop("path", None)  # the machine's own path
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(json_safe(result), indent=1, allow_nan=False) + "\n")
     print(f"wrote {args.out}")
