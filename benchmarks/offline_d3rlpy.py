@@ -20,7 +20,12 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("dataset_id")
     parser.add_argument("run_dir", type=Path)
-    parser.add_argument("--steps", type=int, default=5_000, help="gradient steps (the paper: 1,000,000; 5,000 take 5 min on one CPU core)")
+    parser.add_argument(
+        "--steps",
+        type=int,
+        default=5_000,
+        help="gradient steps (the paper: 1,000,000; 5,000 take 5 min on one CPU core)",
+    )
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args(argv)
     import d3rlpy
