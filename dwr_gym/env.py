@@ -13,6 +13,7 @@ from numpy.typing import NDArray
 from dwr_gym import core, model, observation, state
 from dwr_gym.disturbances import make_perturbation, split_env_kwargs
 from dwr_gym.params import EnvParams
+from dwr_gym.serialization import env_kwargs_from_json
 
 RENDER_MODES = ("human", "rgb_array")
 RESET_OPTIONS = ("start", "goal", "T_con")
@@ -233,7 +234,7 @@ class DWRPointStabilizationEnv(HorizonSpec, OneRobotRendering, gym.Env[NDArray[n
                 f"autoreset_mode={kwargs['autoreset_mode']!r} is a keyword of vector envs, not of the single env: "
                 "with vectorization_mode 'sync' or 'async' pass vector_kwargs={'autoreset_mode': ...}"
             )
-        kwargs, drive, disturbances = split_env_kwargs(kwargs)
+        kwargs, drive, disturbances = split_env_kwargs(env_kwargs_from_json(kwargs))  # dicts: a stored spec's
         self.params = EnvParams.from_kwargs(**kwargs)
         self.perturbation = make_perturbation(drive, disturbances, self.params, 1)
         check_render_mode(render_mode)

@@ -15,6 +15,7 @@ from dwr_gym import core, model, observation, state
 from dwr_gym.disturbances import make_perturbation, split_env_kwargs
 from dwr_gym.env import HorizonSpec, append_trail, check_render_mode, parse_reset_options, parse_T_con_option
 from dwr_gym.params import EnvParams
+from dwr_gym.serialization import env_kwargs_from_json
 from dwr_gym.validation import POSE_LIMIT, as_choice, as_int
 
 MAX_NUM_ENVS = 1_000_000
@@ -95,7 +96,7 @@ class DWRPointStabilizationVectorEnv(HorizonSpec, VectorEnv):
         self.dtype = as_choice("dtype", dtype, ("float64", "float32"))
         self.autoreset_mode = parse_autoreset_mode(autoreset_mode)
         self.metadata = {**type(self).metadata, "autoreset_mode": self.autoreset_mode}
-        kwargs, drive, disturbances = split_env_kwargs(kwargs)
+        kwargs, drive, disturbances = split_env_kwargs(env_kwargs_from_json(kwargs))  # dicts: a stored spec's
         self.params = EnvParams.from_kwargs(**kwargs)
         self.perturbation = make_perturbation(drive, disturbances, self.params, int(num_envs))
         check_render_mode(render_mode)

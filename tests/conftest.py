@@ -10,3 +10,5 @@ os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 # The tests never read or write the user's cache of optimal energies (~/.cache/dwr-gym).
 os.environ.setdefault("DWR_GYM_CACHE", tempfile.mkdtemp(prefix="dwr-gym-test-cache-"))
+# Nor the user's Minari datasets (~/.minari/datasets): the docs' snippets write one.
+os.environ.setdefault("MINARI_DATASETS_PATH", tempfile.mkdtemp(prefix="dwr-gym-test-minari-"))

@@ -23,7 +23,9 @@ def test_bad_settings_name_what_is_wrong() -> None:
     with pytest.raises(ValueError, match="delay"):
         DisturbanceDistribution(delay=2.5)  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="disturbance_distribution"):
-        gym.make(ENV, disturbance_distribution={"probability": 0.5})
+        gym.make(ENV, disturbance_distribution=0.5)
+    with pytest.raises(ValueError, match=r"disturbance_distribution field.*probabilty"):  # its dict form, misspelt
+        gym.make(ENV, disturbance_distribution={"probabilty": 0.5})
     from dwr_gym.disturbances import InputDelay
 
     with pytest.raises(ValueError, match="exclusive"):

@@ -1,4 +1,4 @@
-"""``dwr-gym imitate``: behaviour cloning of the optimal planner into a network policy for any T_con."""
+"""``dwr-gym imitate``: behaviour cloning of the optimal planner (or a Minari dataset's policy) into a network."""
 
 from __future__ import annotations
 
@@ -16,7 +16,8 @@ def add_parser(sub: Any) -> None:
 
     p = sub.add_parser("imitate", help="clone the optimal planner into a network policy for any T_con",
                        description="Record the optimal controller on the env's task (T_con drawn per episode) and fit "
-                       "a PPO MlpPolicy to its actions (behaviour cloning with noise injection).")  # fmt: skip
+                       "a PPO MlpPolicy to its actions (behaviour cloning with noise injection); with --dataset ID, fit it to the "
+                       "actions of a Minari dataset of dwr-gym dataset instead.")  # fmt: skip
     for f in dataclasses.fields(ImitationConfig):
         flag = f.metadata.get("flag", "--" + f.name.replace("_", "-"))
         if isinstance(f.default, tuple):
@@ -26,7 +27,8 @@ def add_parser(sub: Any) -> None:
         else:
             p.add_argument(flag, dest=f.name, type=type(f.default), default=argparse.SUPPRESS,
                            help=f"{f.metadata['help']} (default: {f.default})")  # fmt: skip
-    p.add_argument("--run-dir", default=None, help="output directory (default: runs/bc-optimal-seed<seed>)")
+    p.add_argument("--run-dir", default=None,
+                   help="output directory (default: runs/bc-optimal-seed<seed>, or runs/bc-<name>-seed<seed> of --dataset)")  # fmt: skip
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     p.set_defaults(func=run)
 
@@ -66,14 +68,22 @@ def run(args: argparse.Namespace) -> int:
             raise UsageError(f"--{key.replace('_', '-')} {list(value)} is invalid: expected two numbers 0 < min <= max")
     if len(config.net_arch) == 0 or min(config.net_arch) < 1:
         raise UsageError(f"--net-arch {list(config.net_arch)} is invalid: expected layer sizes >= 1")
+    if config.dataset:
+        from train.datasets.store import DatasetError, dataset_env, load_dataset
+
+        try:
+            config.env_id = dataset_env(load_dataset(config.dataset, "--dataset"))[0]
+        except DatasetError as error:
+            raise UsageError(str(error)) from None
     validated_env_params(env_kwargs(config))
-    if not casadi_available():
+    if not casadi_available() and not config.dataset:
         raise UsageError('imitate needs the optimal planner (CasADi): pip install "dwr-gym[optimal]"')
     try:
         import stable_baselines3  # noqa: F401
     except ImportError as error:
         raise UsageError('stable-baselines3 is not installed: pip install "dwr-gym[train]"') from error
-    run_dir = Path(args.run_dir or f"runs/bc-optimal-seed{config.seed}")
+    source = config.dataset.rsplit("/", 1)[-1] if config.dataset else "optimal"
+    run_dir = Path(args.run_dir or f"runs/bc-{source}-seed{config.seed}")
     if (run_dir / "model.zip").exists():
         raise UsageError(
             f"--run-dir {str(run_dir)!r} is invalid: it already holds a model.zip; choose another directory"

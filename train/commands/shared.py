@@ -168,13 +168,17 @@ def add_agents_argument(p: argparse.ArgumentParser, what: str) -> None:
 
 def checked_env(args: argparse.Namespace) -> tuple[str, dict[str, Any]]:
     """``--env`` without a ``dwr_gym:`` prefix, and the env's keywords: the id's registered ones, then ``--env-kwargs``."""
+    from dwr_gym.serialization import env_kwargs_from_json
     from train.env_ids import check_env_id, env_keywords
 
     try:
         env_id = check_env_id(args.env)
     except ValueError as error:
         raise UsageError(str(error)) from None
-    kwargs = env_keywords(env_id, parse_env_kwargs(args.env_kwargs))
+    try:  # disturbances, robot and disturbance_distribution may be given in their JSON form (dwr_gym.serialization)
+        kwargs = env_kwargs_from_json(env_keywords(env_id, parse_env_kwargs(args.env_kwargs)))
+    except (TypeError, ValueError) as error:
+        raise UsageError(f"invalid env keyword: {error}") from None
     validated_env_params(kwargs)
     return env_id, kwargs
 

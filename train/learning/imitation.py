@@ -1,4 +1,4 @@
-"""``dwr-gym imitate``: a network policy cloned from the minimum-energy planner, for any T_con.
+"""``dwr-gym imitate``: a network policy cloned from the minimum-energy planner, for any T_con, or from a dataset.
 
 The expert is the ``optimal`` controller (:mod:`baselines.nmpc`), planning to arrive at
 ``arrival_fraction`` x T_con (a margin the network can use). Demonstrations come from batched
@@ -8,7 +8,8 @@ action is recorded (DART, Laskey et al. 2017): the expert re-plans from the pert
 data covers the states a slightly imperfect student visits. The policy is a stable-baselines3 PPO
 ``MlpPolicy`` whose action mean is fitted to the expert's actions (mean squared error), so the result
 loads, evaluates and fine-tunes like any PPO agent of ``dwr-gym train``. At run time the policy is the
-network alone; the optimiser is only used to make the data.
+network alone; the optimiser is only used to make the data. With ``--dataset ID`` the demonstrations are the
+observations and actions of a Minari dataset of ``dwr-gym dataset`` instead, on that dataset's env.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dwr_gym import core
+from dwr_gym.disturbances import split_env_kwargs
 from dwr_gym.params import EnvParams
 from train.env_ids import ENV_HELP, TASK_ENV_ID, env_keywords
 from train.learning.config import option
@@ -51,10 +53,17 @@ class ImitationConfig:
     eval_seed: int = option(12345, "seed of that scenario set (kept apart from the training seed)")
     eval_every: int = option(10, "evaluate every this many epochs")
     threads: int = option(1, "torch threads while it runs (restored afterwards)")
+    dataset: str = option("", "a Minari dataset id (dwr-gym dataset) to clone instead of recording the planner; "
+                          "the dataset's env replaces --env and the ranges")  # fmt: skip
 
 
 def env_kwargs(config: ImitationConfig) -> dict[str, Any]:
-    """The task the student learns: the keywords of ``env_id`` (v1's by default) with the config's ranges."""
+    """The task the student learns: the keywords of ``env_id`` (v1's by default) with the config's ranges, or
+    the env of the config's dataset."""
+    if config.dataset:
+        from train.datasets.store import dataset_env, load_dataset
+
+        return dataset_env(load_dataset(config.dataset, "--dataset"))[1]
     ranges = {"T_con_range": tuple(config.T_con_range), "start_distance": tuple(config.start_distance)}
     return env_keywords(config.env_id, ranges)
 
@@ -108,6 +117,18 @@ def record_demonstrations(
     return np.concatenate(observations), np.concatenate(actions), stats
 
 
+def dataset_demonstrations(
+    config: ImitationConfig,
+) -> tuple[NDArray[np.float32], NDArray[np.float32], dict[str, float]]:
+    """(observations (M, 10), actions (M, 2), statistics) of every step of the config's dataset."""
+    from train.datasets.store import load_dataset, transitions
+
+    dataset = load_dataset(config.dataset, "--dataset")
+    data = transitions(dataset)
+    stats = {"episodes": float(dataset.total_episodes), "steps": float(len(data["actions"])), "seconds": 0.0}
+    return data["observations"].astype(np.float32), data["actions"].astype(np.float32), stats
+
+
 def imitate(config: ImitationConfig, run_dir: Path, progress: bool = True) -> Path:
     """Record demonstrations, clone them into a PPO policy, save model.zip, config.yaml and evaluations.csv.
     torch runs on ``config.threads`` threads meanwhile; the caller's count is restored afterwards."""
@@ -130,9 +151,13 @@ def _imitate(config: ImitationConfig, run_dir: Path, progress: bool) -> Path:
 
     run_dir.mkdir(parents=True, exist_ok=True)
     began = time.perf_counter()
-    observations, actions, stats = record_demonstrations(config, progress)
-    print(f"recorded {len(observations):,} expert steps from {config.episodes} episodes in {stats['seconds']:.0f} s "
-          f"(expert success {stats['expert_success_rate']:.3f})")  # fmt: skip
+    if config.dataset:
+        observations, actions, stats = dataset_demonstrations(config)
+        print(f"read {len(observations):,} steps of {stats['episodes']:.0f} episodes from {config.dataset}")
+    else:
+        observations, actions, stats = record_demonstrations(config, progress)
+        print(f"recorded {len(observations):,} expert steps from {config.episodes} episodes in {stats['seconds']:.0f} s "
+              f"(expert success {stats['expert_success_rate']:.3f})")  # fmt: skip
     torch.manual_seed(config.seed)
     kwargs = env_kwargs(config)
     model = PPO("MlpPolicy", make_sb3_vec_env(1, seed=config.seed, **kwargs), seed=config.seed, device="cpu",
@@ -141,7 +166,7 @@ def _imitate(config: ImitationConfig, run_dir: Path, progress: bool) -> Path:
     optimizer = torch.optim.Adam(policy.parameters(), lr=config.learning_rate)
     inputs = torch.as_tensor(observations)
     targets = torch.as_tensor(actions)
-    params = EnvParams.from_kwargs(**kwargs)
+    params = EnvParams.from_kwargs(**split_env_kwargs(kwargs)[0])  # a dataset's env may have disturbances
     scenario = make_scenario("random", n=config.eval_episodes, seed=config.eval_seed, env_kwargs=kwargs)
     csv_path = run_dir / "evaluations.csv"
     with csv_path.open("w", newline="") as handle:
@@ -169,7 +194,13 @@ def _imitate(config: ImitationConfig, run_dir: Path, progress: bool) -> Path:
             with csv_path.open("a", newline="") as handle:
                 csv.writer(handle).writerow([row[k] for k in EVAL_FIELDS])
     model.save(run_dir / "model.zip")
-    ranges = {key: kwargs[key] for key in ("T_con_range", "start_distance")}
+    if config.dataset:  # the dataset's env without its robot's imperfections: the agent is run on any robot
+        from dwr_gym.serialization import env_kwargs_to_json
+        from train.datasets.build import nominal
+
+        ranges = env_kwargs_to_json(nominal(kwargs))
+    else:
+        ranges = {key: kwargs[key] for key in ("T_con_range", "start_distance")}
     train_config = TrainConfig(algo="ppo", env_id=config.env_id, env_kwargs=ranges, seed=config.seed, run_dir=str(run_dir), progress=False,
                                algo_kwargs={"policy": "MlpPolicy", "gamma": 0.999,
                                             "policy_kwargs": {"net_arch": list(config.net_arch)}})  # fmt: skip

@@ -20,6 +20,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from train.reporting import dataset_tables
+
 ROOT = Path(__file__).resolve().parents[2]
 MARKER = re.compile(r"(<!-- table: (?P<name>[\w-]+) -->\n)(?P<body>.*?)(<!-- /table -->)", re.DOTALL)
 
@@ -220,6 +222,9 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "rl-benchmark-disturbed": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "disturbed")),
     "rl-diagnosis": ("docs/rl_benchmark/diagnosis.json", lambda data: rl_table(data, "diagnosis")),
     "rl-levers": ("docs/rl_benchmark/levers.json", lambda data: rl_table(data, "levers")),
+    "datasets-suite": ("docs/datasets/suite.json", lambda data: dataset_tables.suite_table(data)),
+    "datasets-baselines": ("docs/datasets/suite.json", lambda data: dataset_tables.baselines_table(data)),
+    "datasets-speed": ("docs/datasets/speed.json", lambda data: dataset_tables.speed_table(data)),
 }
 
 

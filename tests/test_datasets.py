@@ -1,0 +1,227 @@
+"""Minari datasets of dwr-gym: collection from the vector env, the round trip, the env spec, safety, the CLI."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import dwr_gym  # noqa: F401
+from baselines.expert import ExpertPolicy
+from baselines.registry import make_controller
+from dwr_gym.disturbances import InputDelay, VelocityBias
+from dwr_gym.randomization import DisturbanceDistribution
+from dwr_gym.serialization import env_kwargs_from_json, env_kwargs_to_json
+from train.datasets.collect import RandomPolicy, collect
+from train.env_ids import env_keywords
+
+minari = pytest.importorskip("minari")
+
+from train.datasets.store import (  # noqa: E402  (after the skip: the module needs no minari, its tests do)
+    DatasetError,
+    episode_metadata,
+    load_dataset,
+    transitions,
+    write_dataset,
+)
+
+V1 = "DWRPointStabilization-v1"
+
+
+@pytest.fixture(autouse=True)
+def datasets_path(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    """Every test writes its datasets in its own temporary Minari data path."""
+    path = tmp_path / "minari"
+    monkeypatch.setenv("MINARI_DATASETS_PATH", str(path))
+    return path
+
+
+def ptc() -> ExpertPolicy:
+    return ExpertPolicy(make_controller("ptc"), 0.5, 2.0)
+
+
+def single_env_episode(seed: int, index: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The ``index``-th episode of PTC on a single v1 env reset with ``seed`` (then without a seed)."""
+    env, policy = gym.make(V1), ptc()
+    obs, _ = env.reset(seed=seed)
+    for k in range(index + 1):
+        if k:
+            obs, _ = env.reset()
+        observations, actions, rewards, done = [obs], [], [], False
+        while not done:
+            action, _ = policy.predict(obs)
+            obs, reward, terminated, truncated, _ = env.step(action)
+            observations.append(obs)
+            actions.append(action)
+            rewards.append(reward)
+            done = terminated or truncated
+    return np.array(observations), np.array(actions), np.array(rewards)
+
+
+def test_collected_episodes_are_the_single_envs_episodes_robot_by_robot() -> None:
+    # 10 episodes on 4 robots: episode k is robot k % 4's episode k // 4, robot i reset with seed 7 + i
+    episodes = collect(ptc(), env_keywords(V1), 10, seed=7, num_envs=4)
+    assert len(episodes.rewards) == 10
+    for k in (0, 3, 6, 9):
+        observations, actions, rewards = single_env_episode(7 + k % 4, k // 4)
+        assert episodes.observations[k].shape == observations.shape  # the last observation included
+        np.testing.assert_allclose(episodes.observations[k], observations, atol=1e-5)
+        np.testing.assert_allclose(episodes.actions[k], actions, atol=1e-5)
+        np.testing.assert_allclose(episodes.rewards[k], rewards, atol=1e-6)
+        assert episodes.terminations[k][-1] or episodes.truncations[k][-1]
+        assert not (episodes.terminations[k][:-1].any() or episodes.truncations[k][:-1].any())
+        meta = episodes.metadata[k]
+        assert meta["steps"] == len(rewards) and meta["return"] == pytest.approx(rewards.sum())
+        assert meta["T_con"] == pytest.approx(observations[0, 7])  # the observation's T_con feature
+
+
+def test_which_episodes_are_kept_does_not_depend_on_the_batch() -> None:
+    few = collect(RandomPolicy(0), env_keywords(V1), 3, seed=2, num_envs=3)
+    more = collect(RandomPolicy(0), env_keywords(V1), 6, seed=2, num_envs=6)
+    for k in range(3):  # robots 0-2 start from the same seeds; the actions differ (one generator), the starts not
+        assert few.metadata[k]["start"] == more.metadata[k]["start"]
+        assert few.metadata[k]["T_con"] == more.metadata[k]["T_con"]
+
+
+def written(dataset_id: str = "dwr-gym/test-v0", episodes: int = 5, **kwargs: object) -> tuple[object, object]:
+    env_kwargs = {**env_keywords(V1), **kwargs.pop("env_kwargs", {})}  # type: ignore[dict-item]
+    data = collect(ptc(), env_kwargs, episodes, seed=1, num_envs=4)
+    write_dataset(dataset_id, data, V1, env_kwargs, algorithm_name="ptc", description="test", ref_min_score=-100.0,
+                  ref_max_score=12.0, **kwargs)  # type: ignore[arg-type]  # fmt: skip
+    return data, load_dataset(dataset_id)
+
+
+def test_loading_round_trips_the_same_arrays_and_metadata() -> None:
+    data, dataset = written()
+    assert dataset.total_episodes == 5 and dataset.total_steps == data.steps
+    for k, episode in enumerate(dataset.iterate_episodes()):
+        np.testing.assert_array_equal(episode.observations, data.observations[k])
+        np.testing.assert_array_equal(episode.actions, data.actions[k])
+        np.testing.assert_array_equal(episode.rewards, data.rewards[k])
+        np.testing.assert_array_equal(episode.terminations, data.terminations[k])
+        np.testing.assert_array_equal(episode.truncations, data.truncations[k])
+    meta = episode_metadata(dataset)
+    assert [m["start"] for m in meta] == [m["start"] for m in data.metadata]
+    assert [m["energy"] for m in meta] == [m["energy"] for m in data.metadata]
+    flat = transitions(dataset)
+    assert flat["observations"].shape == (data.steps, 10) and flat["actions"].shape == (data.steps, 2)
+    first = len(data.rewards[0])
+    np.testing.assert_array_equal(flat["next_observations"][:first], data.observations[0][1:])
+
+
+def test_the_normalised_score_is_one_at_the_optimum_and_zero_at_random() -> None:
+    _, dataset = written()
+    np.testing.assert_allclose(minari.get_normalized_score(dataset, np.array([12.0, -100.0])), [1.0, 0.0])
+
+
+@pytest.mark.parametrize(
+    "imperfection",
+    [
+        {"disturbances": [VelocityBias(linear=-0.02, angular=0.1), InputDelay(steps=4)]},
+        {"disturbance_distribution": DisturbanceDistribution(probability=0.3, seed=4)},
+        {"robot": "turtlebot3_burger", "observation_noise": 0.01},
+    ],
+)
+def test_recover_environment_gives_back_the_env_with_its_disturbances(imperfection: dict) -> None:
+    _, dataset = written(env_kwargs=imperfection)
+    for env in (dataset.recover_environment(), dataset.recover_environment(eval_env=True)):
+        original = gym.make(V1, **imperfection)
+        assert env.unwrapped.params == original.unwrapped.params
+        assert repr(env.unwrapped.perturbation) == repr(original.unwrapped.perturbation)
+        obs, _ = env.reset(seed=3)
+        expected, _ = original.reset(seed=3)
+        np.testing.assert_array_equal(obs, expected)
+
+
+def test_env_keywords_without_a_json_form_are_a_clear_error() -> None:
+    with pytest.raises(ValueError, match=r"env keyword dt=.*no JSON form"):
+        env_kwargs_to_json({"dt": object()})
+    kwargs = {"disturbances": [VelocityBias(linear=0.1)], "disturbance_distribution": None, "T_con": 20.0}
+    assert env_kwargs_from_json(env_kwargs_to_json(kwargs)) == {**kwargs, "disturbances": kwargs["disturbances"]}
+
+
+def test_an_existing_id_is_refused_and_replaced_only_with_overwrite() -> None:
+    written("dwr-gym/same-v0", episodes=2)
+    with pytest.raises(DatasetError, match=r"exists.*--overwrite"):
+        written("dwr-gym/same-v0", episodes=3)
+    assert load_dataset("dwr-gym/same-v0").total_episodes == 2
+    written("dwr-gym/same-v0", episodes=3, overwrite=True)
+    assert load_dataset("dwr-gym/same-v0").total_episodes == 3
+
+
+def test_an_interrupted_write_leaves_no_dataset_under_the_id(
+    datasets_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from minari.dataset._storages.arrow_storage import ArrowStorage
+
+    def interrupted(*args: object, **kwargs: object) -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(ArrowStorage, "update_episode_metadata", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        written("dwr-gym/half-v0")
+    assert not (datasets_path / "dwr-gym" / "half-v0").exists()
+    assert [p.name for p in datasets_path.iterdir()] == []  # nor a staging directory
+    monkeypatch.undo()
+    monkeypatch.setenv("MINARI_DATASETS_PATH", str(datasets_path))
+    written("dwr-gym/old-v0", episodes=2)
+    monkeypatch.setattr(ArrowStorage, "update_episode_metadata", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        written("dwr-gym/old-v0", episodes=3, overwrite=True)
+    assert load_dataset("dwr-gym/old-v0").total_episodes == 2  # the old one is kept
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["dataset", "ptc-v0", "--policy", "ptc"], "ID 'ptc-v0' is invalid: expected Minari's form namespace/name-vN"),
+        (["dataset", "dwr-gym/x-v0", "--policy", "pid"], "--policy 'pid' is invalid: expected any of ptc,"),
+        (["dataset", "dwr-gym/x-v0"], "--policy is missing"),
+        (["dataset", "dwr-gym/x-v0", "--policy", "ptc", "--scenarios", "paper-fig5"], "--scenarios 'paper-fig5'"),
+        (["dataset", "dwr-gym/x-v0", "--policy", "ptc", "--env-kwargs", 'disturbances=[{"type": "Gust"}]'],
+         "disturbances item {'type': 'Gust'} is invalid"),
+        (["imitate", "--dataset", "dwr-gym/none-v0"], "--dataset 'dwr-gym/none-v0' is invalid: no such dataset"),
+    ],
+)  # fmt: skip
+def test_bad_input_is_a_one_line_error(argv: list[str], message: str, capsys: pytest.CaptureFixture[str]) -> None:
+    from train.cli import main
+
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+
+
+def test_minari_missing_is_a_one_line_error_naming_the_extra(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from train.cli import main
+
+    monkeypatch.setitem(sys.modules, "minari", None)  # import minari raises ImportError
+    assert main(["dataset", "dwr-gym/x-v0", "--policy", "ptc"]) == 2
+    assert 'datasets need Minari: pip install "dwr-gym[minari]"' in capsys.readouterr().err
+
+
+def test_the_command_writes_a_dataset_that_imitate_clones(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from train import cli
+    from train.datasets import build
+
+    pytest.importorskip("casadi")
+    monkeypatch.setattr(build, "reference_scores", lambda *args, **kwargs: (-100.0, 12.0))  # the optimum's: slow
+    argv = ["dataset", "dwr-gym/cli-v0", "--policy", "pt-astolfi", "--episodes", "6", "--num-envs", "4",
+            "--no-optimum", "--no-progress", "--scenarios", "delay"]  # fmt: skip
+    assert cli.main(argv) == 0
+    dataset = load_dataset("dwr-gym/cli-v0")
+    assert dataset.total_episodes == 6
+    assert dataset.spec.env_spec.kwargs["disturbances"] == [{"type": "InputDelay", "steps": 4}]
+    assert episode_metadata(dataset)[5]["disturbance"] == {"disturbances": [{"type": "InputDelay", "steps": 4}]}
+    assert cli.main(argv) == 2  # the id exists now
+    run = tmp_path / "bc"
+    assert cli.main(["imitate", "--dataset", "dwr-gym/cli-v0", "--epochs", "1", "--eval-episodes", "2",
+                     "--run-dir", str(run), "--no-progress"]) == 0  # fmt: skip
+    assert (run / "model.zip").is_file()
+    assert "steps of 6 episodes from dwr-gym/cli-v0" in capsys.readouterr().out
