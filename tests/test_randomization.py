@@ -94,3 +94,31 @@ def test_with_nothing_present_the_robot_is_the_nominal_one() -> None:
         assert t_b == t_a
         if t_a:
             break
+
+
+def drawn_robots(seed: int, reset_seed: int = 0, steps: int = 40) -> tuple[dict, np.ndarray]:
+    """What 16 robots of a distribution with ``seed`` drew at reset(seed=reset_seed), and their observations after
+    ``steps`` steps of one fixed action (the per-step draws: random walk, dropout)."""
+    distribution = DisturbanceDistribution(probability=1.0, seed=seed)
+    envs = gym.make_vec(ENV, num_envs=16, disturbance_distribution=distribution)
+    obs, _ = envs.reset(seed=reset_seed)
+    drawn = envs.unwrapped.perturbation.episode()
+    for _ in range(steps):
+        obs, *_ = envs.step(np.tile(np.float32([0.5, 0.3]), (16, 1)))
+    return drawn, obs
+
+
+def test_the_distributions_seed_picks_the_robots_the_same_seed_repeats_them() -> None:
+    """Two runs of one seed meet the same robots, step for step; another seed (same reset seed) meets others."""
+    drawn, obs = drawn_robots(seed=1)
+    again, obs_again = drawn_robots(seed=1)
+    other, obs_other = drawn_robots(seed=2)
+    for key in drawn:
+        np.testing.assert_array_equal(again[key], drawn[key], err_msg=key)
+    np.testing.assert_array_equal(obs_again, obs)
+    for key in ("bias", "sinusoid_amplitude", "sinusoid_period", "random_walk", "wheel_efficiency", "fault_fraction",
+                "fault_start", "dropout"):  # fmt: skip
+        assert not np.any(np.isclose(other[key], drawn[key], rtol=0, atol=1e-12)), key  # every robot, every kind
+    assert not np.allclose(obs_other, obs)
+    # the reset seed picks the robots as well: the distribution's seed is one more key, not the only one
+    assert not np.any(drawn_robots(seed=1, reset_seed=1, steps=0)[0]["bias"] == drawn["bias"])
