@@ -161,3 +161,26 @@ def test_behind_the_filter_pose_noise_no_longer_becomes_command_chatter() -> Non
     results = evaluate({"raw": raw, "filtered": filtered}, scenario, seed=3)
     assert results["filtered"].success.all()
     assert results["filtered"].command_rate_rms.mean() < 0.5 * results["raw"].command_rate_rms.mean()
+
+
+@pytest.mark.parametrize(("delay", "response"), [(3, NOMINAL_RESPONSE), (2, (0.02, 0.15, 0.9, 0.5))])
+def test_the_smith_predictor_returns_the_pose_when_the_next_command_takes_effect(delay: int, response: tuple) -> None:
+    """With the input delay D told apart, update() returns the estimate carried through the D commands sent but not
+    yet executed: the model's rollout of those commands (with the learned response) from the estimated pose, which
+    is where the robot really is D periods later."""
+    commands = wiggle(300)
+    poses = drive(commands, response, delay=delay)
+    pose_filter, sent = PoseFilter(dt=DT), np.zeros(2)
+    for k in range(len(commands)):
+        returned = pose_filter.update(poses[k][None], sent[None])[0]
+        sent = commands[k]
+        if k < 150:
+            continue
+        assert pose_filter.delay[0] == delay
+        x, y, psi = pose_filter.mean[0, :3]
+        for command in commands[k - delay : k]:  # sent at k - D ... k - 1, executed from k on
+            u, w = robot_velocities(command[:1], command[1:], pose_filter.response)
+            x, y, psi = model.unicycle_step_exact(x, y, psi, u[0], w[0], DT)
+        np.testing.assert_allclose(returned, (x, y, psi), rtol=0, atol=1e-12)
+        if k + delay < len(poses):  # and that is where the robot is when the command sent now takes effect
+            np.testing.assert_allclose(returned[:2], poses[k + delay, :2], atol=2e-3)
