@@ -132,3 +132,34 @@ def test_the_shipped_robust_agent_keeps_the_deadline_for_less_energy_than_ptc(na
     assert robust.success.mean() >= 23 / 24
     assert np.mean(robust.final_heading_error) <= (0.1 if name == "random" else 0.2)
     assert robust.energy.mean() < ptc.energy.mean()
+
+
+def drive_on_its_plan(controller: object, start: tuple[float, float, float], steps: int,
+                      push: tuple[int, float] | None = None) -> list[int]:  # fmt: skip
+    """Step one nominal robot (the exact arc of eq. (1)) under ``controller``; ``push`` = (step, metres) moves it
+    sideways (in its own frame) before that step. Returns the controller's plan solves after each step."""
+    from dwr_gym import model
+
+    x, y, psi = start
+    initial = (float(np.hypot(x, y)), 0.0)
+    solves = []
+    for k in range(steps):
+        if push is not None and k == push[0]:
+            x, y = x - push[1] * np.sin(psi), y + push[1] * np.cos(psi)
+        inputs = ControllerInput.from_pose(x, y, psi, k * 0.05, initial)._replace(prescribed_time=np.array([T_CON]))
+        u, omega = controller(inputs)  # type: ignore[operator]
+        x, y, psi = model.unicycle_step_exact(x, y, psi, float(u[0]), float(omega[0]), 0.05)
+        solves.append(controller.solves)  # type: ignore[attr-defined]
+    return solves
+
+
+@pytest.mark.parametrize(("push", "replans"), [(None, 0), (0.03, 0), (0.12, 1)], ids=["none", "in-tube", "out"])
+def test_a_robot_pushed_out_of_the_tube_re_plans_once_one_inside_it_does_not(push: float | None, replans: int) -> None:
+    """robust-pt on the raw measurement (no filter to smooth the push): a nominal robot tracks its plan without
+    re-planning; a push of 3 cm (tube 5 cm) is tracked back; one of 12 cm re-plans from where the robot is, once."""
+    controller = make_controller("robust-pt", T_con=T_CON, estimator=None, workers=1)
+    solves = drive_on_its_plan(controller, (-1.0, 0.4, 0.3), 40, None if push is None else (20, push))
+    assert solves[0] == 1  # the first plan, at the first step
+    assert solves[-1] == 1 + replans
+    if replans:
+        assert solves[19] == 1 and solves[20] == 2  # at the very step it left the tube
