@@ -38,14 +38,34 @@ def test_demonstration_samples_are_what_the_env_observes_when_the_plan_is_replay
     assert np.all(np.abs(actions) <= 1.0)
 
 
-def test_a_tiny_cloning_run_saves_an_agent_that_loads_and_acts(tmp_path) -> None:  # type: ignore[no-untyped-def]
+def test_a_tiny_cloning_run_aggregates_each_rounds_data_and_saves_an_agent_that_loads_and_acts(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """DAgger fits each round on all the data so far: the demonstrations and every round's re-planned labels."""
+    import csv
+
+    from train.learning import dagger
+
+    added: list[int] = []
+
+    def counted(*args, **kwargs):  # type: ignore[no-untyped-def]
+        data = collect(*args, **kwargs)
+        added.append(len(data[0]))
+        return data
+
+    collect = dagger.dagger_samples
+    monkeypatch.setattr(dagger, "dagger_samples", counted)
     env_kwargs = {**V1_DEFAULTS, "T_con_range": (10.0, 10.0), "start_distance": (0.3, 0.5)}  # few solver builds
-    config = DaggerConfig(episodes=4, dagger_rounds=1, dagger_episodes=2, replans_per_episode=1, epochs=1,
+    config = DaggerConfig(episodes=4, dagger_rounds=2, dagger_episodes=2, replans_per_episode=1, epochs=1,
                              workers=1, eval_episodes=2, eval_T_con=(10.0,), env_kwargs=env_kwargs)  # fmt: skip
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         run_dir = run(config, tmp_path / "bc", ["test"])
-    assert (run_dir / "evaluations.csv").read_text().count("\n") == 3  # header and one row per fit
+    rows = list(csv.DictReader((run_dir / "evaluations.csv").open()))
+    assert [int(r["round"]) for r in rows] == [0, 1, 2]  # one row per fit
+    samples = [int(r["samples"]) for r in rows]
+    assert len(added) == 2 and min(added) > 0 and samples[0] > 0
+    assert samples == [samples[0], samples[0] + added[0], samples[0] + added[0] + added[1]]
     label, policy = load_agent(run_dir)
     action, _ = policy.predict(np.zeros((5, 10), np.float32), deterministic=True)
     assert label == "bc" and action.shape == (5, 2) and np.all(np.isfinite(action))
