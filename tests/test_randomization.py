@@ -192,7 +192,7 @@ def test_a_dropped_measurement_holds_the_last_delivered_pose_from_the_reset_on()
     last = reset_obs[:, :6].copy()
     held_count = np.zeros(n)
     rng = np.random.default_rng(3)
-    for k in range(60):
+    for _ in range(60):
         fresh = rng.uniform(-1, 1, (n, 10)).astype(np.float32)
         out = perturbation.measure(fresh.copy())
         held = perturbation.info()["measurement_held"]
