@@ -261,3 +261,16 @@ def test_settings_are_normalised_and_each_bound_is_enforced() -> None:
     DisturbanceDistribution(delay=steps - 1).perturbation(None, params, 2)
     with pytest.raises(ValueError, match="delay"):
         DisturbanceDistribution(delay=steps).perturbation(None, params, 2)  # as long as the episode: refused
+
+
+def test_the_disturbance_info_has_the_same_keys_at_reset_and_at_each_step_as_the_fixed_disturbances() -> None:
+    from dwr_gym.disturbances import VelocityBias
+
+    fixed = gym.make(ENV, disturbances=[VelocityBias(0.1, 0.0)], disable_env_checker=True)
+    drawn = gym.make(ENV, disturbance_distribution=DisturbanceDistribution(), disable_env_checker=True)
+    keys = set(fixed.reset(seed=0)[1]["disturbance"])
+    _, info = drawn.reset(seed=0)
+    assert set(info["disturbance"]) == keys and not any(info["disturbance"].values())  # nothing happened yet
+    *_, info = drawn.step(np.float32([0.5, -0.25]))
+    assert set(info["disturbance"]) == keys
+    assert info["disturbance"]["commanded_angular_velocity"] == pytest.approx(-0.5)  # -0.25 x omega_max 2 rad/s

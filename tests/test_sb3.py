@@ -86,6 +86,30 @@ def test_reset_seeds_and_options_reach_the_vector_env_and_are_used_once() -> Non
     adapter.set_options({"start": start})
     obs = adapter.reset()
     np.testing.assert_allclose(obs[:, 0], np.hypot(1.0, -0.5), rtol=1e-6)  # every robot starts at `start`
+    # the vector env takes one options dict for all robots: the first sub-env's
+    adapter.set_options([{"start": start}, {"start": (2.0, 0.0, 0.0)}, {"start": (2.0, 0.0, 0.0)}])
+    np.testing.assert_allclose(adapter.reset()[:, 0], np.hypot(1.0, -0.5), rtol=1e-6)
+
+
+def test_the_episode_time_is_the_wall_time_since_the_adapter_was_made_as_a_monitor_reports_it(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import dwr_gym.sb3
+
+    class Clock:
+        now = 1000.0
+
+        @classmethod
+        def time(cls) -> float:
+            return cls.now
+
+    monkeypatch.setattr(dwr_gym.sb3, "time", Clock)
+    adapter = make_sb3_vec_env(num_envs=2, seed=0, **KWARGS)
+    adapter.reset()
+    Clock.now = 1012.34567891
+    for _ in range(adapter.venv.params.max_episode_steps):
+        _, _, dones, infos = adapter.step(np.zeros((2, 2), np.float32))
+    assert dones.all() and [info["episode"]["t"] for info in infos] == [12.345679, 12.345679]  # 6 decimals
 
 
 def test_attributes_methods_and_wrappers_answer_once_per_requested_sub_env() -> None:
@@ -98,6 +122,10 @@ def test_attributes_methods_and_wrappers_answer_once_per_requested_sub_env() -> 
     adapter.set_attr("marker", 7)
     assert adapter.venv.marker == 7  # type: ignore[attr-defined]
     assert adapter.env_method("__repr__", indices=[1, 2]) == [repr(adapter.venv)] * 2
+    assert adapter.env_method("__getattribute__", "num_envs") == [4] * 4  # positional arguments reach the method
+    obs, _ = adapter.env_method("reset", indices=0, seed=21)[0]  # and keyword arguments
+    np.testing.assert_array_equal(obs, make_sb3_vec_env(num_envs=4, seed=21, **KWARGS).reset())
+    assert adapter.metadata["render_fps"] == adapter.venv.metadata["render_fps"]  # VecVideoRecorder's frame rate
     assert adapter.env_is_wrapped(Monitor) == [True] * 4
     assert adapter.env_is_wrapped(Monitor, indices=1) == [True]
     import gymnasium as gym
