@@ -153,3 +153,63 @@ def test_a_composite_agent_comes_apart_so_that_its_network_is_reported_alone() -
     assert type(whole.model) is type(network)
     with pytest.raises(AgentLoadError, match="part='finish'"):
         load_agent(PRETRAINED["dagger-handover"], part="finish")
+
+
+def test_the_module_command_line_builds_the_config_from_its_flags(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """`python -m train.learning.dagger` and `... robust_dagger`: every int, float and str field is a flag."""
+    from train.learning import dagger, robust_dagger
+
+    got: dict[str, object] = {}
+    monkeypatch.setattr(dagger, "run", lambda config, run_dir, command: got.update(config=config, run_dir=run_dir,
+                                                                                   command=command))  # fmt: skip
+    dagger.main(["--run-dir", str(tmp_path / "a"), "--episodes", "7", "--arrival-fraction", "0.9",
+                 "--env", "dwr_gym:DWRPointStabilization-v0", "--handover-expert", "ptc"])  # fmt: skip
+    config = got["config"]
+    assert isinstance(config, DaggerConfig) and got["run_dir"] == tmp_path / "a"
+    assert (config.episodes, config.arrival_fraction, config.env_id, config.handover_expert) == (
+        7, 0.9, "DWRPointStabilization-v0", "ptc")  # fmt: skip
+    assert config.dagger_rounds == DaggerConfig().dagger_rounds  # the others keep their defaults
+    assert got["command"][:3] == ["python", "-m", "train.learning.dagger"] and "--episodes" in got["command"]
+    with pytest.raises(SystemExit) as exit_info:
+        dagger.main(["--run-dir", str(tmp_path / "b"), "--env", "CartPole-v1"])
+    assert exit_info.value.code == 2
+
+    monkeypatch.setattr(robust_dagger, "run", lambda config, run_dir, command: got.update(config=config))
+    robust_dagger.main(["--run-dir", str(tmp_path / "c"), "--plan-arrival", "0.7", "--init-from", "", "--seed", "3"])
+    config = got["config"]
+    assert (config.plan_arrival, config.init_from, config.seed) == (0.7, "", 3)
+    with pytest.raises(SystemExit):
+        robust_dagger.main(["--run-dir", str(tmp_path / "d"), "--env", "nope"])
+
+
+def test_handover_only_chooses_the_handover_of_a_trained_run_and_writes_it(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import shutil
+
+    import yaml
+
+    from train.learning import dagger
+
+    run_dir = tmp_path / "agent"
+    shutil.copytree(Path(__file__).resolve().parents[1] / "train" / "pretrained" / "dagger", run_dir)
+    chosen = {"expert": "pt-astolfi", "distance": 0.0, "time_fraction": 0.85, "speed_margin": 1.5, "selected_on": "x"}
+    asked = []
+
+    def select(model, config, params):  # type: ignore[no-untyped-def]
+        asked.append((config.handover_expert, config.eval_episodes, params.T_con_range))
+        return chosen, [{"tried": 1}]
+
+    monkeypatch.setattr(dagger, "select_handover", select)
+    dagger.main(
+        ["--run-dir", str(run_dir), "--handover-only", "--handover-expert", "pt-astolfi", "--eval-episodes", "9"]
+    )
+    saved = yaml.safe_load((run_dir / "config.yaml").read_text())
+    assert saved["handover"] == chosen and saved["handover_tried"] == [{"tried": 1}]
+    assert asked[0][:2] == ("pt-astolfi", 9) and asked[0][2] is not None  # the run's own env (v1: T_con drawn)
+    with pytest.raises(SystemExit, match="--handover-expert 'nope' is invalid"):
+        dagger.main(["--run-dir", str(run_dir), "--handover-only", "--handover-expert", "nope"])
+    with pytest.raises(SystemExit, match="holds no model.zip"):
+        dagger.main(["--run-dir", str(tmp_path / "empty"), "--handover-only", "--handover-expert", "ptc"])
