@@ -211,5 +211,5 @@ def test_handover_only_chooses_the_handover_of_a_trained_run_and_writes_it(
     assert asked[0][:2] == ("pt-astolfi", 9) and asked[0][2] is not None  # the run's own env (v1: T_con drawn)
     with pytest.raises(SystemExit, match="--handover-expert 'nope' is invalid"):
         dagger.main(["--run-dir", str(run_dir), "--handover-only", "--handover-expert", "nope"])
-    with pytest.raises(SystemExit, match="holds no model.zip"):
+    with pytest.raises(SystemExit, match=r"holds no model\.zip"):
         dagger.main(["--run-dir", str(tmp_path / "empty"), "--handover-only", "--handover-expert", "ptc"])
