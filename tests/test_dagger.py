@@ -213,3 +213,32 @@ def test_handover_only_chooses_the_handover_of_a_trained_run_and_writes_it(
         dagger.main(["--run-dir", str(run_dir), "--handover-only", "--handover-expert", "nope"])
     with pytest.raises(SystemExit, match=r"holds no model\.zip"):
         dagger.main(["--run-dir", str(tmp_path / "empty"), "--handover-only", "--handover-expert", "ptc"])
+
+
+def test_select_handover_takes_the_least_energy_among_those_in_time_and_on_heading_else_the_most_in_time(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The rule of select_handover's docstring, on made-up evaluations of the grid (no rollout)."""
+    from train.learning import dagger
+
+    def fake(table):  # type: ignore[no-untyped-def]
+        def evaluate(policy, params, T_cons, n, seed):  # type: ignore[no-untyped-def]
+            success, heading, energy = table(policy.time_fraction, policy.speed_margin)
+            return [{"T_con": T, "success": success, "heading": heading, "energy": energy / T} for T in T_cons]
+
+        return evaluate
+
+    config = DaggerConfig(handover_expert="pt-astolfi", eval_episodes=3, eval_T_con=(10.0, 20.0))
+    params = EnvParams.from_kwargs(**V1_DEFAULTS)
+    # good where fraction >= 0.85 and margin >= 1.5; the energy falls with the fraction, rises with the margin
+    monkeypatch.setattr(dagger, "evaluate_by_T_con", fake(lambda f, m: (1.0 if f >= 0.85 and m >= 1.5 else 0.9,
+                                                                        0.05, 10.0 - 5 * f + m)))  # fmt: skip
+    chosen, tried = dagger.select_handover(ConstantModel(), config, params)
+    assert len(tried) == len(dagger.HANDOVER_GRID) == 16
+    assert (chosen["expert"], chosen["time_fraction"], chosen["speed_margin"]) == ("pt-astolfi", 1.0, 1.5)
+    assert chosen["selected_on"] == "3 random starts per T_con in [10.0, 20.0], seed 12345"
+    assert tried[0]["energy"] == pytest.approx(10.0 - 4.0 + 0.0)  # energy x T_con, averaged over the T_cons
+    # none good: the most often in time (then the least heading error)
+    monkeypatch.setattr(dagger, "evaluate_by_T_con", fake(lambda f, m: (0.5 + 0.1 * m, 0.3 - 0.1 * f, 1.0)))
+    chosen, _ = dagger.select_handover(ConstantModel(), config, params)
+    assert (chosen["time_fraction"], chosen["speed_margin"]) == (1.0, 3.0)
