@@ -163,3 +163,37 @@ def test_a_robot_pushed_out_of_the_tube_re_plans_once_one_inside_it_does_not(pus
     assert solves[-1] == 1 + replans
     if replans:
         assert solves[19] == 1 and solves[20] == 2  # at the very step it left the tube
+
+
+def finish_by_hand(x: float, y: float, psi: float, t: float, direction: float, p: object) -> tuple[float, float]:
+    """Astolfi's law (rho, alpha, beta) driving ``direction``, times min(1 / (T - t), max_gain), T = 0.92 T_con."""
+    from dwr_gym import model
+
+    alpha = float(model.wrap_angle(np.arctan2(-y, -x) - psi))
+    if direction < 0:
+        alpha = float(model.wrap_angle(alpha + np.pi))
+    beta = float(model.wrap_angle(-psi - alpha))
+    T = p.finish_arrival * T_CON  # type: ignore[attr-defined]
+    rate = min(1.0 / (T - t), p.max_gain) if t < T else p.max_gain  # type: ignore[attr-defined]
+    return (direction * p.k_rho * np.hypot(x, y) * rate,  # type: ignore[attr-defined]
+            (p.k_alpha * alpha + p.k_beta * beta) * rate)  # type: ignore[attr-defined]  # fmt: skip
+
+
+def test_the_finish_is_astolfis_law_on_the_deadlines_time_scale_and_reverses_with_hysteresis() -> None:
+    """plan=False: the finish law from the start. A goal behind (bearing pi) is approached in reverse, and stays so
+    while the bearing is within reverse_hysteresis (0.3 rad) of pi/2; past it the robot drives forward."""
+    controller = make_controller("robust-pt", T_con=T_CON, plan=False, estimator=None, cancel_disturbance=False)
+    p = controller.params
+    # the goal 1 m north of the robot: bearing = pi/2 - psi
+    for t, psi, direction in ((0.0, -np.pi / 2, -1.0), (0.05, -0.1, -1.0), (0.1, 0.1, -1.0), (0.15, 0.4, 1.0),
+                              (0.2, -0.1, 1.0), (17.0, -0.1, 1.0), (18.3, 0.0, 1.0), (19.0, 0.0, 1.0)):  # fmt: skip
+        inputs = ControllerInput.from_pose(0.0, -1.0, psi, t, (1.0, 0.0))._replace(prescribed_time=np.array([T_CON]))
+        u, omega = controller(inputs)
+        expected = finish_by_hand(0.0, -1.0, psi, t, direction, p)
+        np.testing.assert_allclose((u[0], omega[0]), np.clip(expected, [-0.5, -2.0], [0.5, 2.0]), atol=1e-12,
+                                   err_msg=f"t={t}, psi={psi}")  # fmt: skip
+    ptc = make_controller("robust-pt", T_con=T_CON, plan=False, estimator=None, finish="ptc")
+    inputs = ControllerInput.from_pose([0.3, -1.0], [0.2, 0.5], [1.0, -2.0], 3.0, ([0.5, 1.2], [0.1, -0.4]))
+    inputs = inputs._replace(prescribed_time=np.full(2, T_CON))
+    np.testing.assert_allclose(ptc(inputs), np.clip(make_controller("ptc", T_con=T_CON)(inputs),
+                                                    [[-0.5], [-2.0]], [[0.5], [2.0]]), atol=1e-12)  # fmt: skip
