@@ -197,3 +197,65 @@ def test_the_finish_is_astolfis_law_on_the_deadlines_time_scale_and_reverses_wit
     inputs = inputs._replace(prescribed_time=np.full(2, T_CON))
     np.testing.assert_allclose(ptc(inputs), np.clip(make_controller("ptc", T_con=T_CON)(inputs),
                                                     [[-0.5], [-2.0]], [[0.5], [2.0]]), atol=1e-12)  # fmt: skip
+
+
+def one_step(controller: object, x: float, y: float, psi: float, t: float, T_con: float = T_CON) -> np.ndarray:
+    inputs = ControllerInput.from_pose(x, y, psi, t, (float(np.hypot(x, y)), 0.0))
+    return np.array(controller(inputs._replace(prescribed_time=np.array([T_con]))))[:, 0]  # type: ignore[operator]
+
+
+def test_past_its_re_plans_or_too_far_to_plan_the_robot_is_handed_to_the_finish_law() -> None:
+    """max_replans = 0: a robot pushed out of the tube is not re-planned, the finish law drives it; a plan longer than
+    MAX_PLAN_INTERVALS (T_con 400 s) is not even tried."""
+    controller = make_controller("robust-pt", T_con=T_CON, estimator=None, workers=1, max_replans=0)
+    solves = drive_on_its_plan(controller, (-1.0, 0.4, 0.3), 21, (20, 0.12))
+    assert solves[-1] == 1
+    p = controller.params
+    x, y, psi = -0.5, 0.9, 0.2
+    u, omega = one_step(controller, x, y, psi, 21 * 0.05)
+    assert (u, omega) == pytest.approx(finish_by_hand(x, y, psi, 21 * 0.05, 1.0, p), abs=1e-12)
+    far = make_controller("robust-pt", T_con=400.0, estimator=None, workers=1)
+    u, omega = one_step(far, -1.0, 0.4, 0.3, 0.0, T_con=400.0)
+    assert far.solves == 0
+    T = p.finish_arrival * 400.0
+    assert u == pytest.approx(p.k_rho * np.hypot(-1.0, 0.4) / T, rel=1e-12)
+
+
+class Cruise:
+    """A learned cruise that always answers (0.5, -0.25)."""
+
+    def predict(self, obs, state=None, episode_start=None, deterministic=True):  # type: ignore[no-untyped-def]
+        return np.tile(np.float32([0.5, -0.25]), (len(obs), 1)), state
+
+
+def test_a_learned_cruise_drives_until_handover_time_or_until_the_robot_falls_behind() -> None:
+    from baselines.robust import RobustPTController, RobustPTParams
+
+    params = RobustPTParams(T_con=T_CON, estimator=None, cancel_disturbance=False, workers=1)
+    early = RobustPTController(params, cruise=Cruise())
+    assert one_step(early, -1.0, 0.4, 0.3, 0.0) == pytest.approx([0.25, -0.5])  # the network's (0.5, -0.25) x limits
+    assert early.solves == 0
+    late = RobustPTController(params, cruise=Cruise())  # past handover_time (0.7) x T_con: the planner takes over
+    one_step(late, -1.0, 0.4, 0.3, 0.71 * T_CON)
+    assert late.solves >= 1
+    behind = RobustPTController(params, cruise=Cruise())  # 3 s left for 1.08 m: less than 1.5 x the 2.2 s it takes
+    one_step(behind, -1.0, 0.4, 0.3, T_CON - 3.0)
+    assert behind.solves >= 1
+    in_time = RobustPTController(params, cruise=Cruise())  # 10 s left at 0.5 T_con: on schedule, the network drives
+    assert one_step(in_time, -1.0, 0.4, 0.3, 0.5 * T_CON) == pytest.approx([0.25, -0.5])
+
+
+def test_frozen_robots_get_no_command_and_no_plan_until_their_reset() -> None:
+    controller = make_controller("robust-pt", T_con=T_CON, estimator=None, workers=1)
+    inputs = ControllerInput.from_pose([-1.0, 0.8], [0.4, -0.6], [0.3, 2.0], 0.0, ([1.08, 1.0], [0.0, 0.0]))
+    inputs = inputs._replace(prescribed_time=np.full(2, T_CON))
+    controller(inputs)
+    assert controller.solves == 2
+    controller.freeze(np.array([False, True]))
+    controller.freeze(np.array([True, True, True]))  # a mask of another batch size is ignored
+    pushed = ControllerInput.from_pose([-1.0, 0.3], [0.4, -0.6], [0.3, 2.0], 0.05, ([1.08, 1.0], [0.0, 0.0]))
+    u, omega = controller(pushed._replace(prescribed_time=np.full(2, T_CON)))  # robot 1 is 0.5 m out of its tube
+    assert controller.solves == 2 and u[1] == omega[1] == 0.0 and u[0] != 0.0
+    controller.reset(np.array([False, True]))
+    controller(pushed._replace(time=np.full(2, 0.1), prescribed_time=np.full(2, T_CON)))
+    assert controller.solves == 3  # robot 1 planned anew once it was reset
