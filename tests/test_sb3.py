@@ -58,8 +58,8 @@ def test_each_done_carries_the_vector_envs_ending_episode_statistics_and_truncat
     assert ends["truncated"] > 0 and ends["terminated"] > 0, ends  # both endings were met and told apart
 
 
-def test_time_limit_truncated_is_true_exactly_at_the_horizon_and_false_at_an_arrival() -> None:
-    """A robot that stands still is cut by the time limit; one that starts within the goal tolerance arrives."""
+def test_robots_that_stand_still_are_cut_at_the_horizon_with_time_limit_truncated_true() -> None:
+    """Not one step earlier, and not as arrivals (the test above checks the arrivals' False)."""
     adapter = make_sb3_vec_env(num_envs=2, seed=0, **KWARGS)
     adapter.reset()
     horizon = adapter.venv.params.max_episode_steps
