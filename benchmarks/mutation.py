@@ -63,7 +63,7 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
                    ["tests/test_controllers.py", "tests/test_optimal.py", "tests/test_prescribed_time.py",
                     "tests/test_robustness.py"]),
     "learning": (["train/learning/dagger.py", "train/learning/robust_dagger.py", "train/learning/residual.py"],
-                 ["tests/test_dagger.py", "tests/test_robust_dagger.py",
+                 ["tests/test_dagger.py", "tests/test_robust_dagger.py", "tests/test_residual.py",
                   *(f"tests/test_train.py::test_{name}" for name in (
                       "residual_action_arithmetic_and_clipping", "residual_wrapper_logs_expert_and_residual_parts",
                       "residual_vec_env_with_zero_residual_is_the_expert", "residual_training_starts_from_the_expert",
