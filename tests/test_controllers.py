@@ -194,6 +194,7 @@ def test_expert_in_sb3_evaluate_policy_and_on_batches() -> None:
     obs, _ = vec.reset(seed=0)
     actions, state = expert.predict(obs)
     assert actions.shape == (64, 2) and actions.dtype == np.float32 and state is None
+    np.testing.assert_array_equal(expert(obs), actions)  # called as a function: the same actions
     with pytest.raises(ValueError, match="observation"):
         expert.predict(np.zeros(7))
 

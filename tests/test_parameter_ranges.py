@@ -78,3 +78,28 @@ def test_a_value_just_past_either_end_is_refused_and_one_just_inside_is_taken(
             assert coupled, error
             continue
         assert taken == value, field
+
+
+#: class -> {integer parameter: (low, high)}, with the keywords another parameter's range needs
+INTEGERS: list[tuple[type, str, int, int, dict]] = [
+    (ConventionalPTCParams, "power", 1, 10, {}),
+    (OptimalParams, "hold_steps", 1, 10_000, {"replan_every": 0}),
+    (OptimalParams, "replan_every", 0, 1_000_000, {"hold_steps": 1}),
+    (OptimalParams, "workers", 0, 256, {}),
+    (RobustPTParams, "hold_steps", 1, 10_000, {}),
+    (RobustPTParams, "max_replans", 0, 1_000, {}),
+    (RobustPTParams, "workers", 0, 256, {}),
+    (PoseFilterParams, "max_delay", 0, 100, {}),
+]
+
+
+@pytest.mark.parametrize(("cls", "name", "low", "high", "others"), INTEGERS,
+                         ids=[f"{c.__name__}.{n}" for c, n, *_ in INTEGERS])  # fmt: skip
+def test_an_integer_parameter_takes_both_ends_and_refuses_one_past_them(
+    cls: type, name: str, low: int, high: int, others: dict
+) -> None:
+    for value in (low, high):
+        assert getattr(cls(**{name: value, **others}), name) == value
+    for value in (low - 1, high + 1):
+        with pytest.raises(ValueError, match=rf"^{name}={value} is invalid: expected an integer in \[{low}, {high}\]"):
+            cls(**{name: value, **others})
