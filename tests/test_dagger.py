@@ -43,6 +43,7 @@ def test_a_tiny_cloning_run_aggregates_each_rounds_data_and_saves_an_agent_that_
 ) -> None:
     """DAgger fits each round on all the data so far: the demonstrations and every round's re-planned labels."""
     import csv
+    import time
 
     from train.learning import dagger
 
@@ -58,11 +59,16 @@ def test_a_tiny_cloning_run_aggregates_each_rounds_data_and_saves_an_agent_that_
     env_kwargs = {**V1_DEFAULTS, "T_con_range": (10.0, 10.0), "start_distance": (0.3, 0.5)}  # few solver builds
     config = DaggerConfig(episodes=4, dagger_rounds=2, dagger_episodes=2, replans_per_episode=1, epochs=1,
                              workers=1, eval_episodes=2, eval_T_con=(10.0,), env_kwargs=env_kwargs)  # fmt: skip
+    began = time.time()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         run_dir = run(config, tmp_path / "bc", ["test"])
+    elapsed = time.time() - began
     rows = list(csv.DictReader((run_dir / "evaluations.csv").open()))
     assert [int(r["round"]) for r in rows] == [0, 1, 2]  # one row per fit
+    wall = [float(r["wall_time"]) for r in rows]
+    assert 0.0 <= wall[0] <= wall[1] <= wall[2] <= elapsed + 0.1  # seconds since the run began
+    assert (run_dir / "learning_curve.png").is_file()
     samples = [int(r["samples"]) for r in rows]
     assert len(added) == 2 and min(added) > 0 and samples[0] > 0
     assert samples == [samples[0], samples[0] + added[0], samples[0] + added[0] + added[1]]
@@ -156,7 +162,7 @@ def test_a_composite_agent_comes_apart_so_that_its_network_is_reported_alone() -
 
 
 def test_the_module_command_line_builds_the_config_from_its_flags(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """`python -m train.learning.dagger` and `... robust_dagger`: every int, float and str field is a flag."""
     from train.learning import dagger, robust_dagger
@@ -175,6 +181,7 @@ def test_the_module_command_line_builds_the_config_from_its_flags(
     with pytest.raises(SystemExit) as exit_info:
         dagger.main(["--run-dir", str(tmp_path / "b"), "--env", "CartPole-v1"])
     assert exit_info.value.code == 2
+    assert "--env 'CartPole-v1' is invalid" in capsys.readouterr().err
 
     monkeypatch.setattr(robust_dagger, "run", lambda config, run_dir, command: got.update(config=config))
     robust_dagger.main(["--run-dir", str(tmp_path / "c"), "--plan-arrival", "0.7", "--init-from", "", "--seed", "3"])
@@ -242,3 +249,48 @@ def test_select_handover_takes_the_least_energy_among_those_in_time_and_on_headi
     monkeypatch.setattr(dagger, "evaluate_by_T_con", fake(lambda f, m: (0.5 + 0.1 * m, 0.3 - 0.1 * f, 1.0)))
     chosen, _ = dagger.select_handover(ConstantModel(), config, params)
     assert (chosen["time_fraction"], chosen["speed_margin"]) == (1.0, 3.0)
+
+
+def test_dagger_rounds_re_plan_from_visited_states_to_the_original_target_or_most_of_the_time_left(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A robot that stands still visits its start at every step t: each re-plan from there arrives at
+    0.85 T_con - t while that is at least half the time left, else at 0.85 (T_con - t); none of one interval or less."""
+    from train.learning import dagger
+
+    class Still:
+        def predict(self, obs, state=None, episode_start=None, deterministic=True):  # type: ignore[no-untyped-def]
+            return np.zeros((len(obs), 2), np.float32), state
+
+    jobs: list = []
+    monkeypatch.setattr(dagger, "solve_plans", lambda batch, workers: jobs.extend(batch) or [None] * len(batch))
+    params = EnvParams.from_kwargs(**{**V1_DEFAULTS, "T_con_range": (10.0, 10.0)})
+    config = DaggerConfig(dagger_episodes=40, replans_per_episode=3, hold_steps=5)
+    data = dagger.dagger_samples(Still(), config, params, np.random.default_rng(0))
+    assert len(data[0]) == 0 and len(jobs) > 60  # no plan solved (all None): no samples
+    late = 0
+    for start, arrival, dt, u_max, omega_max, hold in jobs:
+        assert (dt, u_max, omega_max, hold) == (0.05, 0.5, 2.0, 5) and np.hypot(*start[:2]) > params.goal_tolerance
+        assert arrival > 0.25  # a re-plan of one interval or less is not asked for
+        t_on_target, t_late = 8.5 - arrival, 10.0 - arrival / 0.85
+
+        def a_step(t: float) -> bool:
+            return 0.0 < t < 15.0 and abs(t / 0.05 - round(t / 0.05)) < 1e-6
+
+        on_target = a_step(t_on_target) and t_on_target <= 7.0 + 1e-9  # 0.85 T - t >= 0.5 (T - t) while t <= 7 s
+        behind = a_step(t_late) and t_late > 7.0
+        assert on_target or behind, arrival
+        late += behind
+    assert 0 < late < len(jobs)  # both rules were met
+
+
+def test_plans_solved_in_worker_processes_are_those_solved_in_order() -> None:
+    from train.learning.dagger import solve_plans
+
+    jobs = [((-0.4, 0.2, 0.3), 3.0, 0.05, 0.5, 2.0, 5), ((0.3, -0.3, 1.0), 2.0, 0.05, 0.5, 2.0, 5),
+            ((0.2, 0.0, 0.0), 0.1, 0.05, 0.5, 2.0, 5)]  # fmt: skip  # the last one infeasible: None
+    serial, parallel = solve_plans(jobs, 1), solve_plans(jobs, 2)
+    assert serial[2] is None and parallel[2] is None
+    for a, b in zip(serial[:2], parallel[:2], strict=True):
+        np.testing.assert_allclose(a[0], b[0], atol=1e-9)
+        np.testing.assert_allclose(a[1], b[1], atol=1e-9)

@@ -4,6 +4,7 @@ aggregates, the student it rolls out, the run directory it leaves."""
 from __future__ import annotations
 
 import csv
+import time
 import warnings
 from pathlib import Path
 from typing import Any
@@ -50,11 +51,16 @@ def test_a_tiny_robust_dagger_run_aggregates_disturbed_rollouts_and_leaves_a_rob
     collect, roll = robust_dagger.dagger_samples, robust_dagger.rollouts
     monkeypatch.setattr(robust_dagger, "dagger_samples", counted)
     monkeypatch.setattr(robust_dagger, "rollouts", watched)
+    began = time.time()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        run_dir = run(tiny(), tmp_path / "robust", ["test"])
+        run_dir = run(tiny(), tmp_path / "runs" / "robust", ["test"])  # its parent made too
+    elapsed = time.time() - began
     rows = list(csv.DictReader((run_dir / "evaluations.csv").open()))
     assert [int(r["round"]) for r in rows] == [0, 1]
+    wall = [float(r["wall_time"]) for r in rows]
+    assert 0.0 <= wall[0] < wall[1] <= elapsed + 0.1  # seconds since the run began
+    assert (run_dir / "learning_curve.png").is_file() and (run_dir / "learning_curve_disturbed.png").is_file()
     samples = [int(r["samples"]) for r in rows]
     assert samples[0] > 0 and len(added) == 1 and added[0] > 0
     assert samples == [samples[0], samples[0] + added[0]]  # the demonstrations kept, the round's data added
