@@ -72,6 +72,8 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
 }  # fmt: skip
 #: Words of DESELECTED a group keeps: the learning group's subject is the tiny DAgger runs.
 KEPT = {"learning": ("cloning_run",)}
+#: Words a group leaves out besides: the shipped robust agent's evaluations take minutes per mutant.
+EXTRA = {"robust": ("shipped",)}
 #: Groups whose module runs code at import (dwr_gym.model builds its torch-backed functions then): mutmut imports
 #: them anew for each mutant instead of forking after collection, which would keep the unmutated import.
 IMPORT_PER_MUTANT = {"model"}
@@ -80,7 +82,7 @@ IMPORT_PER_MUTANT = {"model"}
 def deselected(group: str) -> str:
     """The ``-k`` expression of the tests a group leaves out."""
     words = [word for word in DESELECTED.split(" and not ") if word.removeprefix("not ") not in KEPT.get(group, ())]
-    return " and not ".join(words)
+    return " and not ".join([*words, *EXTRA.get(group, ())])
 
 
 def mutmut_config(group: str) -> str:
