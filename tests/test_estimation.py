@@ -217,6 +217,17 @@ def test_behind_the_filter_a_policy_sees_the_pose_features_of_the_robot_and_its_
         np.testing.assert_allclose(seen[0, :6], obs[:6], atol=2e-4)
         np.testing.assert_array_equal(seen[0, 6:], obs[6:])
         obs, *_ = env.step(action[0])
+    noisy = gym.make("DWRPointStabilization-v1", observation_noise=0.02, disable_env_checker=True)
+    obs, _ = noisy.reset(seed=5)
+    for k in range(10):  # with pose noise the policy sees the estimate: every pose feature is the estimated pose's
+        action, _ = policy.predict(obs)
+        seen = recorder.seen[-1][0][0]
+        x, y, psi = policy.filter.mean[0, :3]
+        assert seen[0] == pytest.approx(np.hypot(x, y), abs=1e-6)
+        assert k == 0 or abs(seen[0] - obs[0]) > 1e-6  # (the first estimate is the first measurement)
+        np.testing.assert_allclose(seen[1:5], [-x / np.hypot(x, y), -y / np.hypot(x, y), np.cos(psi), np.sin(psi)],
+                                   atol=1e-6)  # fmt: skip
+        obs, *_ = noisy.step(action)
     obs, _ = env.reset(seed=4)  # a new episode the policy is not told of: its clock goes back to 0
     policy.predict(obs[None])
     np.testing.assert_allclose(recorder.seen[-1][0][0, :6], obs[:6], atol=1e-6)  # the first measurement, exactly
@@ -248,7 +259,7 @@ def test_the_filtered_policy_cancels_the_robots_estimated_response_and_keeps_its
     np.testing.assert_array_equal(action, np.float32([1.0, -1.0]))
     with pytest.raises(ValueError, match=r"^k=0\.2 is invalid"):
         FilteredPolicy(Recorder((0.0, 0.0)), 0.5, 2.0, DT, k=0.2)
-    with pytest.raises(ValueError, match="disturbance_limit"):
+    with pytest.raises(ValueError, match=r"^disturbance_limit\[1\]=2000\.0 is invalid"):
         PoseFilterParams(disturbance_limit=(0.1, 2000.0))
 
 

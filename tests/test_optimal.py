@@ -270,9 +270,9 @@ def test_padding_a_plan_with_a_robot_response_holds_it_still_at_the_goal_and_kee
     is the unpadded one (to IPOPT's tolerance), and the robot, with that response, ends at the goal."""
     response = (0.02, 0.1, 0.9, 0.5)
     start = (-0.8, 0.3, 0.4)
-    plain = solve_minimum_energy(start, 6.0, **LIMITS, hold_steps=5, response=response)  # type: ignore[arg-type]
-    padded = solve_minimum_energy(start, 6.0, **LIMITS, hold_steps=5, response=response, pad_to=8)  # type: ignore[arg-type]
-    assert padded.intervals == plain.intervals == 24  # 6 s of 0.25 s intervals; padded to 32 and cut back
+    plain = solve_minimum_energy(start, 6.5, **LIMITS, hold_steps=5, response=response)  # type: ignore[arg-type]
+    padded = solve_minimum_energy(start, 6.5, **LIMITS, hold_steps=5, response=response, pad_to=8)  # type: ignore[arg-type]
+    assert padded.intervals == plain.intervals == 26  # 6.5 s of 0.25 s intervals; padded to 32 and cut back
     assert padded.energy == pytest.approx(plain.energy, rel=1e-4)
     np.testing.assert_allclose(padded.commands, plain.commands, atol=1e-3)
     b_u, b_w, a, g = response
