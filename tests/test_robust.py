@@ -259,3 +259,33 @@ def test_frozen_robots_get_no_command_and_no_plan_until_their_reset() -> None:
     controller.reset(np.array([False, True]))
     controller(pushed._replace(time=np.full(2, 0.1), prescribed_time=np.full(2, T_CON)))
     assert controller.solves == 3  # robot 1 planned anew once it was reset
+
+
+def test_the_first_finish_decision_inside_the_hysteresis_band_goes_the_shorter_way() -> None:
+    """Undecided, a bearing of pi/2 + 0.1 (within reverse_hysteresis of pi/2) reverses, pi/2 - 0.1 drives forward."""
+    p = make_controller("robust-pt", T_con=T_CON, plan=False).params
+    for psi, direction in ((-0.1, -1.0), (0.1, 1.0)):  # the goal 1 m north: bearing pi/2 - psi
+        controller = make_controller("robust-pt", T_con=T_CON, plan=False, estimator=None, cancel_disturbance=False)
+        inputs = ControllerInput.from_pose(0.0, -1.0, psi, 0.0, (1.0, 0.0))._replace(prescribed_time=np.array([T_CON]))
+        u, omega = controller(inputs)
+        assert (u[0], omega[0]) == pytest.approx(finish_by_hand(0.0, -1.0, psi, 0.0, direction, p), abs=1e-12)
+
+
+def test_the_cruise_tracks_its_reference_with_kanayamas_law_by_hand() -> None:
+    """u = u_r cos e_psi + k_along e_x, omega = omega_r + k_lateral u_r e_y + k_heading |u_r| sin e_psi, the errors in
+    the robot's frame; and the position error it reports."""
+    from baselines.robust import RobustPTParams, tracking_commands
+
+    p = RobustPTParams(k_along=1.3, k_lateral=3.0, k_heading=2.5)
+    pose = np.array([[0.2, -0.1, 0.4], [-1.0, 0.5, -2.0]])
+    reference = np.array([[0.25, -0.05, 0.3], [-0.9, 0.45, -2.2]])
+    command = np.array([[0.3, 0.5], [-0.2, -1.0]])
+    u, omega, error = tracking_commands(pose, reference, command, p)
+    for i in range(2):
+        dx, dy = reference[i, :2] - pose[i, :2]
+        c, s = np.cos(pose[i, 2]), np.sin(pose[i, 2])
+        e_x, e_y, e_psi = c * dx + s * dy, -s * dx + c * dy, reference[i, 2] - pose[i, 2]
+        u_r, omega_r = command[i]
+        assert u[i] == pytest.approx(u_r * np.cos(e_psi) + 1.3 * e_x, abs=1e-12)
+        assert omega[i] == pytest.approx(omega_r + 3.0 * u_r * e_y + 2.5 * abs(u_r) * np.sin(e_psi), abs=1e-12)
+        assert error[i] == pytest.approx(np.hypot(dx, dy), abs=1e-12)
