@@ -2,6 +2,7 @@
 
     python benchmarks/planted_bugs.py              # every bug, one suite run each (~5 min each on 2 cores)
     python benchmarks/planted_bugs.py --bugs sinc_1_over_24
+    python benchmarks/planted_bugs.py --bugs truncated_is_terminated --tests tests/test_sb3.py  # only these tests
 
 A golden or pinned record (tests/test_golden.py, the pinned v0 returns and trajectories) detects a change,
 not a bug that was there when it was recorded; so each bug must also fail another test. The source tree
@@ -49,6 +50,31 @@ BUGS: dict[str, tuple[str, str, str, str]] = {
         "zero_init_last_layer does nothing", "train/residual.py",
         '    policy = model.policy\n    if hasattr(policy, "action_net"):',
         '    return\n    policy = model.policy\n    if hasattr(policy, "action_net"):'),
+    # issue 34: behaviours no test looked at
+    "distribution_ignores_seed": (
+        "DisturbanceDistribution ignores its seed", "dwr_gym/randomization.py",
+        "seed = self.distribution.seed", "seed = 0"),
+    "command_rate_from_applied_velocities": (
+        "the command-rate RMS from the applied velocities instead of the commanded", "train/evaluation/rollout.py",
+        "command = np.clip(actions, -1.0, 1.0) * limits", "command = np.stack([u, w], axis=1)"),
+    "truncated_is_terminated": (
+        "the SB3 adapter's TimeLimit.truncated set to terminated", "dwr_gym/sb3.py",
+        '"TimeLimit.truncated": bool(truncated[i] and not terminated[i]),', '"TimeLimit.truncated": bool(terminated[i]),'),
+    "dagger_keeps_the_last_round": (
+        "DAgger keeps only the last round's data", "train/learning/dagger.py",
+        "data = concatenate([data, dagger_samples(model, config, params, rng)])",
+        "data = dagger_samples(model, config, params, rng)"),
+    "robust_dagger_keeps_the_last_round": (
+        "robust DAgger keeps only the last round's data", "train/learning/robust_dagger.py",
+        "data = concatenate([data, dagger_samples(model, config, params, rng)])",
+        "data = dagger_samples(model, config, params, rng)"),
+    "no_replan_out_of_the_tube": (
+        "robust-pt does not re-plan when pushed out of the tube", "baselines/robust.py",
+        "stray = ended | off", "stray = ended"),
+    "smith_prediction_one_step_short": (
+        "the Smith predictor's pose one command short", "baselines/estimation.py",
+        "for lag in range(int(self.delay.max(initial=0)), 0, -1):",
+        "for lag in range(int(self.delay.max(initial=0)) - 1, 0, -1):"),
 }  # fmt: skip
 
 
@@ -74,11 +100,14 @@ def plant(bug: str, work: Path) -> Path:
     return root
 
 
-def run_suite(root: Path) -> tuple[list[str], str]:
-    """The failing tests and pytest's last line, running the default suite in ``root`` (which imports from there)."""
+def run_suite(root: Path, tests: list[str] | None = None) -> tuple[list[str], str]:
+    """The failing tests and pytest's last line, running the default suite (or ``tests``) in ``root`` (which imports
+    from there)."""
     env = {**os.environ, "SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy", "MPLBACKEND": "Agg",
            "OMP_NUM_THREADS": "1"}  # fmt: skip
-    command = ["nice", "-n", "10", sys.executable, "-m", "pytest", "-n", "2", "-q", "-rf", "-p", "no:cacheprovider"]
+    workers = "0" if tests else "2"  # a few test files: one process
+    command = ["nice", "-n", "10", sys.executable, "-m", "pytest", "-n", workers, "-q", "-rf", "-p", "no:cacheprovider",
+               *(tests or [])]  # fmt: skip
     output = subprocess.run(command, cwd=root, env=env, capture_output=True, text=True, check=False).stdout
     failed = sorted({line.split()[1] for line in output.splitlines() if line.startswith("FAILED ")})
     return failed, output.strip().splitlines()[-1] if output.strip() else ""
@@ -88,13 +117,14 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--bugs", nargs="+", choices=list(BUGS), default=list(BUGS))
     parser.add_argument("--work", type=Path, default=Path("/tmp/dwr-gym-planted"))
+    parser.add_argument("--tests", nargs="+", help="run only these tests (files or node ids) instead of the suite")
     args = parser.parse_args()
     results = json.loads(RESULTS.read_text()) if RESULTS.is_file() else {}
     for bug in args.bugs:
-        failed, last = run_suite(plant(bug, args.work))
+        failed, last = run_suite(plant(bug, args.work), args.tests)
         independent = [test for test in failed if not PINNED.search(test)]
         results[bug] = {"description": BUGS[bug][0], "file": BUGS[bug][1], "failed": failed,
-                        "failed_not_pinned": independent, "summary": last}  # fmt: skip
+                        "failed_not_pinned": independent, "summary": last, "tests": args.tests or "the default suite"}  # fmt: skip
         print(f"{bug}: {len(failed)} failed, {len(independent)} of them not a golden/pinned record ({last})")
         RESULTS.parent.mkdir(parents=True, exist_ok=True)
         RESULTS.write_text(json.dumps(results, indent=1) + "\n")

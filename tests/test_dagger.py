@@ -38,14 +38,40 @@ def test_demonstration_samples_are_what_the_env_observes_when_the_plan_is_replay
     assert np.all(np.abs(actions) <= 1.0)
 
 
-def test_a_tiny_cloning_run_saves_an_agent_that_loads_and_acts(tmp_path) -> None:  # type: ignore[no-untyped-def]
+def test_a_tiny_cloning_run_aggregates_each_rounds_data_and_saves_an_agent_that_loads_and_acts(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """DAgger fits each round on all the data so far: the demonstrations and every round's re-planned labels."""
+    import csv
+    import time
+
+    from train.learning import dagger
+
+    added: list[int] = []
+
+    def counted(*args, **kwargs):  # type: ignore[no-untyped-def]
+        data = collect(*args, **kwargs)
+        added.append(len(data[0]))
+        return data
+
+    collect = dagger.dagger_samples
+    monkeypatch.setattr(dagger, "dagger_samples", counted)
     env_kwargs = {**V1_DEFAULTS, "T_con_range": (10.0, 10.0), "start_distance": (0.3, 0.5)}  # few solver builds
-    config = DaggerConfig(episodes=4, dagger_rounds=1, dagger_episodes=2, replans_per_episode=1, epochs=1,
+    config = DaggerConfig(episodes=4, dagger_rounds=2, dagger_episodes=2, replans_per_episode=1, epochs=1,
                              workers=1, eval_episodes=2, eval_T_con=(10.0,), env_kwargs=env_kwargs)  # fmt: skip
+    began = time.time()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         run_dir = run(config, tmp_path / "bc", ["test"])
-    assert (run_dir / "evaluations.csv").read_text().count("\n") == 3  # header and one row per fit
+    elapsed = time.time() - began
+    rows = list(csv.DictReader((run_dir / "evaluations.csv").open()))
+    assert [int(r["round"]) for r in rows] == [0, 1, 2]  # one row per fit
+    wall = [float(r["wall_time"]) for r in rows]
+    assert 0.0 <= wall[0] <= wall[1] <= wall[2] <= elapsed + 0.1  # seconds since the run began
+    assert (run_dir / "learning_curve.png").is_file()
+    samples = [int(r["samples"]) for r in rows]
+    assert len(added) == 2 and min(added) > 0 and samples[0] > 0
+    assert samples == [samples[0], samples[0] + added[0], samples[0] + added[0] + added[1]]
     label, policy = load_agent(run_dir)
     action, _ = policy.predict(np.zeros((5, 10), np.float32), deterministic=True)
     assert label == "bc" and action.shape == (5, 2) and np.all(np.isfinite(action))
@@ -133,3 +159,138 @@ def test_a_composite_agent_comes_apart_so_that_its_network_is_reported_alone() -
     assert type(whole.model) is type(network)
     with pytest.raises(AgentLoadError, match="part='finish'"):
         load_agent(PRETRAINED["dagger-handover"], part="finish")
+
+
+def test_the_module_command_line_builds_the_config_from_its_flags(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`python -m train.learning.dagger` and `... robust_dagger`: every int, float and str field is a flag."""
+    from train.learning import dagger, robust_dagger
+
+    got: dict[str, object] = {}
+    monkeypatch.setattr(dagger, "run", lambda config, run_dir, command: got.update(config=config, run_dir=run_dir,
+                                                                                   command=command))  # fmt: skip
+    dagger.main(["--run-dir", str(tmp_path / "a"), "--episodes", "7", "--arrival-fraction", "0.9",
+                 "--env", "dwr_gym:DWRPointStabilization-v0", "--handover-expert", "ptc"])  # fmt: skip
+    config = got["config"]
+    assert isinstance(config, DaggerConfig) and got["run_dir"] == tmp_path / "a"
+    assert (config.episodes, config.arrival_fraction, config.env_id, config.handover_expert) == (
+        7, 0.9, "DWRPointStabilization-v0", "ptc")  # fmt: skip
+    assert config.dagger_rounds == DaggerConfig().dagger_rounds  # the others keep their defaults
+    assert got["command"][:3] == ["python", "-m", "train.learning.dagger"] and "--episodes" in got["command"]
+    with pytest.raises(SystemExit) as exit_info:
+        dagger.main(["--run-dir", str(tmp_path / "b"), "--env", "CartPole-v1"])
+    assert exit_info.value.code == 2
+    assert "--env 'CartPole-v1' is invalid" in capsys.readouterr().err
+
+    monkeypatch.setattr(robust_dagger, "run", lambda config, run_dir, command: got.update(config=config))
+    robust_dagger.main(["--run-dir", str(tmp_path / "c"), "--plan-arrival", "0.7", "--init-from", "", "--seed", "3"])
+    config = got["config"]
+    assert (config.plan_arrival, config.init_from, config.seed) == (0.7, "", 3)
+    with pytest.raises(SystemExit):
+        robust_dagger.main(["--run-dir", str(tmp_path / "d"), "--env", "nope"])
+
+
+def test_handover_only_chooses_the_handover_of_a_trained_run_and_writes_it(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import shutil
+
+    import yaml
+
+    from train.learning import dagger
+
+    run_dir = tmp_path / "agent"
+    shutil.copytree(Path(__file__).resolve().parents[1] / "train" / "pretrained" / "dagger", run_dir)
+    chosen = {"expert": "pt-astolfi", "distance": 0.0, "time_fraction": 0.85, "speed_margin": 1.5, "selected_on": "x"}
+    asked = []
+
+    def select(model, config, params):  # type: ignore[no-untyped-def]
+        asked.append((config.handover_expert, config.eval_episodes, params.T_con_range))
+        return chosen, [{"tried": 1}]
+
+    monkeypatch.setattr(dagger, "select_handover", select)
+    dagger.main(
+        ["--run-dir", str(run_dir), "--handover-only", "--handover-expert", "pt-astolfi", "--eval-episodes", "9"]
+    )
+    saved = yaml.safe_load((run_dir / "config.yaml").read_text())
+    assert saved["handover"] == chosen and saved["handover_tried"] == [{"tried": 1}]
+    assert asked[0][:2] == ("pt-astolfi", 9) and asked[0][2] is not None  # the run's own env (v1: T_con drawn)
+    with pytest.raises(SystemExit, match="--handover-expert 'nope' is invalid"):
+        dagger.main(["--run-dir", str(run_dir), "--handover-only", "--handover-expert", "nope"])
+    with pytest.raises(SystemExit, match=r"holds no model\.zip"):
+        dagger.main(["--run-dir", str(tmp_path / "empty"), "--handover-only", "--handover-expert", "ptc"])
+
+
+def test_select_handover_takes_the_least_energy_among_those_in_time_and_on_heading_else_the_most_in_time(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The rule of select_handover's docstring, on made-up evaluations of the grid (no rollout)."""
+    from train.learning import dagger
+
+    def fake(table):  # type: ignore[no-untyped-def]
+        def evaluate(policy, params, T_cons, n, seed):  # type: ignore[no-untyped-def]
+            success, heading, energy = table(policy.time_fraction, policy.speed_margin)
+            return [{"T_con": T, "success": success, "heading": heading, "energy": energy / T} for T in T_cons]
+
+        return evaluate
+
+    config = DaggerConfig(handover_expert="pt-astolfi", eval_episodes=3, eval_T_con=(10.0, 20.0))
+    params = EnvParams.from_kwargs(**V1_DEFAULTS)
+    # good where fraction >= 0.85 and margin >= 1.5; the energy falls with the fraction, rises with the margin
+    monkeypatch.setattr(dagger, "evaluate_by_T_con", fake(lambda f, m: (1.0 if f >= 0.85 and m >= 1.5 else 0.9,
+                                                                        0.05, 10.0 - 5 * f + m)))  # fmt: skip
+    chosen, tried = dagger.select_handover(ConstantModel(), config, params)
+    assert len(tried) == len(dagger.HANDOVER_GRID) == 16
+    assert (chosen["expert"], chosen["time_fraction"], chosen["speed_margin"]) == ("pt-astolfi", 1.0, 1.5)
+    assert chosen["selected_on"] == "3 random starts per T_con in [10.0, 20.0], seed 12345"
+    assert tried[0]["energy"] == pytest.approx(10.0 - 4.0 + 0.0)  # energy x T_con, averaged over the T_cons
+    # none good: the most often in time (then the least heading error)
+    monkeypatch.setattr(dagger, "evaluate_by_T_con", fake(lambda f, m: (0.5 + 0.1 * m, 0.3 - 0.1 * f, 1.0)))
+    chosen, _ = dagger.select_handover(ConstantModel(), config, params)
+    assert (chosen["time_fraction"], chosen["speed_margin"]) == (1.0, 3.0)
+
+
+def test_dagger_rounds_re_plan_from_visited_states_to_the_original_target_or_most_of_the_time_left(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A robot that stands still visits its start at every step t: each re-plan from there arrives at
+    0.85 T_con - t while that is at least half the time left, else at 0.85 (T_con - t); none of one interval or less."""
+    from train.learning import dagger
+
+    class Still:
+        def predict(self, obs, state=None, episode_start=None, deterministic=True):  # type: ignore[no-untyped-def]
+            return np.zeros((len(obs), 2), np.float32), state
+
+    jobs: list = []
+    monkeypatch.setattr(dagger, "solve_plans", lambda batch, workers: jobs.extend(batch) or [None] * len(batch))
+    params = EnvParams.from_kwargs(**{**V1_DEFAULTS, "T_con_range": (10.0, 10.0)})
+    config = DaggerConfig(dagger_episodes=40, replans_per_episode=3, hold_steps=5)
+    data = dagger.dagger_samples(Still(), config, params, np.random.default_rng(0))
+    assert len(data[0]) == 0 and len(jobs) > 60  # no plan solved (all None): no samples
+    late = 0
+    for start, arrival, dt, u_max, omega_max, hold in jobs:
+        assert (dt, u_max, omega_max, hold) == (0.05, 0.5, 2.0, 5) and np.hypot(*start[:2]) > params.goal_tolerance
+        assert arrival > 0.25  # a re-plan of one interval or less is not asked for
+        t_on_target, t_late = 8.5 - arrival, 10.0 - arrival / 0.85
+
+        def a_step(t: float) -> bool:
+            return 0.0 < t < 15.0 and abs(t / 0.05 - round(t / 0.05)) < 1e-6
+
+        on_target = a_step(t_on_target) and t_on_target <= 7.0 + 1e-9  # 0.85 T - t >= 0.5 (T - t) while t <= 7 s
+        behind = a_step(t_late) and t_late > 7.0
+        assert on_target or behind, arrival
+        late += behind
+    assert 0 < late < len(jobs)  # both rules were met
+
+
+def test_plans_solved_in_worker_processes_are_those_solved_in_order() -> None:
+    from train.learning.dagger import solve_plans
+
+    jobs = [((-0.4, 0.2, 0.3), 3.0, 0.05, 0.5, 2.0, 5), ((0.3, -0.3, 1.0), 2.0, 0.05, 0.5, 2.0, 5),
+            ((0.2, 0.0, 0.0), 0.1, 0.05, 0.5, 2.0, 5)]  # fmt: skip  # the last one infeasible: None
+    serial, parallel = solve_plans(jobs, 1), solve_plans(jobs, 2)
+    assert serial[2] is None and parallel[2] is None
+    for a, b in zip(serial[:2], parallel[:2], strict=True):
+        np.testing.assert_allclose(a[0], b[0], atol=1e-9)
+        np.testing.assert_allclose(a[1], b[1], atol=1e-9)

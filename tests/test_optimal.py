@@ -251,3 +251,45 @@ def test_each_episode_is_measured_against_the_optimum_of_its_own_T_con() -> None
         nominal = solve_minimum_energy(tuple(start), 20.0, **limits).energy  # type: ignore[arg-type]
         assert result.optimal_energy[i] == pytest.approx(own, rel=1e-6)  # type: ignore[index]
         assert abs(own - nominal) > 0.2 * own  # so that using the nominal T_con would be seen
+
+
+def test_the_plan_is_the_cheapest_of_the_guesses_not_the_first_that_converges() -> None:
+    """From 1 m straight behind the goal, backing up (u = -1/8 m/s for 8 s, energy 1/8) beats turning round. From
+    (0.5, 0.5) facing +x, the forward guess converges to a plan of twice the energy the reverse guess finds: the
+    plan kept is the cheaper."""
+    plan = solve_minimum_energy((1.0, 0.0, 0.0), 8.0, **LIMITS)  # type: ignore[arg-type]
+    assert plan.energy == pytest.approx(1.0 / 8.0, abs=1e-6)
+    np.testing.assert_allclose(plan.commands[:, 0], -1.0 / 8.0, atol=1e-5)
+    both = solve_minimum_energy((0.5, 0.5, 0.0), 8.0, **LIMITS)  # type: ignore[arg-type]
+    forward_only = solve_minimum_energy((0.5, 0.5, 0.0), 8.0, **LIMITS, guesses=1)  # type: ignore[arg-type]
+    assert forward_only.energy > 1.5 * both.energy  # measured: 1.069 against 0.503
+
+
+def test_padding_a_plan_with_a_robot_response_holds_it_still_at_the_goal_and_keeps_the_plan() -> None:
+    """pad_to solves a longer problem whose last intervals cancel the robot's drift at the goal: the plan returned
+    is the unpadded one (to IPOPT's tolerance), and the robot, with that response, ends at the goal."""
+    response = (0.02, 0.1, 0.9, 0.5)
+    start = (-0.8, 0.3, 0.4)
+    plain = solve_minimum_energy(start, 6.5, **LIMITS, hold_steps=5, response=response)  # type: ignore[arg-type]
+    padded = solve_minimum_energy(start, 6.5, **LIMITS, hold_steps=5, response=response, pad_to=8)  # type: ignore[arg-type]
+    assert padded.intervals == plain.intervals == 26  # 6.5 s of 0.25 s intervals; padded to 32 and cut back
+    assert padded.energy == pytest.approx(plain.energy, rel=1e-4)
+    np.testing.assert_allclose(padded.commands, plain.commands, atol=1e-3)
+    b_u, b_w, a, g = response
+    x, y, psi = start
+    for u, w in padded.commands:
+        x, y, psi = model.unicycle_step_exact(x, y, psi, a * u + b_u, a * w + g * u + b_w, 0.25)
+    np.testing.assert_allclose((x, y, psi), 0.0, atol=1e-6)
+
+
+def test_the_initial_guess_is_a_straight_line_at_constant_speed_turning_uniformly() -> None:
+    from baselines.optimal import initial_guess
+
+    guess = initial_guess((-0.6, 0.8, 1.0), 4, 0.5, 0.0, reverse=False)
+    states, commands = guess[:15].reshape(5, 3), guess[15:].reshape(4, 2)
+    np.testing.assert_allclose(states[:, 0], -0.6 * np.array([1.0, 0.75, 0.5, 0.25, 0.0]))
+    np.testing.assert_allclose(states[:, 1], 0.8 * np.array([1.0, 0.75, 0.5, 0.25, 0.0]))
+    np.testing.assert_allclose(states[:, 2], [1.0, 0.75, 0.5, 0.25, 0.0])
+    np.testing.assert_allclose(commands, np.tile([1.0 / 2.0, -1.0 / 2.0], (4, 1)))  # 1 m and -1 rad in 2 s
+    backwards = initial_guess((-0.6, 0.8, 1.0), 4, 0.5, 0.0, reverse=True)
+    np.testing.assert_allclose(backwards[15::2], -0.5)

@@ -132,3 +132,160 @@ def test_the_shipped_robust_agent_keeps_the_deadline_for_less_energy_than_ptc(na
     assert robust.success.mean() >= 23 / 24
     assert np.mean(robust.final_heading_error) <= (0.1 if name == "random" else 0.2)
     assert robust.energy.mean() < ptc.energy.mean()
+
+
+def drive_on_its_plan(controller: object, start: tuple[float, float, float], steps: int,
+                      push: tuple[int, float] | None = None) -> list[int]:  # fmt: skip
+    """Step one nominal robot (the exact arc of eq. (1)) under ``controller``; ``push`` = (step, metres) moves it
+    sideways (in its own frame) before that step. Returns the controller's plan solves after each step."""
+    from dwr_gym import model
+
+    x, y, psi = start
+    initial = (float(np.hypot(x, y)), 0.0)
+    solves = []
+    for k in range(steps):
+        if push is not None and k == push[0]:
+            x, y = x - push[1] * np.sin(psi), y + push[1] * np.cos(psi)
+        inputs = ControllerInput.from_pose(x, y, psi, k * 0.05, initial)._replace(prescribed_time=np.array([T_CON]))
+        u, omega = controller(inputs)  # type: ignore[operator]
+        x, y, psi = model.unicycle_step_exact(x, y, psi, float(u[0]), float(omega[0]), 0.05)
+        solves.append(controller.solves)  # type: ignore[attr-defined]
+    return solves
+
+
+@pytest.mark.parametrize(("push", "replans"), [(None, 0), (0.03, 0), (0.12, 1)], ids=["none", "in-tube", "out"])
+def test_a_robot_pushed_out_of_the_tube_re_plans_once_one_inside_it_does_not(push: float | None, replans: int) -> None:
+    """robust-pt on the raw measurement (no filter to smooth the push): a nominal robot tracks its plan without
+    re-planning; a push of 3 cm (tube 5 cm) is tracked back; one of 12 cm re-plans from where the robot is, once."""
+    controller = make_controller("robust-pt", T_con=T_CON, estimator=None, workers=1)
+    solves = drive_on_its_plan(controller, (-1.0, 0.4, 0.3), 40, None if push is None else (20, push))
+    assert solves[0] == 1  # the first plan, at the first step
+    assert solves[-1] == 1 + replans
+    if replans:
+        assert solves[19] == 1 and solves[20] == 2  # at the very step it left the tube
+
+
+def finish_by_hand(x: float, y: float, psi: float, t: float, direction: float, p: object) -> tuple[float, float]:
+    """Astolfi's law (rho, alpha, beta) driving ``direction``, times min(1 / (T - t), max_gain), T = 0.92 T_con."""
+    from dwr_gym import model
+
+    alpha = float(model.wrap_angle(np.arctan2(-y, -x) - psi))
+    if direction < 0:
+        alpha = float(model.wrap_angle(alpha + np.pi))
+    beta = float(model.wrap_angle(-psi - alpha))
+    T = p.finish_arrival * T_CON  # type: ignore[attr-defined]
+    rate = min(1.0 / (T - t), p.max_gain) if t < T else p.max_gain  # type: ignore[attr-defined]
+    return (direction * p.k_rho * np.hypot(x, y) * rate,  # type: ignore[attr-defined]
+            (p.k_alpha * alpha + p.k_beta * beta) * rate)  # type: ignore[attr-defined]  # fmt: skip
+
+
+def test_the_finish_is_astolfis_law_on_the_deadlines_time_scale_and_reverses_with_hysteresis() -> None:
+    """plan=False: the finish law from the start. A goal behind (bearing pi) is approached in reverse, and stays so
+    while the bearing is within reverse_hysteresis (0.3 rad) of pi/2; past it the robot drives forward."""
+    controller = make_controller("robust-pt", T_con=T_CON, plan=False, estimator=None, cancel_disturbance=False)
+    p = controller.params
+    # the goal 1 m north of the robot: bearing = pi/2 - psi
+    for t, psi, direction in ((0.0, -np.pi / 2, -1.0), (0.05, -0.1, -1.0), (0.1, 0.1, -1.0), (0.15, 0.4, 1.0),
+                              (0.2, -0.1, 1.0), (17.0, -0.1, 1.0), (18.3, 0.0, 1.0), (19.0, 0.0, 1.0)):  # fmt: skip
+        inputs = ControllerInput.from_pose(0.0, -1.0, psi, t, (1.0, 0.0))._replace(prescribed_time=np.array([T_CON]))
+        u, omega = controller(inputs)
+        expected = finish_by_hand(0.0, -1.0, psi, t, direction, p)
+        np.testing.assert_allclose((u[0], omega[0]), np.clip(expected, [-0.5, -2.0], [0.5, 2.0]), atol=1e-12,
+                                   err_msg=f"t={t}, psi={psi}")  # fmt: skip
+    ptc = make_controller("robust-pt", T_con=T_CON, plan=False, estimator=None, finish="ptc")
+    inputs = ControllerInput.from_pose([0.3, -1.0], [0.2, 0.5], [1.0, -2.0], 3.0, ([0.5, 1.2], [0.1, -0.4]))
+    inputs = inputs._replace(prescribed_time=np.full(2, T_CON))
+    np.testing.assert_allclose(ptc(inputs), np.clip(make_controller("ptc", T_con=T_CON)(inputs),
+                                                    [[-0.5], [-2.0]], [[0.5], [2.0]]), atol=1e-12)  # fmt: skip
+
+
+def one_step(controller: object, x: float, y: float, psi: float, t: float, T_con: float = T_CON) -> np.ndarray:
+    inputs = ControllerInput.from_pose(x, y, psi, t, (float(np.hypot(x, y)), 0.0))
+    return np.array(controller(inputs._replace(prescribed_time=np.array([T_con]))))[:, 0]  # type: ignore[operator]
+
+
+def test_past_its_re_plans_or_too_far_to_plan_the_robot_is_handed_to_the_finish_law() -> None:
+    """max_replans = 0: a robot pushed out of the tube is not re-planned, the finish law drives it; a plan longer than
+    MAX_PLAN_INTERVALS (T_con 400 s) is not even tried."""
+    controller = make_controller("robust-pt", T_con=T_CON, estimator=None, workers=1, max_replans=0)
+    solves = drive_on_its_plan(controller, (-1.0, 0.4, 0.3), 21, (20, 0.12))
+    assert solves[-1] == 1
+    p = controller.params
+    x, y, psi = -0.5, 0.9, 0.2
+    u, omega = one_step(controller, x, y, psi, 21 * 0.05)
+    assert (u, omega) == pytest.approx(finish_by_hand(x, y, psi, 21 * 0.05, 1.0, p), abs=1e-12)
+    far = make_controller("robust-pt", T_con=400.0, estimator=None, workers=1)
+    u, omega = one_step(far, -1.0, 0.4, 0.3, 0.0, T_con=400.0)
+    assert far.solves == 0
+    T = p.finish_arrival * 400.0
+    assert u == pytest.approx(p.k_rho * np.hypot(-1.0, 0.4) / T, rel=1e-12)
+
+
+class Cruise:
+    """A learned cruise that always answers (0.5, -0.25)."""
+
+    def predict(self, obs, state=None, episode_start=None, deterministic=True):  # type: ignore[no-untyped-def]
+        return np.tile(np.float32([0.5, -0.25]), (len(obs), 1)), state
+
+
+def test_a_learned_cruise_drives_until_handover_time_or_until_the_robot_falls_behind() -> None:
+    from baselines.robust import RobustPTController, RobustPTParams
+
+    params = RobustPTParams(T_con=T_CON, estimator=None, cancel_disturbance=False, workers=1)
+    early = RobustPTController(params, cruise=Cruise())
+    assert one_step(early, -1.0, 0.4, 0.3, 0.0) == pytest.approx([0.25, -0.5])  # the network's (0.5, -0.25) x limits
+    assert early.solves == 0
+    late = RobustPTController(params, cruise=Cruise())  # past handover_time (0.7) x T_con: the planner takes over
+    one_step(late, -1.0, 0.4, 0.3, 0.71 * T_CON)
+    assert late.solves >= 1
+    behind = RobustPTController(params, cruise=Cruise())  # 3 s left for 1.08 m: less than 1.5 x the 2.2 s it takes
+    one_step(behind, -1.0, 0.4, 0.3, T_CON - 3.0)
+    assert behind.solves >= 1
+    in_time = RobustPTController(params, cruise=Cruise())  # 10 s left at 0.5 T_con: on schedule, the network drives
+    assert one_step(in_time, -1.0, 0.4, 0.3, 0.5 * T_CON) == pytest.approx([0.25, -0.5])
+
+
+def test_frozen_robots_get_no_command_and_no_plan_until_their_reset() -> None:
+    controller = make_controller("robust-pt", T_con=T_CON, estimator=None, workers=1)
+    inputs = ControllerInput.from_pose([-1.0, 0.8], [0.4, -0.6], [0.3, 2.0], 0.0, ([1.08, 1.0], [0.0, 0.0]))
+    inputs = inputs._replace(prescribed_time=np.full(2, T_CON))
+    controller(inputs)
+    assert controller.solves == 2
+    controller.freeze(np.array([False, True]))
+    controller.freeze(np.array([True, True, True]))  # a mask of another batch size is ignored
+    pushed = ControllerInput.from_pose([-1.0, 0.3], [0.4, -0.6], [0.3, 2.0], 0.05, ([1.08, 1.0], [0.0, 0.0]))
+    u, omega = controller(pushed._replace(prescribed_time=np.full(2, T_CON)))  # robot 1 is 0.5 m out of its tube
+    assert controller.solves == 2 and u[1] == omega[1] == 0.0 and u[0] != 0.0
+    controller.reset(np.array([False, True]))
+    controller(pushed._replace(time=np.full(2, 0.1), prescribed_time=np.full(2, T_CON)))
+    assert controller.solves == 3  # robot 1 planned anew once it was reset
+
+
+def test_the_first_finish_decision_inside_the_hysteresis_band_goes_the_shorter_way() -> None:
+    """Undecided, a bearing of pi/2 + 0.1 (within reverse_hysteresis of pi/2) reverses, pi/2 - 0.1 drives forward."""
+    p = make_controller("robust-pt", T_con=T_CON, plan=False).params
+    for psi, direction in ((-0.1, -1.0), (0.1, 1.0)):  # the goal 1 m north: bearing pi/2 - psi
+        controller = make_controller("robust-pt", T_con=T_CON, plan=False, estimator=None, cancel_disturbance=False)
+        inputs = ControllerInput.from_pose(0.0, -1.0, psi, 0.0, (1.0, 0.0))._replace(prescribed_time=np.array([T_CON]))
+        u, omega = controller(inputs)
+        assert (u[0], omega[0]) == pytest.approx(finish_by_hand(0.0, -1.0, psi, 0.0, direction, p), abs=1e-12)
+
+
+def test_the_cruise_tracks_its_reference_with_kanayamas_law_by_hand() -> None:
+    """u = u_r cos e_psi + k_along e_x, omega = omega_r + k_lateral u_r e_y + k_heading |u_r| sin e_psi, the errors in
+    the robot's frame; and the position error it reports."""
+    from baselines.robust import RobustPTParams, tracking_commands
+
+    p = RobustPTParams(k_along=1.3, k_lateral=3.0, k_heading=2.5)
+    pose = np.array([[0.2, -0.1, 0.4], [-1.0, 0.5, -2.0]])
+    reference = np.array([[0.25, -0.05, 0.3], [-0.9, 0.45, -2.2]])
+    command = np.array([[0.3, 0.5], [-0.2, -1.0]])
+    u, omega, error = tracking_commands(pose, reference, command, p)
+    for i in range(2):
+        dx, dy = reference[i, :2] - pose[i, :2]
+        c, s = np.cos(pose[i, 2]), np.sin(pose[i, 2])
+        e_x, e_y, e_psi = c * dx + s * dy, -s * dx + c * dy, reference[i, 2] - pose[i, 2]
+        u_r, omega_r = command[i]
+        assert u[i] == pytest.approx(u_r * np.cos(e_psi) + 1.3 * e_x, abs=1e-12)
+        assert omega[i] == pytest.approx(omega_r + 3.0 * u_r * e_y + 2.5 * abs(u_r) * np.sin(e_psi), abs=1e-12)
+        assert error[i] == pytest.approx(np.hypot(dx, dy), abs=1e-12)
