@@ -197,6 +197,20 @@ def optimal_timing_table(rows: list[dict[str, Any]]) -> str:
     return "\n".join(lines) + f"\n\n*{first['workers']} worker processes on {first['cores']} cores.*\n"
 
 
+def jax_env_step_table(data: dict[str, Any]) -> str:
+    """benchmarks/jax_env_step.py: the JAX env's step against the numpy vector env's."""
+    lines = ["| step | dtype | us per step | env-steps per second | x the numpy env's |", "|---|---|---|---|---|"]
+    for r in data["rows"]:
+        case, dtype = r["case"].rsplit(", ", 1)
+        lines.append(f"| {case} | {dtype} | {r['us_per_step']:,.0f} | {r['env_steps_per_second']:,.0f} | "
+                     f"{r['speedup']:.2f} |")  # fmt: skip
+    return "\n".join(lines) + (
+        f"\n\n*N = {data['num_envs']} robots of {data['env_id']}, {data['threads']} thread(s) for both, "
+        f"{data['machine']}, jax {data['jax']} on {data['device']}; medians of {data['repeats']} interleaved "
+        "repeats.*\n"
+    )
+
+
 #: Table name -> (its JSON file, relative to the repository, and the function that makes its Markdown).
 TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "compare": ("docs/compare/comparison.json", compare_table),
@@ -208,6 +222,7 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "robust-goal": ("docs/robust/goal.json", robust_goal_table),
     "robust-filter-rates": ("docs/robust/filter_rates.json", filter_rates_table),
     "robust-headline": ("docs/compare/comparison.json", lambda rows: robust_headline(rows)),
+    "jax-env-step": ("docs/jax/env_step.json", jax_env_step_table),
 }
 
 
