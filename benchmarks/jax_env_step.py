@@ -115,15 +115,19 @@ def jax_cases(num_envs: int, dtype: str, actions: Any, scan: int) -> dict[str, C
     return {"per call": per_call, **{name: scanned(rollout) for name, rollout in rollouts.items()}}
 
 
-def measure(cases: dict[str, tuple[Callable[[int], None], int]], repeats: int) -> dict[str, float]:
-    """Median seconds per step of each case, timed in interleaved repeats."""
-    times: dict[str, list[float]] = {name: [] for name in cases}
+def measure(cases: dict[str, tuple[Callable[[int], None], int]], repeats: int) -> dict[str, tuple[float, float]]:
+    """Median (wall-clock seconds, CPU seconds of this process) per step of each case, in interleaved repeats.
+
+    On a machine busy with other work the wall clock counts the time this process waits for a core; the CPU time
+    counts what it computed (all its threads), which varies far less with the load.
+    """
+    times: dict[str, list[tuple[float, float]]] = {name: [] for name in cases}
     for _ in range(repeats):
         for name, (run, steps) in cases.items():
-            start = time.perf_counter()
+            wall, cpu = time.perf_counter(), time.process_time()
             run(steps)
-            times[name].append((time.perf_counter() - start) / steps)
-    return {name: statistics.median(values) for name, values in times.items()}
+            times[name].append(((time.perf_counter() - wall) / steps, (time.process_time() - cpu) / steps))
+    return {name: (statistics.median(w for w, _ in v), statistics.median(c for _, c in v)) for name, v in times.items()}
 
 
 def main() -> None:
@@ -145,7 +149,8 @@ def main() -> None:
     import dwr_gym  # noqa: F401
 
     actions = np.random.default_rng(0).uniform(-1, 1, (args.num_envs, 2)).astype(np.float32)
-    seconds: dict[str, float] = {}
+    load_before = os.getloadavg()[0]
+    seconds: dict[str, tuple[float, float]] = {}
     for dtype in ("float64", "float32"):  # x64 set for the whole block: toggling it per call costs a re-trace check
         jax.config.update("jax_enable_x64", dtype == "float64")
         cases = {f"numpy vector env, {dtype}": (native_case(args.num_envs, dtype, actions), args.steps)}
@@ -154,14 +159,17 @@ def main() -> None:
             cases[f"JAX env {how}, {dtype}"] = (run, steps)
         seconds.update(measure(cases, args.repeats))
     reference = {dtype: seconds[f"numpy vector env, {dtype}"] for dtype in ("float64", "float32")}
-    rows = [{"case": name, "us_per_step": s * 1e6, "env_steps_per_second": args.num_envs / s,
-             "speedup": reference[name.rsplit(", ", 1)[1]] / s} for name, s in seconds.items()]  # fmt: skip
-    for row in rows:
-        print(f"{row['case']:<34} {row['us_per_step']:10.1f} us/step {row['env_steps_per_second']:14,.0f} "
-              f"env-steps/s  {row['speedup']:6.2f}x the numpy env's")  # fmt: skip
+    rows = []
+    for name, (wall, cpu) in seconds.items():
+        ref_wall, ref_cpu = reference[name.rsplit(", ", 1)[1]]
+        rows.append({"case": name, "us_per_step": wall * 1e6, "env_steps_per_second": args.num_envs / wall,
+                     "speedup": ref_wall / wall, "cpu_us_per_step": cpu * 1e6, "cpu_speedup": ref_cpu / cpu})  # fmt: skip
+        print(f"{name:<36} {wall * 1e6:9.1f} us/step {args.num_envs / wall:13,.0f} env-steps/s {ref_wall / wall:6.2f}x "
+              f"the numpy env's; CPU {cpu * 1e6:9.1f} us/step, {ref_cpu / cpu:6.2f}x")  # fmt: skip
     record = {"num_envs": args.num_envs, "threads": args.threads, "repeats": args.repeats, "scan": args.scan,
               "env_id": ENV_ID, "rows": rows, "machine": f"{platform.machine()}, {os.cpu_count()} cores",
-              "jax": jax.__version__, "numpy": np.__version__, "device": str(jax.devices()[0].platform)}  # fmt: skip
+              "jax": jax.__version__, "numpy": np.__version__, "device": str(jax.devices()[0].platform),
+              "load_average": [round(load_before, 1), round(os.getloadavg()[0], 1)]}  # fmt: skip
     if args.docs:
         JSON_PATH.parent.mkdir(parents=True, exist_ok=True)
         JSON_PATH.write_text(json.dumps(record, indent=1) + "\n")

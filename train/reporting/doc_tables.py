@@ -199,15 +199,16 @@ def optimal_timing_table(rows: list[dict[str, Any]]) -> str:
 
 def jax_env_step_table(data: dict[str, Any]) -> str:
     """benchmarks/jax_env_step.py: the JAX env's step against the numpy vector env's."""
-    lines = ["| step | dtype | us per step | env-steps per second | x the numpy env's |", "|---|---|---|---|---|"]
+    lines = ["| step | dtype | us per step | env-steps per second | x the numpy env's | CPU us per step | "
+             "x the numpy env's, CPU time |", "|---|---|---|---|---|---|---|"]  # fmt: skip
     for r in data["rows"]:
         case, dtype = r["case"].rsplit(", ", 1)
         lines.append(f"| {case} | {dtype} | {r['us_per_step']:,.0f} | {r['env_steps_per_second']:,.0f} | "
-                     f"{r['speedup']:.2f} |")  # fmt: skip
+                     f"{r['speedup']:.2f} | {r['cpu_us_per_step']:,.0f} | {r['cpu_speedup']:.2f} |")  # fmt: skip
     return "\n".join(lines) + (
         f"\n\n*N = {data['num_envs']} robots of {data['env_id']}, {data['threads']} thread(s) for both, "
         f"{data['machine']}, jax {data['jax']} on {data['device']}; medians of {data['repeats']} interleaved "
-        "repeats.*\n"
+        f"repeats; load average {data['load_average'][0]:g} before, {data['load_average'][1]:g} after.*\n"
     )
 
 
