@@ -157,7 +157,8 @@ def run_both(env_id: str, dtype: str, seed: int) -> dict[str, int]:
             close("restart observation", state.observation, obs, obs_atol)
         if dtype == "float32":  # the next step from the numpy env's state
             task = native.unwrapped._state
-            state = state.replace(**{name: jnp.asarray(getattr(task, name)) for name in TASK_FIELDS})
+            # copies: jax may alias a numpy array's memory, which the numpy env's next step writes into
+            state = state.replace(**{name: jnp.asarray(getattr(task, name).copy()) for name in TASK_FIELDS})
     native.close()
     return counts
 

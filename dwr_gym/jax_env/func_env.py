@@ -154,10 +154,11 @@ class DWRFuncEnv(FuncEnv):
         """A new episode: the start (distance, bearing, heading) and T_con drawn as the numpy envs draw them."""
         params = self._params_or_default(params)
         dtype = jnp.dtype(params.dtype)
-        start_key, T_con_key, noise_key = jax.random.split(rng, 3)
-        draws = jax.random.uniform(start_key, (3,), dtype)
+        # one call for the four draws: on a CPU, jax.random's hashing costs more than the episode's arithmetic
+        draws = jax.random.uniform(rng, (4,), dtype)
         start = start_from_uniforms(draws[0], draws[1], draws[2], params, jnp)
-        T_con = uniform_in(params.T_con_range, jax.random.uniform(T_con_key, (), dtype))
+        T_con = uniform_in(params.T_con_range, draws[3])
+        noise_key = jax.random.fold_in(rng, 1) if params.observation_noise > 0 else rng  # (unused without noise)
         return initial_state(start, T_con, noise_key, params, observation_space(params))
 
     def transition(

@@ -76,7 +76,8 @@ class DWRGymnaxEnv:
         """One step with gymnax's auto-reset: where ``done``, the returned observation and state are a new
         episode's; reward, done and info are the ended step's."""
         params = self.default_params if params is None else params
-        step_key, reset_key = jax.random.split(key)
+        noisy = params.observation_noise > 0 or params.actuation_noise > 0  # (static) else the step draws nothing:
+        step_key, reset_key = jax.random.split(key) if noisy else (key, key)  # its key is free for the reset
         obs, next_state, reward, done, info = self.step_env(step_key, state, action, params)
         info["final_observation"] = obs  # the ended step's (to bootstrap a truncated episode's value from)
         reset_obs, reset_state = self.reset_env(reset_key, params)

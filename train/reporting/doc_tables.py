@@ -204,6 +204,21 @@ def optimal_timing_table(rows: list[dict[str, Any]]) -> str:
     return "\n".join(lines) + f"\n\n*{first['workers']} worker processes on {first['cores']} cores.*\n"
 
 
+def jax_env_step_table(data: dict[str, Any]) -> str:
+    """benchmarks/jax_env_step.py: the JAX env's step against the numpy vector env's."""
+    lines = ["| step | dtype | us per step | env-steps per second | x the numpy env's | CPU us per step | "
+             "x the numpy env's, CPU time |", "|---|---|---|---|---|---|---|"]  # fmt: skip
+    for r in data["rows"]:
+        case, dtype = r["case"].rsplit(", ", 1)
+        lines.append(f"| {case} | {dtype} | {r['us_per_step']:,.0f} | {r['env_steps_per_second']:,.0f} | "
+                     f"{r['speedup']:.2f} | {r['cpu_us_per_step']:,.0f} | {r['cpu_speedup']:.2f} |")  # fmt: skip
+    return "\n".join(lines) + (
+        f"\n\n*N = {data['num_envs']} robots of {data['env_id']}, {data['threads']} thread(s) for both, "
+        f"{data['machine']}, jax {data['jax']} on {data['device']}; medians of {data['repeats']} interleaved "
+        f"repeats; load average {data['load_average'][0]:g} before, {data['load_average'][1]:g} after.*\n"
+    )
+
+
 #: Table name -> (its JSON file, relative to the repository, and the function that makes its Markdown).
 TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "compare": ("docs/compare/comparison.json", compare_table),
@@ -225,6 +240,7 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "datasets-suite": ("docs/datasets/suite.json", lambda data: dataset_tables.suite_table(data)),
     "datasets-baselines": ("docs/datasets/suite.json", lambda data: dataset_tables.baselines_table(data)),
     "datasets-speed": ("docs/datasets/speed.json", lambda data: dataset_tables.speed_table(data)),
+    "jax-env-step": ("docs/jax/env_step.json", jax_env_step_table),
 }
 
 

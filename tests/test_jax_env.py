@@ -1,0 +1,120 @@
+"""The JAX env's interfaces: Gymnasium's ids and checker, the gymnax adapter, its params and its one-line errors.
+(Its equality with the numpy env: tests/test_jax_equivalence.py.)"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+jax = pytest.importorskip("jax")
+pytest.importorskip("flax")
+
+import jax.numpy as jnp  # noqa: E402
+from gymnasium.utils.env_checker import check_env  # noqa: E402
+
+import dwr_gym  # noqa: E402
+from dwr_gym.disturbances import VelocityBias  # noqa: E402
+from dwr_gym.jax_env import DWRFuncEnv, functional_params, make_gymnax_env  # noqa: E402
+
+INFO_KEYS = ("is_success", "energy", "heading_error", "time", "T_con", "terminated", "truncated", "distance",
+             "reward_terms", "final_observation")  # fmt: skip
+
+
+def run(code: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+
+
+def test_importing_dwr_gym_registers_the_jax_ids_without_importing_jax() -> None:
+    result = run("import sys, gymnasium, dwr_gym; print('jax' in sys.modules, 'DWRPointStabilizationJax-v1' in "
+                 "gymnasium.registry, gymnasium.spec('DWRPointStabilizationJax-v1').vector_entry_point is not None)")  # fmt: skip
+    assert result.stdout.split() == ["False", "True", "True"], result.stderr
+
+
+def test_without_jax_the_error_is_one_line_naming_the_extra() -> None:
+    result = run("import sys; sys.modules['jax'] = None; import dwr_gym.jax_env")
+    last = result.stderr.strip().splitlines()[-1]
+    assert result.returncode != 0 and last.startswith("ImportError") and 'pip install "dwr-gym[jax]"' in last
+
+
+@pytest.mark.parametrize("env_id", [dwr_gym.JAX_ENV_ID, dwr_gym.JAX_ENV_ID_V1])
+def test_gymnasium_checker_passes_through_the_jax_wrappers(env_id: str) -> None:
+    env = gym.make(env_id)
+    check_env(env.unwrapped, skip_render_check=True)
+    assert env.spec.max_episode_steps == env.unwrapped.params.max_episode_steps
+
+
+def test_the_jax_vector_env_autoresets_in_the_next_step_as_the_numpy_one() -> None:
+    """Standing still, every robot is truncated at the horizon (15 steps at T_con 0.5 s); the step after returns the
+    new episode's first observation (time fraction 0), reward 0 and both flags False, in both envs."""
+    kwargs = {"T_con": 0.5, "num_envs": 4}
+    envs = [gym.make_vec(env_id, **kwargs) for env_id in (dwr_gym.JAX_ENV_ID, dwr_gym.ENV_ID)]
+    still = np.zeros((4, 2), np.float32)
+    for env in envs:
+        env.reset(seed=3)
+        for step in range(1, 17):
+            obs, reward, terminated, truncated, _info = env.step(still)
+            assert not np.any(terminated)
+            assert np.all(np.asarray(truncated) == (step == 15)), step
+        np.testing.assert_array_equal(np.asarray(reward), 0.0)
+        np.testing.assert_array_equal(np.asarray(obs)[:, 6], 0.0)
+        assert not np.any(np.asarray(truncated))
+
+
+def test_the_gymnax_adapter_steps_under_jit_and_vmap_with_autoreset() -> None:
+    env, params = make_gymnax_env(dwr_gym.ENV_ID, T_con=0.5)
+    keys = jax.random.split(jax.random.PRNGKey(0), 8)
+    obs, state = jax.jit(jax.vmap(env.reset, in_axes=(0, None)))(keys, params)
+    assert obs.shape == (8, 10) and obs.dtype == jnp.float32
+    assert bool(jax.vmap(env.observation_space(params).contains)(obs).all())
+    step = jax.jit(jax.vmap(env.step, in_axes=(0, 0, 0, None)))
+    for _ in range(15):
+        obs, state, _reward, done, info = step(keys, state, jnp.zeros((8, 2)), params)
+    assert set(INFO_KEYS) <= set(info) and bool(done.all()) and bool(info["truncated"].all())
+    np.testing.assert_array_equal(info["time"], 0.75)  # the ended step's info, before the reset
+    np.testing.assert_array_equal(state.step_count, 0)  # the state: a new episode's
+    np.testing.assert_array_equal(obs, state.observation)
+    assert env.action_space(params).sample(keys[0]).shape == (2,)
+
+
+def test_float64_with_x64_and_a_nan_action_gives_finite_numbers() -> None:
+    with jax.enable_x64(True):
+        env, params = make_gymnax_env(dtype="float64")
+        obs, state = jax.jit(env.reset)(jax.random.PRNGKey(1), params)
+        obs, state, reward, _done, info = jax.jit(env.step)(jax.random.PRNGKey(2), state, jnp.array([jnp.nan, 1.0]))
+        assert obs.dtype == jnp.float64 and reward.dtype == jnp.float64
+        assert bool(jnp.isfinite(obs).all()) and bool(jnp.isfinite(reward))
+        assert float(info["linear_velocity"]) == 0.0 and float(info["angular_velocity"]) == params.omega_max
+
+
+def test_params_vmap_over_robots_of_different_speeds() -> None:
+    """Domain randomisation: one compiled step, each robot with its own u_max."""
+    func_env = DWRFuncEnv(dwr_gym.ENV_ID)
+    params = func_env.default_params
+    speeds = jnp.array([0.1, 0.2, 0.4])
+    batch = jax.vmap(lambda u: params.replace(u_max=u))(speeds)
+    state = jax.jit(jax.vmap(func_env.initial))(jax.random.split(jax.random.PRNGKey(0), 3), batch)
+    state = jax.jit(jax.vmap(func_env.transition, in_axes=(0, None, 0, 0)))(
+        state, jnp.array([1.0, 0.0]), jax.random.split(jax.random.PRNGKey(1), 3), batch
+    )
+    np.testing.assert_allclose(state.linear_velocity, speeds)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"dtype": "float16"}, "dtype='float16' is invalid"),
+        ({"dtype": "float64"}, "dtype='float64' is invalid while jax_enable_x64 is off"),
+        ({"disturbances": [VelocityBias(0.1)]}, "disturbances=[VelocityBias(linear=0.1, angular=0.0)] is invalid"),
+        ({"robot": "turtlebot3_burger"}, "robot='turtlebot3_burger' is invalid for the functional (JAX) env"),
+        ({"u_max": -1.0}, "u_max=-1.0 is invalid"),
+        ({"env_id": "CartPole-v1"}, "env_id='CartPole-v1' is invalid"),
+    ],
+)
+def test_bad_input_is_a_one_line_error_naming_the_parameter(kwargs: dict, message: str) -> None:
+    with pytest.raises(ValueError) as error:
+        functional_params(**kwargs)
+    assert message in str(error.value) and "\n" not in str(error.value)
