@@ -277,7 +277,8 @@ def test_rollout_metrics_of_straight_drives_by_hand() -> None:
     assert summary["final_heading_error_mean"] == pytest.approx((math.atan2(4.0, -3.0) + math.pi) / 3)
     assert summary["command_rate_rms_mean"] == pytest.approx(np.mean(10.0 / np.sqrt(steps)))
     assert summary["velocity_rate_rms_mean"] == pytest.approx(summary["command_rate_rms_mean"])
-    assert len(summary) == 24  # the keys above and the energy-ratio ones
+    assert summary["energy_ratio_episodes"] == 0.0  # no optimum: no episode stands behind E/opt
+    assert len(summary) == 25  # the keys above and the energy-ratio ones
 
 
 def test_evaluate_sets_gives_one_row_per_set_T_con_and_policy_as_evaluate_summarises_them() -> None:
