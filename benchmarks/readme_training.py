@@ -83,8 +83,8 @@ def render(results: dict[str, Any]) -> str:
     steps = int(results["curve"][-1]["timesteps"])
     return (
         f"\n```bash\n{results['command']}     # {steps:,} env steps\n{results['evaluate']}\n```\n\n"
-        f"Measured ({results['machine']}): {results['cpu_seconds'] / 60:.1f} min of CPU time, which is the wall time "
-        f"on an idle machine (the run uses one core); {results['wall_seconds'] / 60:.1f} min of wall time on the shared "
+        f"Measured ({results['machine']}): {results['cpu_seconds'] / 60:.1f} min of CPU time, about its wall time on "
+        f"an idle machine (it runs on one core); {results['wall_seconds'] / 60:.1f} min of wall time on the shared "
         f"machine it ran on (load average {results['load_average_1min_at_end']:g}). Its best model arrives in time on "
         f"{agent['success_rate']:.0%} of the 200 random starts of the task, with a mean energy of {agent['energy_mean']:.2f} "
         f"(PTC: {ptc['success_rate']:.0%}, {ptc['energy_mean']:.2f}); final heading error "

@@ -1,5 +1,6 @@
-"""benchmarks/training_speed.py, training_old_vs_new.py and retrain_pretrained.py: the blocks of docs/training.md
-are what they render from their JSON, and the retraining replays each shipped agent's recorded recipe."""
+"""benchmarks/training_speed.py, training_old_vs_new.py, retrain_pretrained.py, training_threads.py and
+readme_training.py: the blocks of docs/training.md and the README are what they render from their JSON, and the
+retraining replays each shipped agent's recorded recipe."""
 
 from __future__ import annotations
 
@@ -21,7 +22,7 @@ def load(name: str) -> ModuleType:  # benchmarks/ is not a package
     return module
 
 
-@pytest.mark.parametrize("name", ["training_speed", "training_old_vs_new", "retrain_pretrained"])
+@pytest.mark.parametrize("name", ["training_speed", "training_old_vs_new", "retrain_pretrained", "training_threads"])
 def test_each_docs_block_is_what_its_benchmark_renders_from_its_json(name: str) -> None:
     module = load(name)
     results = json.loads(module.JSON_PATH.read_text())
@@ -35,6 +36,22 @@ def test_the_speed_verdict_follows_the_measured_ratio() -> None:
     assert ("20x SB3 PPO on CartPole-v1" in module.render(results)[-1]) and module.render(results)[-1].endswith(
         ", met" if results["met"] else "NOT met"
     )
+
+
+def test_the_threads_verdict_follows_the_measured_ratios() -> None:
+    module = load("training_threads")
+    results = json.loads(module.JSON_PATH.read_text())
+    assert results["met"] == all(ratio >= 0.8 for ratio in results["ratio_defaults_to_omp1"].values())
+    assert module.render(results)[-1].endswith(", met" if results["met"] else "NOT met")
+
+
+def test_the_readmes_training_example_is_what_its_benchmark_measured() -> None:
+    module = load("readme_training")
+    results = json.loads(module.JSON_PATH.read_text())
+    assert module.readme_block() == module.render(results)
+    best = max(results["curve"], key=lambda row: (row["success_rate"], -row["energy_mean"], row["return_mean"]))
+    assert results["command"] in module.readme_block()
+    assert results["best"]["timesteps"] == best["timesteps"]  # the most episodes in time, then the least energy
 
 
 def test_a_recipe_is_replayed_with_only_seed_run_dir_env_and_budget_changed(tmp_path: Path) -> None:

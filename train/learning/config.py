@@ -48,7 +48,10 @@ class TrainConfig:
     algo: str = option("ppo", "algorithm: ppo, sac, td3, tqc or crossq (the last two from sb3-contrib)")
     backend: str = option("sb3", "training library: sb3 (stable-baselines3 on torch) or jax (jitted PPO, extra 'jax')")
     threads: int | None = option(
-        None, "torch threads for training and evaluation", shown_default="1 (our commands only)", metavar="N"
+        None,
+        "torch threads while it trains and evaluates; the caller's count is restored afterwards",
+        shown_default="1: a small network waits on a thread pool, most on a busy machine",
+        metavar="N",
     )
     env_id: str = option(TASK_ENV_ID, ENV_HELP, flag="--env", metavar="ID")
     total_timesteps: int | None = option(
