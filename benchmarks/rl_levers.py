@@ -59,7 +59,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", default="runs/levers", help="where the runs go (default runs/levers)")
     parser.add_argument("--collect", help="read the runs in this directory instead of training")
     parser.add_argument("--docs", action="store_true", help="write docs/rl_benchmark/levers.json")
+    parser.add_argument(
+        "--sweep", help="also copy the trials.csv of this dwr-gym sweep --out to docs/rl_benchmark/sweep.json"
+    )
     args = parser.parse_args(argv)
+    if args.sweep:
+        with (Path(args.sweep) / "trials.csv").open() as handle:
+            trials = list(csv.DictReader(handle))
+        target = ROOT / "docs" / "rl_benchmark" / "sweep.json"
+        target.write_text(json.dumps({"out": args.sweep, "trials": trials}, indent=1))
+        print(f"wrote {target}")
+        return 0
     out = Path(args.collect or args.out)
     data = {"seconds": args.seconds, "machine": f"{os.cpu_count()} cores, shared", "levers": {}}
     for lever, options in LEVERS.items():

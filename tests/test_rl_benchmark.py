@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 
 from train.cli import main
 from train.learning.benchmark import Entry, parse_entry, run_benchmark
@@ -112,17 +113,20 @@ def test_the_protocol_trains_evaluates_and_aggregates_any_policy_over_seeds(tmp_
         return ExpertPolicy(make_controller("ptc"), 0.5, 2.0)
 
     entries = [Entry("my-ptc", make=make), parse_entry(f"tiny:algo=ppo,{TINY_PPO}")]
-    budget = {"env_steps": 128, "eval_freq": 64, "eval_episodes": 4, "disturbed_episodes": 2}
-    results = run_benchmark(entries, [0, 1], tmp_path, budget)
-    assert [(r["entry"], r["seed"]) for r in results] == [("my-ptc", 0), ("my-ptc", 1), ("tiny", 0), ("tiny", 1)]
+    budget = {"env_steps": 128, "eval_freq": 128, "eval_episodes": 4, "disturbed_episodes": 2}
+    results = run_benchmark(entries[:1], [0, 1], tmp_path, budget) + run_benchmark(entries[1:], [0], tmp_path, budget)
+    assert [(r["entry"], r["seed"]) for r in results] == [("my-ptc", 0), ("my-ptc", 1), ("tiny", 0)]
     assert set(results[0]["sets"]) == {"random", "disturbed", "fault", "delay", "noise"}
     assert results[0]["sets"]["random"]["in_time"] == 1.0 and results[0]["sets"]["random"]["energy_ratio"] > 1.0
-    assert len(results[2]["curve"]) >= 2 and results[2]["curve"][-1]["env_steps"] >= 128
+    assert [row["env_steps"] for row in results[2]["curve"]] == [0, 128] and results[2]["env_steps"] == 128
     summary = aggregate(results)
     assert summary["my-ptc"]["sets"]["random"]["in_time"]["iqm"] == 1.0
     assert "| my-ptc | 2 | - |" in table(summary) and "| 1.000 [1.000, 1.000] |" in table(summary)
     # a finished run is not run again: the results are read back
     (tmp_path / "results" / "tiny-seed0.json").write_text(json.dumps({**results[2], "seconds": -1.0}))
+    assert "train" in json.dumps(
+        yaml.safe_load((tmp_path / "runs" / "tiny-seed0" / "config.yaml").read_text())["command"]
+    )
     assert run_benchmark(entries[1:], [0], tmp_path, budget)[0]["seconds"] == -1.0
 
 
@@ -140,8 +144,6 @@ def test_a_sweep_searches_the_initial_exploration_noise_inside_policy_kwargs(tmp
 
 
 def test_every_shipped_agent_says_what_it_learned_from_and_what_acts_beside_it() -> None:
-    import yaml
-
     from train.learning.agents import PRETRAINED, pretrained_paths
     from train.learning.config import LEARNED_FROM
 

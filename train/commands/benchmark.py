@@ -76,10 +76,12 @@ def run(args: argparse.Namespace) -> int:
             results = run_benchmark(entries, list(range(args.seeds)), out, budget, jobs=args.jobs)
         except ConfigError as error:
             raise UsageError(str(error)) from error
-    for result in results:  # results written before the env steps were recorded: read them from the run
-        state = out / "runs" / f"{result['entry']}-seed{result['seed']}" / "run_state.json"
-        if result.get("env_steps") is None and state.is_file():
-            result["env_steps"] = json.loads(state.read_text()).get("timesteps", 0) * result.get("action_repeat", 1)
+    for result in results:  # env steps and training seconds as the run itself counted them (a resumed run too)
+        state_path = out / "runs" / f"{result['entry']}-seed{result['seed']}" / "run_state.json"
+        if state_path.is_file():
+            state = json.loads(state_path.read_text())
+            result["env_steps"] = state.get("timesteps", 0) * result.get("action_repeat", 1)
+            result["seconds"] = state.get("wall_time", result["seconds"])
     data = report(results, out, budget, tuple(args.references))
     if args.docs:
         report(results, DOCS_DIR, budget, tuple(args.references), data)

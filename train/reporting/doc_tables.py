@@ -41,8 +41,6 @@ POLICY_NAMES = {
     "robust-pt": "`robust-pt` (3)",
     "robust": "`robust` agent (v1)",
     "ppo-v1": "`ppo_v1` (v1, reward)",
-    "sac-v1": "`sac_v1` (v1, reward)",
-    "tqc-v1": "`tqc_v1` (v1, reward)",
     "residual-ppo-v1": "`residual_ppo_v1` (v1, reward, on PTC)",
     "residual-ppo-astolfi-v1": "`residual_ppo_astolfi_v1` (v1, reward, on `pt-astolfi`)",
 }
@@ -232,6 +230,7 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "robust-headline": ("docs/compare/comparison.json", lambda rows: robust_headline(rows)),
     "rl-benchmark": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "random")),
     "rl-residual": ("docs/rl_benchmark/residual.json", lambda data: rl_table(data, "residual")),
+    "rl-sweep": ("docs/rl_benchmark/sweep.json", lambda data: rl_table(data, "sweep")),
     "rl-goals": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "goals")),
     "rl-benchmark-readme": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "readme")),
     "rl-benchmark-disturbed": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "disturbed")),
@@ -245,13 +244,20 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
 
 
 def rl_table(data: dict[str, Any], kind: str) -> str:
-    """The tables of docs/rl-benchmark.md (train.reporting.rl_benchmark)."""
+    """The tables of docs/rl-benchmark.md (train.reporting.rl_benchmark), ending in a newline."""
+    text = _rl_table(data, kind)
+    return text if text.endswith("\n") else text + "\n"
+
+
+def _rl_table(data: dict[str, Any], kind: str) -> str:
     from train.reporting import rl_benchmark
 
     if kind == "diagnosis":
         return rl_benchmark.diagnosis_table(data)
     if kind == "levers":
         return rl_benchmark.levers_table(data)
+    if kind == "sweep":
+        return rl_benchmark.sweep_table(data)
     if kind == "residual":
         return rl_benchmark.residual_table(data)
     if kind == "goals":

@@ -5,6 +5,7 @@ against env steps and against wall-clock seconds, and the tables the docs show.
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 from typing import Any
@@ -246,6 +247,17 @@ def residual_table(data: dict[str, Any]) -> str:
     return "\n".join(lines) + f"\n\n*{data['n']} episodes of the benchmark's nominal set (seed {data['seed']}).*\n"
 
 
+def sweep_table(data: dict[str, Any]) -> str:
+    """The trials of a ``dwr-gym sweep`` (benchmarks/rl_levers.py --sweep): hyperparameters and final evaluation."""
+    lines = ["| trial | hyperparameters | in time | return | energy |", "|---|---|---|---|---|"]
+    for t in data["trials"]:
+        params = ", ".join(f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}"
+                           for k, v in json.loads(t["hyperparams"]).items())  # fmt: skip
+        lines.append(f"| {t['config']} | {params} | {float(t['success_rate_mean']):.2f} | "
+                     f"{float(t['return_mean_mean']):.3f} | {float(t['energy_mean_mean']):.3f} |")  # fmt: skip
+    return "\n".join(lines)
+
+
 __all__ = [
     "aggregate",
     "best_seed",
@@ -256,5 +268,6 @@ __all__ = [
     "levers_table",
     "plot_curves",
     "residual_table",
+    "sweep_table",
     "table",
 ]

@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# The RL benchmark of issue 32 (docs/rl-benchmark.md) and the agents it ships: PPO from v1's reward, residual PPO on
+# PTC and on pt-astolfi, SAC and TQC, five seeds each, evaluated on the fixed sets and aggregated with IQM and 95 %
+# stratified-bootstrap intervals; then the best seed of ppo, residual-ppo and residual-ppo-astolfi is copied into
+# train/pretrained/{ppo_v1,residual_ppo_v1,residual_ppo_astolfi_v1} (with its learning curve), and the residuals'
+# corrections are measured. The budgets are those that fitted on 2 shared cores in an hour (about 1 hour with
+# --jobs 4 there); give more with --env-steps and the entries' total_timesteps. Each run's config.yaml records the
+# `dwr-gym train` command that trains it alone (benchmarks/retrain_pretrained.py runs it again).
+set -euo pipefail
+export OMP_NUM_THREADS=1
+dwr-gym benchmark --agents ppo residual-ppo:total_timesteps=100000 residual-ppo-astolfi:total_timesteps=100000 \
+  sac:total_timesteps=50000,eval_freq=50000 tqc:total_timesteps=50000,eval_freq=50000 --seeds 5 \
+  --env-steps 200000 --eval-freq 100000 --disturbed-episodes 100 --jobs 4 --out results/rl-benchmark --docs
+python benchmarks/ship_rl_agents.py results/rl-benchmark
+python benchmarks/rl_residual.py train/pretrained/residual_ppo_v1 train/pretrained/residual_ppo_astolfi_v1 --n 50 --docs
+python benchmarks/rl_diagnosis.py --n 200 --docs
+python -m train.reporting.doc_tables
