@@ -103,3 +103,14 @@ def test_an_integer_parameter_takes_both_ends_and_refuses_one_past_them(
     for value in (low - 1, high + 1):
         with pytest.raises(ValueError, match=rf"^{name}={value} is invalid: expected an integer in \[{low}, {high}\]"):
             cls(**{name: value, **others})
+
+
+BOOLEANS = [(AstolfiParams, "reverse"), (PrescribedTimeAstolfiParams, "reverse"), (OptimalParams, "heading"),
+            (RobustPTParams, "plan"), (RobustPTParams, "cancel_disturbance")]  # fmt: skip
+
+
+@pytest.mark.parametrize(("cls", "name"), BOOLEANS, ids=[f"{c.__name__}.{n}" for c, n in BOOLEANS])
+def test_a_switch_takes_true_or_false_and_names_itself_otherwise(cls: type, name: str) -> None:
+    assert getattr(cls(**{name: False}), name) is False
+    with pytest.raises(ValueError, match=rf"^{name}='yes' is invalid: expected True or False"):
+        cls(**{name: "yes"})

@@ -346,3 +346,24 @@ def test_a_policy_that_fell_below_half_is_not_run_at_larger_magnitudes() -> None
     assert magnitudes["ptc"] == kept[:first_low]
     below = [r for r in rows if r["policy"] == "ptc" and r["success_rate"] < GIVE_UP_LEVEL]
     assert len(below) <= 1 and (not below or below[0]["magnitude"] == magnitudes["ptc"][-1])
+
+
+def test_the_command_rate_is_of_what_was_commanded_not_of_what_a_disturbed_robot_did() -> None:
+    """Under a sinusoidal push the robot's velocities wave while the commands stay put: the command rate is still
+    the one step 0 -> (0.25 m/s, 2 rad/s); the velocity rate is that of the recorded velocities."""
+    from dwr_gym.params import EnvParams
+    from tests.test_controllers import TurnAndGo
+    from train.evaluation.rollout import rollout
+
+    params = EnvParams(T_con=2.0)  # 60 steps to the horizon, none arrives
+    starts = np.array([[-1.0, 0.0, 0.0], [2.0, 1.0, 0.5]])
+    push = {"disturbances": [VelocitySinusoid(0.1, 0.5, period=0.6)]}
+    result = rollout(TurnAndGo(), params, starts, np.zeros((2, 3)), record=True, env_kwargs=push)
+    np.testing.assert_allclose(result.command_rate_rms, math.sqrt((0.25**2 + 2.0**2) / 0.05**2 / 60))
+    trajectory = result.trajectory
+    assert trajectory is not None and trajectory["linear_velocity"].shape == (60, 2)
+    velocities = np.stack([trajectory["linear_velocity"], trajectory["angular_velocity"]], axis=-1)  # (60, 2, 2)
+    assert np.ptp(velocities[:, 0, 0]) > 0.15  # the robot did not do as commanded
+    steps = np.diff(np.concatenate([np.zeros((1, 2, 2)), velocities]), axis=0)
+    np.testing.assert_allclose(result.velocity_rate_rms, np.sqrt(np.sum(steps**2, axis=(0, 2)) / 0.05**2 / 60))
+    assert np.all(result.velocity_rate_rms > 1.2 * result.command_rate_rms)  # so the two metrics differ here
