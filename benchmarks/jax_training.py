@@ -262,6 +262,9 @@ def render_learn(data: dict[str, Any]) -> list[str]:
         steps = f"{row['steps']:,}" if row else f"not by {last['steps']:,}"
         lines.append(f"{seed:<6}{steps:>17}{last['wall_s']:>9.0f}{last['cpu_s']:>9.0f}{last['in_time']:>9.0%}"
                      f"{last['energy_ratio'] or math.nan:>7.2f}{last['final_heading']:>9.3f}")  # fmt: skip
+    first = [next((r for r in curve if r["in_time"] >= c["in_time"]), None) for curve in data["curves"]]
+    lines += ["", f"in time >= {c['in_time']:.0%} alone, first reached (steps, wall s): " + "; ".join(
+        f"seed {i}: {r['steps']:,}, {r['wall_s']:.0f} s" if r else f"seed {i}: not reached" for i, r in enumerate(first))]  # fmt: skip
     last = [curve[-1] for curve in data["curves"]]
     lines += ["", "at the last evaluation, median over seeds: energy "
               f"{statistics.median(r['energy'] for r in last):.2f} (optimum {last[0]['optimal_energy']:.2f}), arrival at "
