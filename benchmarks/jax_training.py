@@ -1,6 +1,7 @@
 """The jitted PPO of `dwr-gym train --backend jax` against `dwr-gym train`'s stable-baselines3 PPO (issue 36).
 
     nice -n 10 python benchmarks/jax_training.py speed --threads 1 --docs   # docs/jax/training_speed_1thread.json
+    nice -n 10 python benchmarks/jax_training.py speed --threads 2 --docs   # docs/jax/training_speed_2thread.json
     nice -n 10 python benchmarks/jax_training.py learn --docs               # docs/jax/time_to_criteria.json
     python benchmarks/jax_training.py --render                              # docs/jax-training.md's blocks from the JSON
 
@@ -276,6 +277,7 @@ def render_learn(data: dict[str, Any]) -> list[str]:
 
 
 BLOCKS = {"jax-training-speed": ("training_speed_1thread.json", render_speed),
+          "jax-training-speed-2threads": ("training_speed_2thread.json", render_speed),
           "jax-time-to-criteria": ("time_to_criteria.json", render_learn)}  # fmt: skip
 
 
