@@ -2,7 +2,8 @@
 
     nice -n 10 python benchmarks/jax_training.py speed --threads 1 --docs   # docs/jax/training_speed_1thread.json
     nice -n 10 python benchmarks/jax_training.py speed --threads 2 --docs   # docs/jax/training_speed_2thread.json
-    nice -n 10 python benchmarks/jax_training.py learn --docs               # docs/jax/time_to_criteria.json
+    nice -n 5 python benchmarks/jax_training.py learn --budget 1380 --eval-every 30 --docs \
+        --hyperparams "policy_kwargs=dict(net_arch=[64, 64], normalize_observations=True)"  # time_to_criteria.json
     python benchmarks/jax_training.py --render                              # docs/jax-training.md's blocks from the JSON
 
 ``speed``: env steps per second including the updates, on DWRPointStabilization-v1 with the defaults of
