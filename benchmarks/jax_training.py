@@ -28,11 +28,12 @@ import sys
 
 
 def set_threads(threads: int) -> None:
-    """One thread budget for XLA and torch, before either is imported."""
+    """One thread budget for XLA and torch, before either is imported: one thread (XLA without its Eigen pool),
+    or XLA's default pool (every core: 2 here) beside torch on ``threads`` threads."""
     os.environ["OMP_NUM_THREADS"] = str(threads)
-    flags = "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1" if threads == 1 else (
-        f"intra_op_parallelism_threads={threads}")  # fmt: skip
-    os.environ["XLA_FLAGS"] = f"{os.environ.get('XLA_FLAGS', '')} {flags}".strip()
+    if threads == 1:
+        flags = "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1"
+        os.environ["XLA_FLAGS"] = f"{os.environ.get('XLA_FLAGS', '')} {flags}".strip()
 
 
 if __name__ == "__main__":
