@@ -1,7 +1,9 @@
 """The jitted PPO of `dwr-gym train --backend jax` against `dwr-gym train`'s stable-baselines3 PPO (issue 36).
 
     nice -n 10 python benchmarks/jax_training.py speed --threads 1 --docs   # docs/jax/training_speed_1thread.json
-    nice -n 10 python benchmarks/jax_training.py learn --docs               # docs/jax/time_to_criteria.json
+    nice -n 10 python benchmarks/jax_training.py speed --threads 2 --docs   # docs/jax/training_speed_2thread.json
+    nice -n 5 python benchmarks/jax_training.py learn --budget 1380 --eval-every 30 --docs \
+        --hyperparams "policy_kwargs=dict(net_arch=[64, 64], normalize_observations=True)"  # time_to_criteria.json
     python benchmarks/jax_training.py --render                              # docs/jax-training.md's blocks from the JSON
 
 ``speed``: env steps per second including the updates, on DWRPointStabilization-v1 with the defaults of
@@ -26,11 +28,12 @@ import sys
 
 
 def set_threads(threads: int) -> None:
-    """One thread budget for XLA and torch, before either is imported."""
+    """One thread budget for XLA and torch, before either is imported: one thread (XLA without its Eigen pool),
+    or XLA's default pool (every core: 2 here) beside torch on ``threads`` threads."""
     os.environ["OMP_NUM_THREADS"] = str(threads)
-    flags = "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1" if threads == 1 else (
-        f"intra_op_parallelism_threads={threads}")  # fmt: skip
-    os.environ["XLA_FLAGS"] = f"{os.environ.get('XLA_FLAGS', '')} {flags}".strip()
+    if threads == 1:
+        flags = "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1"
+        os.environ["XLA_FLAGS"] = f"{os.environ.get('XLA_FLAGS', '')} {flags}".strip()
 
 
 if __name__ == "__main__":
@@ -262,6 +265,9 @@ def render_learn(data: dict[str, Any]) -> list[str]:
         steps = f"{row['steps']:,}" if row else f"not by {last['steps']:,}"
         lines.append(f"{seed:<6}{steps:>17}{last['wall_s']:>9.0f}{last['cpu_s']:>9.0f}{last['in_time']:>9.0%}"
                      f"{last['energy_ratio'] or math.nan:>7.2f}{last['final_heading']:>9.3f}")  # fmt: skip
+    first = [next((r for r in curve if r["in_time"] >= c["in_time"]), None) for curve in data["curves"]]
+    lines += ["", f"in time >= {c['in_time']:.0%} alone, first reached (steps, wall s): " + "; ".join(
+        f"seed {i}: {r['steps']:,}, {r['wall_s']:.0f} s" if r else f"seed {i}: not reached" for i, r in enumerate(first))]  # fmt: skip
     last = [curve[-1] for curve in data["curves"]]
     lines += ["", "at the last evaluation, median over seeds: energy "
               f"{statistics.median(r['energy'] for r in last):.2f} (optimum {last[0]['optimal_energy']:.2f}), arrival at "
@@ -273,6 +279,7 @@ def render_learn(data: dict[str, Any]) -> list[str]:
 
 
 BLOCKS = {"jax-training-speed": ("training_speed_1thread.json", render_speed),
+          "jax-training-speed-2threads": ("training_speed_2thread.json", render_speed),
           "jax-time-to-criteria": ("time_to_criteria.json", render_learn)}  # fmt: skip
 
 

@@ -54,15 +54,12 @@ def check_jax_config(config: TrainConfig) -> None:
 
 
 def configure_threads(threads: int | None) -> None:
-    """Give XLA's CPU backend ``threads`` threads (1: no Eigen thread pool), if jax is not yet imported."""
-    if threads is None or "jax" in sys.modules:
+    """``--threads 1``: XLA's CPU backend on one thread (no Eigen thread pool), if jax is not yet imported; other
+    counts leave XLA its default pool (one thread per core), which XLA offers no flag to size."""
+    if threads != 1 or "jax" in sys.modules:
         return
     flags = os.environ.get("XLA_FLAGS", "")
-    if threads == 1:
-        flags += " --xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1"
-    else:
-        flags += f" intra_op_parallelism_threads={threads}"
-    os.environ["XLA_FLAGS"] = flags.strip()
+    os.environ["XLA_FLAGS"] = f"{flags} --xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1".strip()
 
 
 def use_compilation_cache() -> None:
@@ -191,7 +188,7 @@ def train_jax(
     """Train as configured with the jitted PPO; returns the run directory (see :func:`train.learning.training.train`,
     whose contract this keeps). Ctrl-C saves at the end of the running chunk (at most one evaluation period);
     a second Ctrl-C stops at once and saves the state of the last finished chunk. torch (the evaluations) runs on
-    ``config.threads`` threads (default 1), XLA on as many where given, else on XLA's default."""
+    ``config.threads`` threads (default 1), XLA on one thread with ``--threads 1``, else on its default pool."""
     from train.threads import torch_threads
 
     config.validate()
