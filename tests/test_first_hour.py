@@ -130,7 +130,7 @@ def test_help_lists_every_command_and_each_option_says_its_default_once() -> Non
     top = dwr_gym("--help").stdout
     description = " ".join(top.split("positional arguments:")[0].split())
     commands = list(build_parser()._subparsers._group_actions[0].choices)  # type: ignore[union-attr]
-    assert len(commands) == 8 and "``" not in top
+    assert len(commands) == 9 and "``" not in top
     assert f"Commands: {', '.join(commands)};" in description
     for command in commands:
         entries = option_entries(dwr_gym(command, "--help").stdout)
