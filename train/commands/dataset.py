@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from typing import Any
 
 from train.commands.shared import UsageError, add_env_arguments, checked_env, count, load_agents
@@ -91,6 +92,9 @@ def run(args: argparse.Namespace) -> int:
         name, policy = next(iter(load_agents([args.agent], env_id).items()))
     else:
         name, policy = args.policy, controller_policy(args.policy, env_kwargs, args.seed)
+    if args.policy in ("optimal", "robust-pt"):
+        print(f"note: {args.policy} plans every episode with CasADi: the slowest policy to collect (the progress bar "
+              "says how long)", file=sys.stderr)  # fmt: skip
     request = DatasetRequest(args.dataset_id, name, env_id, env_kwargs, args.episodes, seed=args.seed,
                              num_envs=args.num_envs, optimum=not args.no_optimum, ref_episodes=args.ref_episodes,
                              overwrite=args.overwrite, description=args.description)  # fmt: skip
