@@ -191,6 +191,7 @@ def plot_curves(summary: dict[str, Any], path: Path, x: str) -> None:
                 continue
             line = ax.plot(band["x"], band["iqm"], label=f"{name} ({len(entry['seeds'])} seeds)")[0]
             ax.fill_between(band["x"], band["low"], band["high"], color=line.get_color(), alpha=0.2)
+    axes[1].set_yscale("log")  # an untrained agent can spend hundreds of times what a trained one does
     for ax, label in zip(axes, ("in time (IQM, 95 % CI)", "energy (IQM, 95 % CI)"), strict=True):
         ax.set_xlabel("env steps" if x == "env_steps" else "wall-clock seconds (training, evaluations included)")
         ax.set_ylabel(label)
