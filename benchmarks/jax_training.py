@@ -106,7 +106,7 @@ def speed(threads: int, repeats: int, updates: int, seeds: int) -> dict[str, Any
     from stable_baselines3 import PPO
 
     from train.learning.jax_export import sb3_policy_kwargs
-    from train.learning.training import make_training_env
+    from train.learning.training_env import make_training_env
 
     torch.set_num_threads(threads)
     config, settings, ppo = setup(make_config())
@@ -173,7 +173,7 @@ def learn(seeds: int, eval_every: int, budget_s: float, overrides: dict[str, Any
 
     from train.learning.jax_export import SB3Exporter
     from train.learning.jax_training import export_runner
-    from train.learning.training import make_training_env
+    from train.learning.training_env import make_training_env
 
     config, settings, ppo = setup(config)
     exporter = SB3Exporter(make_training_env(config), config.algo_kwargs)

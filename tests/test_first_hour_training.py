@@ -12,7 +12,8 @@ import pytest
 
 from train.learning.config import TrainConfig
 from train.learning.hyperparams import resolve_hyperparams
-from train.learning.training import saved_best, task_score, train
+from train.learning.runs import saved_best, task_score
+from train.learning.training import train
 
 
 def tiny(run_dir: Path, total: int, eval_freq: int) -> TrainConfig:

@@ -333,7 +333,7 @@ def test_dwr_gym_train_env_logs_episode_statistics_without_vec_monitor(tmp_path:
 
     from train.learning.config import TrainConfig
     from train.learning.hyperparams import resolve_hyperparams
-    from train.learning.training import make_training_env
+    from train.learning.training_env import make_training_env
 
     config = TrainConfig(residual=True, num_envs=4, run_dir=str(tmp_path), env_kwargs=dict(SHORT))
     resolve_hyperparams(config, set())

@@ -50,7 +50,7 @@ def test_exported_sb3_policy_acts_as_the_jax_policy(normalize: bool) -> None:
     import torch
 
     from train.learning.jax_export import SB3Exporter
-    from train.learning.training import make_training_env
+    from train.learning.training_env import make_training_env
 
     config = resolved()
     settings = PPOSettings.from_algo_kwargs(config.algo_kwargs, 8)

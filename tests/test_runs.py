@@ -16,8 +16,8 @@ import pytest
 
 from train.learning.config import TrainConfig
 from train.learning.hyperparams import resolve_hyperparams
-from train.learning.runs import RunDirError, RunLock, resume_config
-from train.learning.training import task_score, train
+from train.learning.runs import RunDirError, RunLock, resume_config, task_score
+from train.learning.training import train
 
 
 def tiny(run_dir: Path, total: int = 512, **overrides: object) -> TrainConfig:

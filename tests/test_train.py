@@ -94,7 +94,7 @@ def test_residual_vec_env_with_zero_residual_is_the_expert() -> None:
 
 def test_residual_training_starts_from_the_expert(tmp_path: Path) -> None:
     from train.learning.residual import ResidualPolicy, zero_init_last_layer
-    from train.learning.training import make_training_env
+    from train.learning.training_env import make_training_env
 
     config = tiny("ppo", True, tmp_path / "r")
     from stable_baselines3 import PPO

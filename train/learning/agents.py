@@ -33,7 +33,7 @@ def load_agent(path: str | Path, part: str = "whole") -> tuple[str, Any]:
     """
     from train.learning.config import ConfigError
     from train.learning.hyperparams import algorithm_class
-    from train.learning.training import as_policy
+    from train.learning.training_env import as_policy
 
     path = Path(path)
     if part not in PARTS:

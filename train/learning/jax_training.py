@@ -131,7 +131,7 @@ class JaxRun:
         self.params = config.env_params()
         self.scenario = make_scenario("random", n=config.eval_episodes, seed=config.eval_seed,
                                       env_kwargs=config.env_keywords())  # fmt: skip
-        from train.learning.training import saved_best
+        from train.learning.runs import saved_best
 
         self.best = saved_best(state, run_dir / EVAL_FILE)
         self.best_row: dict[str, float] = dict(state.get("best", {}))
@@ -148,7 +148,7 @@ class JaxRun:
         import csv
 
         from train.evaluation.rollout import rollout
-        from train.learning.training import EVAL_FIELDS, task_score
+        from train.learning.runs import EVAL_FIELDS, task_score
 
         if not self.csv_path.exists():
             with self.csv_path.open("w", newline="") as handle:
@@ -213,7 +213,7 @@ def _train_jax(
     use_compilation_cache()
     from train.learning.jax_export import SB3Exporter
     from train.learning.jax_ppo import JaxPPO
-    from train.learning.training import make_training_env
+    from train.learning.training_env import make_training_env
 
     run_dir, lock = prepare_run_dir(config)
     try:

@@ -7,7 +7,7 @@ resumed run continues from.
 The format is the same whichever library trained the agent (``backend`` sb3 or jax): ``model.zip`` and every
 checkpoint are stable-baselines3 model files of ``config.algo`` (the jax backend writes its weights into an SB3
 ``MlpPolicy`` of the same architecture), ``evaluations.csv`` has the columns of
-``train.learning.training.EVAL_FIELDS``, and config.yaml holds ``config`` (a :class:`TrainConfig`), ``command``,
+:data:`EVAL_FIELDS`, and config.yaml holds ``config`` (a :class:`TrainConfig`), ``command``,
 ``learned_from`` (``reward`` or ``expert``) and ``runtime`` (what acts beside the network at run time: an expert
 under a residual, a hand-over law, a planner; empty for the network alone). So
 ``train.learning.agents.load_agent`` loads any of them, and ``dwr-gym evaluate --agents DIR`` compares it.
@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import csv
 import json
+import math
 import os
 from pathlib import Path
 from typing import Any
@@ -29,6 +30,9 @@ EVAL_FILE = "evaluations.csv"
 STATE_FILE = "run_state.json"
 RESUME_FILE = "resume_state.pkl"
 LOCK_FILE = ".lock"
+EVAL_FIELDS = ("timesteps", "wall_time", "success_rate", "arrival_time_mean", "final_heading_error_mean",
+               "energy_mean", "return_mean", "final_distance_mean")  # fmt: skip
+"""The columns of evaluations.csv, one row per evaluation on the run's fixed scenario set."""
 RUN_OUTPUTS = (MODEL_FILE, "best_model.zip", EVAL_FILE, CONFIG_FILE, STATE_FILE, RESUME_FILE, "replay_buffer.pkl",
                "checkpoints", "tb")  # fmt: skip
 
@@ -210,3 +214,27 @@ def truncate_log(path: Path, steps: int) -> None:
     if len(kept) != len(rows):
         with path.open("w", newline="") as handle:
             csv.writer(handle).writerows(kept)
+
+
+def task_score(row: dict[str, Any]) -> tuple[float, float, float]:
+    """The order in which evaluations rank, highest best: the share of episodes in time (``success_rate``) first;
+    among equal shares the lower mean energy, when any episode arrives in time (a policy that arrives nowhere
+    would win on energy by standing still); then the higher return."""
+    success, energy, ret = (float(row.get(key, math.nan)) for key in ("success_rate", "energy_mean", "return_mean"))
+    finite = [v if math.isfinite(v) else -math.inf for v in (success, -energy if success > 0 else 0.0, ret)]
+    return finite[0], finite[1], finite[2]
+
+
+def saved_best(state: dict[str, Any], csv_path: Path) -> tuple[float, float, float]:
+    """The score of the run's best_model.zip: ``best`` of run_state.json, or, in a run saved before the task score
+    (``best_score``, a return), the score of the evaluation whose return that was."""
+    if "best" in state:
+        return task_score(state["best"])
+    best_return = float(state.get("best_score", -math.inf))
+    if math.isfinite(best_return) and csv_path.is_file():
+        with csv_path.open(newline="") as handle:
+            rows = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(handle)]
+        matching = [row for row in rows if math.isclose(row["return_mean"], best_return, rel_tol=1e-9, abs_tol=1e-12)]
+        if matching:
+            return task_score(matching[-1])
+    return -math.inf, -math.inf, best_return

@@ -7,7 +7,6 @@ evaluation on a fixed seeded scenario set, checkpoints that resume bit for bit, 
 from __future__ import annotations
 
 import csv
-import math
 import sys
 import time
 from collections.abc import Callable
@@ -25,6 +24,7 @@ from train.learning.hyperparams import (
     steps_to_run,
 )
 from train.learning.runs import (
+    EVAL_FIELDS,
     EVAL_FILE,
     MODEL_FILE,
     RESUME_FILE,
@@ -32,13 +32,12 @@ from train.learning.runs import (
     read_state,
     resume_command,
     save_config,
+    saved_best,
+    task_score,
     truncate_log,
     write_state,
 )
-
-EVAL_FIELDS = ("timesteps", "wall_time", "success_rate", "arrival_time_mean", "final_heading_error_mean",
-               "energy_mean", "return_mean", "final_distance_mean")  # fmt: skip
-
+from train.learning.training_env import as_policy, make_training_env, runtime_of
 
 OPTIMAL_EXPERT_NOTE = (
     "note: --expert optimal solves a minimum-energy plan with CasADi for each robot (about 0.1 s of CPU per plan, "
@@ -47,90 +46,6 @@ OPTIMAL_EXPERT_NOTE = (
     "milliseconds; try --num-envs 4 --total-timesteps 2000 first"
 )
 """What ``train`` says at once when the residual's expert is ``optimal`` (``n``, ``solves``: robots, plans per step)."""
-
-
-def task_score(row: dict[str, Any]) -> tuple[float, float, float]:
-    """The order in which evaluations rank, highest best: the share of episodes in time (``success_rate``) first;
-    among equal shares the lower mean energy, when any episode arrives in time (a policy that arrives nowhere
-    would win on energy by standing still); then the higher return."""
-    success, energy, ret = (float(row.get(key, math.nan)) for key in ("success_rate", "energy_mean", "return_mean"))
-    finite = [v if math.isfinite(v) else -math.inf for v in (success, -energy if success > 0 else 0.0, ret)]
-    return finite[0], finite[1], finite[2]
-
-
-def saved_best(state: dict[str, Any], csv_path: Path) -> tuple[float, float, float]:
-    """The score of the run's best_model.zip: ``best`` of run_state.json, or, in a run saved before the task score
-    (``best_score``, a return), the score of the evaluation whose return that was."""
-    if "best" in state:
-        return task_score(state["best"])
-    best_return = float(state.get("best_score", -math.inf))
-    if math.isfinite(best_return) and csv_path.is_file():
-        with csv_path.open(newline="") as handle:
-            rows = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(handle)]
-        matching = [row for row in rows if math.isclose(row["return_mean"], best_return, rel_tol=1e-9, abs_tol=1e-12)]
-        if matching:
-            return task_score(matching[-1])
-    return -math.inf, -math.inf, best_return
-
-
-def make_expert(config: TrainConfig) -> Any:
-    """The expert policy under a residual agent, scaled to the env's action limits."""
-    from baselines.expert import ExpertPolicy
-    from baselines.registry import make_controller
-
-    params = config.env_params()
-    kwargs = {}
-    if config.expert == "optimal":  # the planner must know the env's grid and limits
-        kwargs = {"T_con": params.T_con, "dt": params.dt, "u_max": params.u_max, "omega_max": params.omega_max}
-    return ExpertPolicy(make_controller(config.expert, **kwargs), params.u_max, params.omega_max)
-
-
-def make_training_env(config: TrainConfig) -> Any:
-    """The native vector env behind SB3's VecEnv API (residual-wrapped if asked); the adapter reports the
-    episode statistics (``ep_rew_mean``, ``ep_len_mean``, ``success_rate``) itself, as a Monitor would."""
-    from dwr_gym.sb3 import make_sb3_vec_env
-    from train.learning.residual import ResidualVecEnv
-
-    venv: Any = make_sb3_vec_env(config.num_envs, seed=config.seed, **config.env_keywords())
-    if config.residual:
-        venv = ResidualVecEnv(venv, make_expert(config), config.residual_scale)
-    if config.action_repeat > 1:
-        from train.learning.wrappers import ActionRepeatVecEnv
-
-        venv = ActionRepeatVecEnv(venv, config.action_repeat)
-    if config.normalize_obs or config.normalize_reward:
-        from stable_baselines3.common.vec_env import VecNormalize
-
-        gamma = float(config.algo_kwargs.get("gamma", 0.99))
-        venv = VecNormalize(venv, norm_obs=config.normalize_obs, norm_reward=config.normalize_reward, gamma=gamma)
-    return venv
-
-
-def as_policy(model: Any, config: TrainConfig, normalizer: Any = None) -> Any:
-    """The policy that acts in the env: the model (on observations normalised by ``normalizer``, a
-    :class:`~train.learning.wrappers.NormalizedPolicy` or ``VecNormalize``, when trained so), its action held for
-    ``action_repeat`` periods, alone or as the residual on the expert (see :func:`make_training_env`)."""
-    policy: Any = model
-    if config.normalize_obs:
-        from train.learning.wrappers import LiveNormalizedPolicy
-
-        if normalizer is None:
-            raise ValueError("an agent trained with normalize_obs needs its observation statistics")
-        policy = LiveNormalizedPolicy(model, normalizer)
-    if config.action_repeat > 1:
-        from train.learning.wrappers import ActionRepeatPolicy
-
-        policy = ActionRepeatPolicy(policy, config.env_params().dt, config.action_repeat)
-    if not config.residual:
-        return policy
-    from train.learning.residual import ResidualPolicy
-
-    return ResidualPolicy(policy, make_expert(config), config.residual_scale)
-
-
-def runtime_of(config: TrainConfig) -> list[str]:
-    """What acts beside the network at run time (config.yaml's ``runtime``): the expert under a residual."""
-    return [f"expert: {config.expert}"] if config.residual else []
 
 
 class InterruptRequestedError(Exception):
