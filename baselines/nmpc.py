@@ -114,7 +114,8 @@ class PlanPool:
             return [_solve(job) for job in jobs]
         if self._executor is None:
             # fork on Linux: works from any script (spawn re-imports __main__, which needs an `if __name__` guard)
-            method = "fork" if sys.platform.startswith("linux") else "spawn"
+            # fork is fast, but forking a process that runs JAX's threads can deadlock the child: spawn then
+            method = "fork" if sys.platform.startswith("linux") and "jax" not in sys.modules else "spawn"
             self._executor = ProcessPoolExecutor(self.workers, mp_context=multiprocessing.get_context(method))
         chunk = max(1, len(jobs) // (4 * self.workers))
         return list(self._executor.map(_solve, jobs, chunksize=chunk))

@@ -237,7 +237,8 @@ def _solve_and_cache(
     todo = list(jobs)
     try:
         if workers > 1 and len(jobs) >= 4:
-            method = "fork" if sys.platform.startswith("linux") else "spawn"
+            # fork is fast, but forking a process that runs JAX's threads can deadlock the child: spawn then
+            method = "fork" if sys.platform.startswith("linux") and "jax" not in sys.modules else "spawn"
             pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(method),
                                        initializer=_ignore_interrupts)  # fmt: skip
         while todo:
