@@ -3,6 +3,8 @@
     nice -n 10 python benchmarks/compare_time.py --docs      # writes docs/compare/timing.json and the block
     python benchmarks/compare_time.py --render                 # docs/results.md's block from the JSON
 
+docs/results.md needs a ``<!-- compare-time:begin -->`` ``<!-- compare-time:end -->`` pair for ``--docs`` to fill.
+
 Runs `dwr-gym compare --out <tmp>` as a user would (a fresh process, the shared optimum cache of
 ``$DWR_GYM_CACHE`` or ``~/.cache/dwr-gym``), with ``--busy`` busy processes beside it, and records the wall time,
 the CPU time of the command and its solver processes, the load average, and how many optima the cache held before
