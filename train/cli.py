@@ -40,6 +40,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     except UsageError as error:
         print(f"dwr-gym {args.command}: error: {error}", file=sys.stderr)
         return 2
+    except ImportError as error:
+        if "dwr-gym[" not in str(error):  # not an optional dependency we name: a bug, shown with its traceback
+            raise
+        print(f"dwr-gym {args.command}: error: {error}", file=sys.stderr)  # a missing extra, named
+        return 2
     except OSError as error:  # e.g. a disk that fills up or a directory removed during the run
         print(f"dwr-gym {args.command}: error: {error}", file=sys.stderr)
         return 1

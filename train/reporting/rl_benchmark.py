@@ -23,7 +23,10 @@ def iqm_interval(values: list[float], seed: int = 0, reps: int = BOOTSTRAP_REPS)
     (the runs resampled with replacement, ``reps`` times, as rliable's ``StratifiedBootstrap`` does for one task;
     written here because ``rliable.library`` needs ``arch``, which does not import with pandas 3). NaN and None
     values are dropped."""
-    from rliable import metrics
+    try:
+        from rliable import metrics
+    except ImportError:
+        raise ImportError('the RL benchmark aggregates with rliable: pip install "dwr-gym[benchmark]"') from None
 
     data = np.array([v for v in values if v is not None and math.isfinite(v)], dtype=np.float64)
     if data.size == 0:
