@@ -54,7 +54,7 @@ def test_a_run_that_recorded_no_env_id_loads_as_v0_and_the_shipped_agents_record
     shipped = {name: trained_env_id(path) for name, path in PRETRAINED.items()}
     assert shipped == {"residual-ppo": PAPER_ENV_ID, "ppo": PAPER_ENV_ID, "dagger": TASK_ENV_ID,
                        "dagger-handover": TASK_ENV_ID, "robust": TASK_ENV_ID, "ppo-v1": TASK_ENV_ID,
-                       "residual-ppo-v1": TASK_ENV_ID,
+                       "ppo-jax-v1": TASK_ENV_ID, "residual-ppo-v1": TASK_ENV_ID,
                        "residual-ppo-astolfi-v1": TASK_ENV_ID}  # fmt: skip
 
 
@@ -298,7 +298,7 @@ def recorded() -> dict[str, object]:
     policies: dict[str, object] = dict(load_agent(path) for path in pretrained_paths().values())
     policies.update({name: name for name in ("ptc", "conventional-ptc", "fabregas", "fixed-time", "astolfi",
                                              "pt-astolfi", "optimal", "robust-pt")})  # fmt: skip
-    assert len(policies) == 16  # as compare draws them: every controller and shipped agent in one figure
+    assert len(policies) == 17  # as compare draws them: every controller and shipped agent in one figure
     return evaluate(policies, make_scenario("paper-fig5"), record=True)  # type: ignore[arg-type]
 
 
