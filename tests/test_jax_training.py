@@ -194,6 +194,8 @@ def test_cli_trains_resumes_bit_for_bit_and_evaluates(tmp_path: Path) -> None:
             "--optimum",
             "none",
             "--no-progress",
+            "--out",
+            str(tmp_path / "evaluate"),
         )
     )
     assert code == 0, err
