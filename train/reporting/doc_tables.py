@@ -41,6 +41,7 @@ POLICY_NAMES = {
     "robust-pt": "`robust-pt` (3)",
     "robust": "`robust` agent (v1)",
     "ppo-v1": "`ppo_v1` (v1, reward)",
+    "ppo-jax-v1": "`ppo_jax_v1` (v1, reward, JAX)",
     "residual-ppo-v1": "`residual_ppo_v1` (v1, reward, on PTC)",
     "residual-ppo-astolfi-v1": "`residual_ppo_astolfi_v1` (v1, reward, on `pt-astolfi`)",
 }
@@ -94,7 +95,7 @@ def compare_caption(rows: list[dict[str, Any]]) -> str:
              "designed to arrive by a shorter T_con", "pt-astolfi": "(2) not from the paper: Astolfi's law on the time "
              "scale of eq. (12)", "robust-pt": "(3) not from the paper: minimum-energy re-planning to 0.8 T_con behind "
              "a Kalman filter, Astolfi's law on the time scale of eq. (12) as the finish (docs/robust.md)", "optimal": "optimum: the `optimal` controller, the least energy to the pose by T_con",
-             "ppo": "(v0), (v1): the shipped agent and the env id it was trained on"}  # fmt: skip
+             "ppo": "(v0), (v1): the shipped agent and the env id it was trained on; reward: learned from v1's reward by RL (the v0 agents from v0's, the other v1 agents cloned from an expert)"}  # fmt: skip
     present = {r["policy"] for r in rows}
     note = "".join(f"; {text}" for name, text in notes.items() if name in present)
     return (f"\n*{env}; {', '.join(sets)}; E/opt: energy / the optimum's on the same episode, over the episodes "
