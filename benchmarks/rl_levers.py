@@ -62,11 +62,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--sweep", help="also copy the trials.csv of this dwr-gym sweep --out to docs/rl_benchmark/sweep.json"
     )
+    parser.add_argument("--sweep-json", default="sweep.json", help="the file under docs/rl_benchmark/ it writes")
     args = parser.parse_args(argv)
     if args.sweep:
         with (Path(args.sweep) / "trials.csv").open() as handle:
             trials = list(csv.DictReader(handle))
-        target = ROOT / "docs" / "rl_benchmark" / "sweep.json"
+        target = ROOT / "docs" / "rl_benchmark" / args.sweep_json
         target.write_text(json.dumps({"out": args.sweep, "trials": trials}, indent=1))
         print(f"wrote {target}")
         return 0

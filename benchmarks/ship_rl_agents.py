@@ -20,8 +20,12 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 #: benchmark entry -> directory under train/pretrained/ (the names of train.learning.agents.PRETRAINED).
-SHIPPED = {"ppo": "ppo_v1", "ppo-jax": "ppo_jax_v1", "residual-ppo": "residual_ppo_v1",
-           "residual-ppo-astolfi": "residual_ppo_astolfi_v1"}
+SHIPPED = {
+    "ppo": "ppo_v1",
+    "ppo-jax": "ppo_jax_v1",
+    "residual-ppo": "residual_ppo_v1",
+    "residual-ppo-astolfi": "residual_ppo_astolfi_v1",
+}
 """SAC and TQC are not shipped: their best seeds of the benchmark arrive in under 1 % of episodes, and their model
 files (critics, replay-sized optimisers) are about 1 MB each; ``--also sac tqc`` ships them."""
 

@@ -98,8 +98,13 @@ def train_config(entry: Entry, seed: int, run_dir: Path, budget: dict[str, Any])
         config.eval_freq = max(1, int(budget["eval_freq"]) // repeat)
         config.checkpoint_freq = config.eval_freq
     config.time_limit = budget.get("time_limit")
-    if overrides:
+    if isinstance(overrides, str):  # hyperparams=PATH: an rl-zoo3 YAML file, as dwr-gym train --hyperparams
+        config.hyperparams = overrides
+    elif isinstance(overrides, dict):
         config.hyperparam_overrides = dict(overrides)
+    elif overrides is not None:
+        raise ConfigError(f"agent {entry.name!r}: hyperparams={overrides!r} is invalid: expected a YAML file's path or "
+                          "a mapping such as {learning_rate: 1e-4}")  # fmt: skip
     config.validate()
     explicit = {"total_timesteps"} if budget.get("env_steps") or "total_timesteps" in entry.options else set()
     return resolve_hyperparams(config, explicit)

@@ -232,6 +232,7 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "rl-benchmark": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "random")),
     "rl-residual": ("docs/rl_benchmark/residual.json", lambda data: rl_table(data, "residual")),
     "rl-sweep": ("docs/rl_benchmark/sweep.json", lambda data: rl_table(data, "sweep")),
+    "rl-sweep-jax": ("docs/rl_benchmark/sweep_ppo_jax.json", lambda data: rl_table(data, "sweep")),
     "rl-goals": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "goals")),
     "rl-benchmark-readme": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "readme")),
     "rl-benchmark-disturbed": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "disturbed")),

@@ -137,7 +137,7 @@ def table(
 
 
 GOALS = {
-    "from the reward alone": (("ppo", "ppo-jax", "sac", "td3", "tqc", "crossq"), 0.99, 1.5, 0.1),
+    "from the reward alone": (("ppo", "ppo-jax", "ppo-jax-tuned", "sac", "td3", "tqc", "crossq"), 0.99, 1.5, 0.1),
     "residual RL on PTC": (("residual-ppo",), 0.995, 1.6, 0.15),
 }
 """Issue 32's goals: (entries, in time >=, E/opt <=, final heading <= [rad]), IQM over >= 5 seeds on nominal v1."""
@@ -255,7 +255,7 @@ def sweep_table(data: dict[str, Any]) -> str:
     """The trials of a ``dwr-gym sweep`` (benchmarks/rl_levers.py --sweep): hyperparameters and final evaluation."""
     lines = ["| trial | hyperparameters | in time | return | energy |", "|---|---|---|---|---|"]
     for t in data["trials"]:
-        params = ", ".join(f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}"
+        params = ", ".join(f"{k} {v:.4g}" if isinstance(v, float) else f"{k} {v}"
                            for k, v in json.loads(t["hyperparams"]).items())  # fmt: skip
         lines.append(f"| {t['config']} | {params} | {float(t['success_rate_mean']):.2f} | "
                      f"{float(t['return_mean_mean']):.3f} | {float(t['energy_mean_mean']):.3f} |")  # fmt: skip
