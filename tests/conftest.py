@@ -2,6 +2,9 @@
 
 import os
 import tempfile
+from typing import Any
+
+import pytest
 
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
@@ -12,3 +15,18 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("DWR_GYM_CACHE", tempfile.mkdtemp(prefix="dwr-gym-test-cache-"))
 # Nor the user's Minari datasets (~/.minari/datasets): the docs' snippets write one.
 os.environ.setdefault("MINARI_DATASETS_PATH", tempfile.mkdtemp(prefix="dwr-gym-test-minari-"))
+
+
+@pytest.fixture
+def ticking_clock() -> Any:
+    """A stand-in for the time module whose clock advances 10 s at each reading, from 0 in each test."""
+
+    class Clock:
+        now = 0.0
+
+        @classmethod
+        def time(cls) -> float:
+            cls.now += 10.0
+            return cls.now
+
+    return Clock

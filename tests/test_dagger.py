@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import warnings
 from pathlib import Path
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -38,19 +39,8 @@ def test_demonstration_samples_are_what_the_env_observes_when_the_plan_is_replay
     assert np.all(np.abs(actions) <= 1.0)
 
 
-class Clock:
-    """A stand-in for the time module whose clock advances 10 s at each reading."""
-
-    now = 0.0
-
-    @classmethod
-    def time(cls) -> float:
-        cls.now += 10.0
-        return cls.now
-
-
 def test_a_tiny_cloning_run_aggregates_each_rounds_data_and_saves_an_agent_that_loads_and_acts(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, ticking_clock: Any
 ) -> None:
     """DAgger fits each round on all the data so far: the demonstrations and every round's re-planned labels."""
     import csv
@@ -69,7 +59,7 @@ def test_a_tiny_cloning_run_aggregates_each_rounds_data_and_saves_an_agent_that_
     env_kwargs = {**V1_DEFAULTS, "T_con_range": (10.0, 10.0), "start_distance": (0.3, 0.5)}  # few solver builds
     config = DaggerConfig(episodes=4, dagger_rounds=2, dagger_episodes=2, replans_per_episode=1, epochs=1,
                              workers=1, eval_episodes=2, eval_T_con=(10.0,), env_kwargs=env_kwargs)  # fmt: skip
-    monkeypatch.setattr(dagger, "time", Clock)  # the run's clock: 10 s per reading
+    monkeypatch.setattr(dagger, "time", ticking_clock)  # the run's clock: 10 s per reading
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         run_dir = run(config, tmp_path / "bc", ["test"])

@@ -22,17 +22,6 @@ from train.learning.robust_dagger import RobustDaggerConfig, expert_arrival, run
 ENV_KWARGS = {**V1_DEFAULTS, "T_con_range": (10.0, 10.0), "start_distance": (0.3, 0.5)}
 
 
-class Clock:
-    """A stand-in for the time module whose clock advances 10 s at each reading."""
-
-    now = 0.0
-
-    @classmethod
-    def time(cls) -> float:
-        cls.now += 10.0
-        return cls.now
-
-
 def tiny(**kwargs: Any) -> RobustDaggerConfig:
     return RobustDaggerConfig(**{"init_from": "", "episodes": 3, "dagger_rounds": 1, "dagger_episodes": 4,
                                  "replans_per_episode": 1, "epochs": 1, "workers": 1, "eval_episodes": 1,
@@ -40,7 +29,7 @@ def tiny(**kwargs: Any) -> RobustDaggerConfig:
 
 
 def test_a_tiny_robust_dagger_run_aggregates_disturbed_rollouts_and_leaves_a_robust_agent(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, ticking_clock: Any
 ) -> None:
     from baselines.estimation import FilteredPolicy
     from baselines.robust import RobustPTController
@@ -61,7 +50,7 @@ def test_a_tiny_robust_dagger_run_aggregates_disturbed_rollouts_and_leaves_a_rob
     collect, roll = robust_dagger.dagger_samples, robust_dagger.rollouts
     monkeypatch.setattr(robust_dagger, "dagger_samples", counted)
     monkeypatch.setattr(robust_dagger, "rollouts", watched)
-    monkeypatch.setattr(robust_dagger, "time", Clock)  # the run's clock: 10 s per reading
+    monkeypatch.setattr(robust_dagger, "time", ticking_clock)  # the run's clock: 10 s per reading
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         run_dir = run(tiny(), tmp_path / "runs" / "robust", ["test"])  # its parent made too
