@@ -55,6 +55,18 @@ def test_short_training_run_of_each_algorithm(algo: str, residual: bool, tmp_pat
     assert actions.shape == (3, 2) and np.all(np.abs(actions) <= 1.0)
 
 
+def test_ppo_log_std_final_anneals_the_exploration_noise_to_its_value(tmp_path: Path) -> None:
+    config = tiny("ppo", False, tmp_path / "run")
+    config.algo_kwargs.update(log_std_final=-3.0, policy_kwargs={"log_std_init": -1.0})
+    run_dir = train(config)
+    from stable_baselines3 import PPO
+
+    # the cap reaches log_std_final at the end of the budget, from log_std_init: far below what 10 updates learn
+    np.testing.assert_allclose(PPO.load(run_dir / "model.zip").policy.log_std.detach().numpy(), -3.0, atol=1e-6)
+    with pytest.raises(ConfigError, match=r"\['log_std_final'\] are not accepted by SAC"):
+        resolve_hyperparams(TrainConfig(algo="sac", hyperparam_overrides={"log_std_final": -3.0}), {"hyperparams"})
+
+
 def test_residual_action_arithmetic_and_clipping() -> None:
     expert = np.array([[0.2, -0.5], [0.9, 0.9], [-0.9, 0.0]], dtype=np.float32)
     residual = np.array([[0.4, 0.2], [1.0, -1.0], [-1.0, 0.5]], dtype=np.float32)

@@ -45,7 +45,8 @@ def add_parser(sub: Any) -> None:
         help="train nothing: aggregate the results already in --out (e.g. of an interrupted benchmark)",
     )
     p.add_argument("--docs", action="store_true", help=f"also write the JSON and figures to {DOCS_DIR}/ and "
-                   "regenerate the docs' tables")  # fmt: skip
+                   "regenerate the docs' tables; the agents already there that this run lacks are kept, so that "
+                   "several runs (each with its own budget) fill one table")  # fmt: skip
     p.set_defaults(func=run)
 
 
@@ -84,7 +85,7 @@ def run(args: argparse.Namespace) -> int:
             result["seconds"] = state.get("wall_time", result["seconds"])
     data = report(results, out, budget, tuple(args.references))
     if args.docs:
-        report(results, DOCS_DIR, budget, tuple(args.references), data)
+        report(results, DOCS_DIR, budget, tuple(args.references), merged_with_docs(data))
         from train.reporting.doc_tables import main as regenerate_tables
 
         regenerate_tables([])
@@ -113,6 +114,20 @@ def report(
     print(disturbed_table(data["summary"], data["references"]))
     print(f"wrote {out / 'benchmark.json'}, {out / 'curves_steps.png'}, {out / 'curves_wall.png'}")
     return data
+
+
+def merged_with_docs(data: dict[str, Any], docs: Path = DOCS_DIR) -> dict[str, Any]:
+    """``data`` plus the agents of ``docs``/benchmark.json that it lacks (their summaries, best seeds and budgets:
+    each agent keeps the budget it ran with, under "budgets"); the references are ``data``'s."""
+    path = docs / "benchmark.json"
+    if not path.is_file():
+        return data
+    old = json.loads(path.read_text())
+    budgets = {name: old.get("budgets", {}).get(name, old.get("budget")) for name in old.get("summary", {})}
+    budgets.update({name: data["budget"] for name in data["summary"]})
+    summary = {**{k: v for k, v in old.get("summary", {}).items() if k not in data["summary"]}, **data["summary"]}
+    best = {**{k: v for k, v in old.get("best_seed", {}).items() if k not in data["summary"]}, **data["best_seed"]}
+    return {**data, "summary": summary, "best_seed": best, "budgets": budgets}
 
 
 def machine() -> str:

@@ -171,7 +171,7 @@ _INT_KEYS = {"n_steps": 1, "batch_size": 1, "n_epochs": 1, "buffer_size": 1, "le
 _FLOAT_KEYS = {"gamma": (0.0, 1.0), "gae_lambda": (0.0, 1.0), "tau": (0.0, 1.0), "ent_coef": (0.0, 1e6),
                "vf_coef": (0.0, 1e6), "max_grad_norm": (0.0, 1e6), "clip_range": (0.0, 1e6),
                "action_noise_sigma": (0.0, 10.0), "target_policy_noise": (0.0, 10.0),
-               "target_noise_clip": (0.0, 10.0)}  # fmt: skip
+               "target_noise_clip": (0.0, 10.0), "log_std_final": (-20.0, 5.0)}  # fmt: skip
 
 
 def _check_policy_kwargs(value: Any) -> dict[str, Any]:
@@ -225,7 +225,7 @@ _ALIASES = {"lr": "learning_rate", "learning-rate": "learning_rate", "batch": "b
 def check_algo_kwargs(algo: str, params: dict[str, Any]) -> dict[str, Any]:
     """The hyperparameters coerced to their types; unknown or ill-typed ones raise ConfigError before any work."""
     accepted = set(inspect.signature(algorithm_class(algo).__init__).parameters) - {"self", "env", "device", "seed"}
-    accepted |= {"action_noise_sigma"}
+    accepted |= {"action_noise_sigma"} | ({"log_std_final"} if algo == "ppo" else set())
     unknown = sorted(set(params) - accepted)
     if unknown:
         import difflib
@@ -306,6 +306,7 @@ def build_algo_kwargs(params: dict[str, Any]) -> dict[str, Any]:
     if isinstance(policy_kwargs.get("activation_fn"), str):
         policy_kwargs["activation_fn"] = getattr(torch.nn, policy_kwargs["activation_fn"].split(".")[-1])
     kwargs["policy_kwargs"] = policy_kwargs
+    kwargs.pop("log_std_final", None)  # PPO's annealed noise: a callback of train.learning.training, not SB3's
     sigma = kwargs.pop("action_noise_sigma", None)
     if sigma:
         from stable_baselines3.common.noise import NormalActionNoise

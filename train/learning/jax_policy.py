@@ -27,6 +27,8 @@ POLICY_KEYS = ("net_arch", "activation_fn", "log_std_init", "ortho_init")
 #: ``policy_kwargs`` key (ours, not SB3's) that turns on observation normalisation; folded into the first
 #: layers on export, so the exported model needs no wrapper.
 NORMALIZE_KEY = "normalize_observations"
+#: Hyperparameter (ours, both backends' PPO) that anneals the exploration noise: :attr:`PPOSettings.log_std_final`.
+ANNEAL_KEY = "log_std_final"
 
 
 @dataclass(frozen=True)
@@ -57,6 +59,11 @@ class PPOSettings:
     """Hidden activation: the lower-case name of policy_kwargs' ``activation_fn`` (nn.Tanh: tanh)."""
     log_std_init: float = 0.0
     ortho_init: bool = True
+    log_std_final: float | None = None
+    """Anneal the exploration noise (ours, not SB3's): after each update the state-independent log standard
+    deviation is capped at log_std_init + (log_std_final - log_std_init) * (env steps done / budget), so that
+    the noise, whose energy v1 charges, shrinks towards exp(log_std_final) by the end of the budget. None: learned
+    freely, as SB3's."""
     normalize_observations: bool = False
     """Scale observations by a running mean and standard deviation (as VecNormalize, without its clipping);
     exported by folding the statistics into the first layers."""
@@ -80,10 +87,11 @@ class PPOSettings:
         a hyperparameter the jitted trainer does not implement is a ConfigError naming it."""
         kwargs = {k: v for k, v in algo_kwargs.items() if k not in IGNORED_KEYS}
         policy = dict(kwargs.pop("policy_kwargs", None) or {})
+        log_std_final = kwargs.pop(ANNEAL_KEY, None)
         unknown = sorted(set(kwargs) - set(SB3_PPO_DEFAULTS))
         if unknown:
             raise ConfigError(f"hyperparameter(s) {unknown} are not implemented by --backend jax; it implements "
-                              f"{', '.join(SB3_PPO_DEFAULTS)} and policy_kwargs {', '.join(POLICY_KEYS)}")  # fmt: skip
+                              f"{', '.join(SB3_PPO_DEFAULTS)}, {ANNEAL_KEY} and policy_kwargs {', '.join(POLICY_KEYS)}")  # fmt: skip
         unknown = sorted(set(policy) - set(POLICY_KEYS) - {NORMALIZE_KEY})
         if unknown:
             raise ConfigError(f"policy_kwargs {unknown} are not implemented by --backend jax; it implements "
@@ -109,6 +117,7 @@ class PPOSettings:
             normalize_advantage=bool(values["normalize_advantage"]), net_arch=tuple(int(s) for s in arch),
             activation=activation, log_std_init=float(policy.get("log_std_init", 0.0)),
             ortho_init=bool(policy.get("ortho_init", True)),
+            log_std_final=None if log_std_final is None else float(log_std_final),
             normalize_observations=bool(policy.get(NORMALIZE_KEY, False)),
         )  # fmt: skip
         settings.check()
@@ -121,6 +130,11 @@ class PPOSettings:
                 f"batch_size={self.batch_size} is invalid for --backend jax: it must divide n_steps * n_envs = "
                 f"{self.n_steps} * {self.n_envs} = {self.steps_per_update} (the minibatches are a reshape)"
             )
+
+    def log_std_cap(self, fraction: Any) -> Any:
+        """The cap on the log standard deviation after ``fraction`` (0-1) of the budget (log_std_final set)."""
+        final = self.log_std_init if self.log_std_final is None else self.log_std_final
+        return self.log_std_init + (final - self.log_std_init) * fraction
 
     def as_dict(self) -> dict[str, Any]:
         return {f.name: getattr(self, f.name) for f in fields(self)}

@@ -259,5 +259,9 @@ class JaxPPO:
         (params, opt_state, rng), _ = jax.lax.scan(
             epoch, (runner.params, runner.opt_state, runner.rng), None, s.n_epochs
         )
+        if s.log_std_final is not None:  # the annealed exploration noise: log_std capped by the schedule
+            cap = s.log_std_cap(jnp.clip(1.0 - progress_remaining, 0.0, 1.0))
+            inner = params["params"]
+            params = {**params, "params": {**inner, "log_std": jnp.minimum(inner["log_std"], cap)}}
         runner = runner.replace(params=params, opt_state=opt_state, rng=rng, updates=runner.updates + 1)
         return runner, totals

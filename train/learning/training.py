@@ -165,6 +165,34 @@ def make_run_callback(
     return RunCallback()
 
 
+def make_anneal_callback(config: TrainConfig) -> Any:
+    """PPO's ``log_std_final`` (ours, as the jitted PPO's :attr:`~train.learning.jax_policy.PPOSettings.log_std_final`):
+    after each rollout's update the policy's log_std is capped at log_std_init + (log_std_final - log_std_init) *
+    (env steps done / budget), annealing the exploration noise whose energy v1 charges."""
+    import torch
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    final = float(config.algo_kwargs["log_std_final"])
+    init = float((config.algo_kwargs.get("policy_kwargs") or {}).get("log_std_init", 0.0))
+
+    class AnnealCallback(BaseCallback):
+        def _on_step(self) -> bool:
+            return True
+
+        def _on_rollout_start(self) -> None:  # after the previous rollout's update
+            self.cap()
+
+        def _on_training_end(self) -> None:  # after the last update
+            self.cap()
+
+        def cap(self) -> None:
+            fraction = min(self.num_timesteps / config.total_timesteps, 1.0)
+            with torch.no_grad():
+                self.model.policy.log_std.clamp_(max=init + (final - init) * fraction)
+
+    return AnnealCallback()
+
+
 def make_progress_callback(total: int) -> Any:
     """A progress bar over the ``total`` env steps that will run (the budget rounded up to whole collections)."""
     from stable_baselines3.common.callbacks import BaseCallback
@@ -316,7 +344,8 @@ def _train(
         previous = signal.signal(signal.SIGINT, on_sigint) if main_thread else None
         start = time.time()
         try:
-            model.learn(remaining, callback=[callback] + ([bar] if bar else []), progress_bar=False,
+            anneal = [make_anneal_callback(config)] if "log_std_final" in config.algo_kwargs else []
+            model.learn(remaining, callback=[callback, *anneal] + ([bar] if bar else []), progress_bar=False,
                         reset_num_timesteps=config.resume is None, tb_log_name=config.algo)  # fmt: skip
             if callback.stop_now:  # stopped by the second Ctrl-C, mid-rollout
                 raise InterruptRequestedError
