@@ -21,6 +21,9 @@ from train.learning.residual import ResidualActionWrapper, ResidualVecEnv, resid
 from train.learning.training import train
 
 
+ROOT = Path(__file__).resolve().parent.parent
+
+
 def dwr_gym(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
     env = {**os.environ, "MPLBACKEND": "Agg", "OMP_NUM_THREADS": "1"}
     return subprocess.run([sys.executable, "-m", "train.cli", *args], capture_output=True, text=True, cwd=cwd,
@@ -65,6 +68,38 @@ def test_ppo_log_std_final_anneals_the_exploration_noise_to_its_value(tmp_path: 
     np.testing.assert_allclose(PPO.load(run_dir / "model.zip").policy.log_std.detach().numpy(), -3.0, atol=1e-6)
     with pytest.raises(ConfigError, match=r"\['log_std_final'\] are not accepted by SAC"):
         resolve_hyperparams(TrainConfig(algo="sac", hyperparam_overrides={"log_std_final": -3.0}), {"hyperparams"})
+
+
+def test_init_from_starts_at_the_saved_network_and_the_warmup_trains_only_the_critic(tmp_path: Path) -> None:
+    import torch
+    import yaml
+    from stable_baselines3 import PPO
+
+    robust = ROOT / "train" / "pretrained" / "robust"
+    config = tiny("ppo", False, tmp_path / "run", init_from=str(robust), critic_warmup=10**6)
+    config.validate()
+    run_dir = train(config)
+    saved, tuned = PPO.load(robust / "model.zip").policy, PPO.load(run_dir / "model.zip").policy
+    actor = ("mlp_extractor.policy_net", "action_net", "log_std")
+    for name, value in saved.state_dict().items():  # the architecture adopted; the actor frozen; the critic learned
+        same = torch.equal(value, tuned.state_dict()[name])
+        assert same == name.startswith(actor), name
+    record = yaml.safe_load((run_dir / "config.yaml").read_text())
+    assert record["learned_from"] == "expert, then reward" and record["config"]["init_from"] == str(robust)
+    with pytest.raises(ConfigError, match="--init-from .* not a SAC model"):
+        train(tiny("sac", False, tmp_path / "sac", init_from=str(robust)))
+    with pytest.raises(ConfigError, match="--critic-warmup 5 is invalid: it needs --init-from"):
+        TrainConfig(critic_warmup=5).validate()
+
+
+def test_env_kwargs_take_the_json_form_of_a_disturbance_distribution_as_config_yaml_keeps_it() -> None:
+    from dwr_gym.randomization import DisturbanceDistribution
+
+    config = TrainConfig(env_kwargs={"disturbance_distribution": {"probability": 0.3}})
+    config.validate()  # the env's parameters accept it
+    distribution = config.env_keywords()["disturbance_distribution"]
+    assert isinstance(distribution, DisturbanceDistribution) and distribution.probability == 0.3
+    assert config.to_dict()["env_kwargs"] == {"disturbance_distribution": {"probability": 0.3}}
 
 
 def test_residual_action_arithmetic_and_clipping() -> None:

@@ -29,9 +29,12 @@ def check_env_id(env_id: Any, flag: str = "--env") -> str:
 
 
 def env_keywords(env_id: str, overrides: dict[str, Any] | None = None) -> dict[str, Any]:
-    """The keywords ``env_id`` is registered with (v1's defaults, none for v0), then ``overrides``."""
+    """The keywords ``env_id`` is registered with (v1's defaults, none for v0), then ``overrides``, whose JSON forms
+    of a robot, disturbances and ``disturbance_distribution`` (``--env-kwargs disturbance_distribution='{}'``, as
+    config.yaml records them) become the objects (:func:`dwr_gym.serialization.env_kwargs_from_json`)."""
     import gymnasium
 
     import dwr_gym  # noqa: F401  (registers the ids)
+    from dwr_gym.serialization import env_kwargs_from_json
 
-    return {**gymnasium.spec(check_env_id(env_id)).kwargs, **(overrides or {})}
+    return {**gymnasium.spec(check_env_id(env_id)).kwargs, **env_kwargs_from_json(dict(overrides or {}))}

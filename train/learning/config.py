@@ -18,9 +18,9 @@ ALGORITHMS: tuple[str, ...] = ("ppo", "sac", "td3", "tqc", "crossq")
 BACKENDS: tuple[str, ...] = ("sb3", "jax")
 """Training libraries: stable-baselines3 on torch, or the jitted PPO on the JAX functional env (PPO only).
 Both write the same run directory, whose model.zip loads as a stable-baselines3 model."""
-LEARNED_FROM: tuple[str, ...] = ("reward", "expert")
+LEARNED_FROM: tuple[str, ...] = ("reward", "expert", "expert, then reward")
 """What an agent learned from, as its config.yaml records it (``learned_from``): the env's reward (RL, residual
-RL) or an expert's actions (cloning, DAgger)."""
+RL), an expert's actions (cloning, DAgger), or both in turn (RL fine-tuning of a cloned network, ``--init-from``)."""
 MAX_TIMESTEPS = 10**10
 MAX_TRAIN_ENVS = 4096
 """More training envs than this give rollouts of little use and risk exhausting memory; larger values are refused."""
@@ -93,6 +93,16 @@ class TrainConfig:
         shown_default="",
         metavar="RUN_DIR|CHECKPOINT",
     )
+    init_from: str | None = option(
+        None,
+        "a saved agent of the same algorithm (run directory or .zip) whose network starts this run (RL fine-tuning); "
+        "its architecture is adopted",
+        shown_default="none: a fresh network",
+        metavar="RUN_DIR|ZIP",
+    )
+    critic_warmup: int = option(
+        0, "with --init-from: env steps at the start during which only the value function learns (PPO)", metavar="N"
+    )
     overwrite: bool = option(False, "delete the outputs of an earlier run in --run-dir and start afresh")
     progress: bool = option(True, "show a progress bar")
     algo_kwargs: dict[str, Any] = field(
@@ -115,6 +125,12 @@ class TrainConfig:
             raise ConfigError(f"invalid env keyword: {error}") from None
         if self.hyperparams is not None and not Path(self.hyperparams).is_file():
             raise ConfigError(f"--hyperparams {self.hyperparams!r} is invalid: no such file")
+        if self.init_from is not None and not Path(self.init_from).exists():
+            raise ConfigError(f"--init-from {self.init_from!r} is invalid: no such run directory or model file")
+        if self.init_from is not None and self.backend != "sb3":
+            raise ConfigError("--init-from is implemented by --backend sb3 only")
+        if self.critic_warmup and (self.init_from is None or self.algo != "ppo"):
+            raise ConfigError(f"--critic-warmup {self.critic_warmup} is invalid: it needs --init-from and --algo ppo")
         if self.resume is not None and not Path(self.resume).exists():
             raise ConfigError(f"--resume {self.resume!r} is invalid: no such run directory or checkpoint file")
         self.device = check_device(self.device)
@@ -136,6 +152,7 @@ class TrainConfig:
             self.time_limit = as_float("--time-limit", self.time_limit, 0.0, 1e9, low_inclusive=False, text=True)
         self.eval_freq = as_int("--eval-freq", self.eval_freq, 1, MAX_TIMESTEPS, text=True)
         self.eval_episodes = as_int("--eval-episodes", self.eval_episodes, 1, 100_000, text=True)
+        self.critic_warmup = as_int("--critic-warmup", self.critic_warmup, 0, MAX_TIMESTEPS, text=True)
         self.checkpoint_freq = as_int("--checkpoint-freq", self.checkpoint_freq, 1, MAX_TIMESTEPS, text=True)
         self.residual_scale = as_float(
             "--residual-scale", self.residual_scale, 0.0, 2.0, low_inclusive=False, text=True

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from train.learning import finetune
 from train.learning.config import ConfigError, TrainConfig
 from train.learning.hyperparams import (
     algorithm_class,
@@ -193,6 +194,17 @@ def make_anneal_callback(config: TrainConfig) -> Any:
     return AnnealCallback()
 
 
+def learned_from(config: TrainConfig) -> str:
+    """config.yaml's ``learned_from``: "reward", or "expert, then reward" for RL fine-tuning of a cloned network."""
+    if config.init_from is None:
+        return "reward"
+    import yaml
+
+    saved = finetune.source_path(config.init_from).parent / "config.yaml"
+    source = yaml.safe_load(saved.read_text()).get("learned_from") if saved.is_file() else None
+    return "expert, then reward" if source in ("expert", "expert, then reward") else "reward"
+
+
 def make_progress_callback(total: int) -> Any:
     """A progress bar over the ``total`` env steps that will run (the budget rounded up to whole collections)."""
     from stable_baselines3.common.callbacks import BaseCallback
@@ -313,17 +325,23 @@ def _train(
             random.setstate(saved["generators"]["random"])
             truncate_log(run_dir / EVAL_FILE, model.num_timesteps)
         else:
+            source = None
+            if config.init_from is not None:  # RL fine-tuning: the saved network's architecture, then its weights
+                source = finetune.load_source(config)
+                finetune.adopt_architecture(config, source)
             env = make_training_env(config)
             try:
                 model = algo(env=env, seed=config.seed, device=config.device, tensorboard_log=str(run_dir / "tb"),
                              verbose=0, **build_algo_kwargs(config.algo_kwargs))  # fmt: skip
             except (TypeError, ValueError, AssertionError) as error:
                 raise ConfigError(f"hyperparameters rejected by {config.algo.upper()}: {error}") from None
-            if config.residual:
+            if source is not None:
+                finetune.load_weights(model, source)
+            elif config.residual:
                 from train.learning.residual import zero_init_last_layer
 
                 zero_init_last_layer(model)
-        save_config(config, run_dir, {"command": command or sys.argv, "learned_from": "reward",
+        save_config(config, run_dir, {"command": command or sys.argv, "learned_from": learned_from(config),
                                       "runtime": runtime_of(config)})  # fmt: skip
         callback = make_run_callback(config, run_dir, env, state, on_evaluation)
         remaining = config.total_timesteps - model.num_timesteps
@@ -345,6 +363,8 @@ def _train(
         start = time.time()
         try:
             anneal = [make_anneal_callback(config)] if "log_std_final" in config.algo_kwargs else []
+            if config.critic_warmup:
+                anneal.append(finetune.make_warmup_callback(config.critic_warmup))
             model.learn(remaining, callback=[callback, *anneal] + ([bar] if bar else []), progress_bar=False,
                         reset_num_timesteps=config.resume is None, tb_log_name=config.algo)  # fmt: skip
             if callback.stop_now:  # stopped by the second Ctrl-C, mid-rollout

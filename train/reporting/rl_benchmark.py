@@ -136,8 +136,11 @@ def table(
     return "\n".join(lines)
 
 
+FROM_REWARD = ("ppo", "ppo-jax", "ppo-jax-12m", "ppo-jax-tuned", "ppo-jax-anneal", "sac", "sac-tuned", "td3", "tqc",
+               "tqc-tuned", "crossq")  # fmt: skip
+"""The benchmark's entries of a network alone learned from the reward (the candidates of the first goal)."""
 GOALS = {
-    "from the reward alone": (("ppo", "ppo-jax", "ppo-jax-tuned", "sac", "td3", "tqc", "crossq"), 0.99, 1.5, 0.1),
+    "from the reward alone": (FROM_REWARD, 0.99, 1.5, 0.1),
     "residual RL on PTC": (("residual-ppo",), 0.995, 1.6, 0.15),
 }
 """Issue 32's goals: (entries, in time >=, E/opt <=, final heading <= [rad]), IQM over >= 5 seeds on nominal v1."""
