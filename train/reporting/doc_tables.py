@@ -236,6 +236,7 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "rl-sweep-sac": ("docs/rl_benchmark/sweep_sac.json", lambda data: rl_table(data, "sweep")),
     "rl-sweep-tqc": ("docs/rl_benchmark/sweep_tqc.json", lambda data: rl_table(data, "sweep")),
     "rl-anneal": ("docs/rl_benchmark/anneal.json", lambda data: rl_table(data, "random")),
+    "rl-robust": ("docs/rl_benchmark/robust_finetune.json", robust_goal_table),
     "rl-goals": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "goals")),
     "rl-benchmark-readme": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "readme")),
     "rl-benchmark-disturbed": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "disturbed")),
