@@ -11,6 +11,16 @@ export OMP_NUM_THREADS=1
 dwr-gym benchmark --agents ppo residual-ppo:total_timesteps=100000 residual-ppo-astolfi:total_timesteps=100000 \
   sac:total_timesteps=50000,eval_freq=50000 tqc:total_timesteps=50000,eval_freq=50000 --seeds 5 \
   --env-steps 200000 --eval-freq 100000 --disturbed-episodes 100 --jobs 4 --out results/rl-benchmark --docs
+# the rows added afterwards (docs/rl-benchmark.md): --docs keeps the rows of the runs above
+dwr-gym benchmark --agents 'ppo-jax:total_timesteps=4000000,eval_freq=1000000,checkpoint_freq=4000000' \
+  'ppo-jax-tuned:backend=jax,hyperparams=train/hyperparams/ppo_jax_tuned.yml,total_timesteps=4000000,eval_freq=1000000' \
+  'ppo-jax-12m:backend=jax,total_timesteps=12000000' \
+  'ppo-jax-anneal:backend=jax,hyperparams=train/hyperparams/ppo_jax_anneal.yml' \
+  --seeds 5 --eval-freq 2000000 --disturbed-episodes 100 --out results/rl-benchmark --docs
+dwr-gym benchmark --agents 'sac-tuned:algo=sac,hyperparams=train/hyperparams/sac_tuned.yml' --seeds 5 \
+  --eval-freq 250000 --disturbed-episodes 100 --out results/rl-benchmark --docs
+dwr-gym benchmark --agents 'tqc-tuned:algo=tqc,hyperparams=train/hyperparams/tqc_tuned.yml' --seeds 5 \
+  --eval-freq 200000 --disturbed-episodes 100 --out results/rl-benchmark --docs
 python benchmarks/ship_rl_agents.py results/rl-benchmark
 python benchmarks/rl_residual.py train/pretrained/residual_ppo_v1 train/pretrained/residual_ppo_astolfi_v1 --n 50 --docs
 python benchmarks/rl_diagnosis.py --n 200 --docs
