@@ -20,7 +20,6 @@ from train.learning.hyperparams import parse_policy_kwargs, resolve_hyperparams
 from train.learning.residual import ResidualActionWrapper, ResidualVecEnv, residual_action
 from train.learning.training import train
 
-
 ROOT = Path(__file__).resolve().parent.parent
 
 
@@ -86,7 +85,7 @@ def test_init_from_starts_at_the_saved_network_and_the_warmup_trains_only_the_cr
         assert same == name.startswith(actor), name
     record = yaml.safe_load((run_dir / "config.yaml").read_text())
     assert record["learned_from"] == "expert, then reward" and record["config"]["init_from"] == str(robust)
-    with pytest.raises(ConfigError, match="--init-from .* not a SAC model"):
+    with pytest.raises(ConfigError, match=r"--init-from .* not a SAC model"):
         train(tiny("sac", False, tmp_path / "sac", init_from=str(robust)))
     with pytest.raises(ConfigError, match="--critic-warmup 5 is invalid: it needs --init-from"):
         TrainConfig(critic_warmup=5).validate()
