@@ -159,12 +159,14 @@ def test_every_shipped_agent_says_what_it_learned_from_and_what_acts_beside_it()
 def test_docs_keep_the_agents_of_earlier_runs_and_take_this_runs_rows(tmp_path: Path) -> None:
     from train.commands.benchmark import merged_with_docs
 
-    old = {"budget": {"env_steps": 1}, "summary": {"a": {"n": 5}, "b": {"n": 5}}, "best_seed": {"a": 0, "b": 3}}
+    old = {"budget": {"env_steps": 1}, "versions": {"jax": "1"}, "summary": {"a": {"n": 5}, "b": {"n": 5}},
+           "best_seed": {"a": 0, "b": 3}}  # fmt: skip
     (tmp_path / "benchmark.json").write_text(json.dumps(old))
-    new = {"budget": {"env_steps": 2}, "summary": {"b": {"n": 2}, "c": {"n": 5}}, "best_seed": {"b": 1, "c": 4},
-           "references": {}}  # fmt: skip
+    new = {"budget": {"env_steps": 2}, "versions": {"jax": "2"}, "summary": {"b": {"n": 2}, "c": {"n": 5}},
+           "best_seed": {"b": 1, "c": 4}, "references": {}}  # fmt: skip
     merged = merged_with_docs(new, tmp_path)
     assert merged["summary"] == {"a": {"n": 5}, "b": {"n": 2}, "c": {"n": 5}}
     assert merged["best_seed"] == {"a": 0, "b": 1, "c": 4}
     assert merged["budgets"] == {"a": {"env_steps": 1}, "b": {"env_steps": 2}, "c": {"env_steps": 2}}
+    assert merged["agent_versions"] == {"a": {"jax": "1"}, "b": {"jax": "2"}, "c": {"jax": "2"}}
     assert merged_with_docs(new, tmp_path / "none") is new

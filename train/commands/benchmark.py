@@ -104,7 +104,7 @@ def report(
         refs = reference_controllers(references, n=budget["eval_episodes"], n_disturbed=budget["disturbed_episodes"],
                                      n_optimum=budget.get("optimum_episodes") or None)  # fmt: skip
         summary = aggregate(results)
-        data = {"budget": budget, "machine": machine(), "summary": summary, "references": refs,
+        data = {"budget": budget, "machine": machine(), "versions": versions(), "summary": summary, "references": refs,
                 "best_seed": {name: best_seed(results, name) for name in summary}}  # fmt: skip
     out.mkdir(parents=True, exist_ok=True)
     (out / "benchmark.json").write_text(json.dumps(data, indent=1))
@@ -118,19 +118,38 @@ def report(
 
 def merged_with_docs(data: dict[str, Any], docs: Path = DOCS_DIR) -> dict[str, Any]:
     """``data`` plus the agents of ``docs``/benchmark.json that it lacks (their summaries, best seeds and budgets:
-    each agent keeps the budget it ran with, under "budgets"); the references are ``data``'s."""
+    each agent keeps the budget and package versions it ran with, under "budgets" and "agent_versions"); the
+    references are ``data``'s."""
     path = docs / "benchmark.json"
     if not path.is_file():
         return data
     old = json.loads(path.read_text())
     budgets = {name: old.get("budgets", {}).get(name, old.get("budget")) for name in old.get("summary", {})}
     budgets.update({name: data["budget"] for name in data["summary"]})
+    agent_versions = {
+        name: old.get("agent_versions", {}).get(name, old.get("versions")) for name in old.get("summary", {})
+    }
+    agent_versions.update({name: data.get("versions") for name in data["summary"]})
     summary = {**{k: v for k, v in old.get("summary", {}).items() if k not in data["summary"]}, **data["summary"]}
     best = {**{k: v for k, v in old.get("best_seed", {}).items() if k not in data["summary"]}, **data["best_seed"]}
-    return {**data, "summary": summary, "best_seed": best, "budgets": budgets}
+    return {**data, "summary": summary, "best_seed": best, "budgets": budgets, "agent_versions": agent_versions}
 
 
 def machine() -> str:
     """The machine the benchmark ran on, in one line."""
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     return f"{platform.machine()}, {os.cpu_count()} cores, load average {load:.1f} (1 min, at the end)"
+
+
+def versions() -> dict[str, str | None]:
+    """Python's and the learning packages' versions (None where one is not installed): a seed's outcome depends on
+    them, so the JSON records them beside the results."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    found: dict[str, str | None] = {"python": platform.python_version()}
+    for name in ("numpy", "gymnasium", "torch", "stable-baselines3", "sb3-contrib", "jax", "jaxlib", "flax", "optax"):
+        try:
+            found[name] = version(name)
+        except PackageNotFoundError:
+            found[name] = None
+    return found
