@@ -12,7 +12,6 @@ training's evaluation set). The README quotes both times, the load average and t
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import os
 import platform
@@ -55,8 +54,9 @@ def measure() -> dict[str, Any]:
         after = resource.getrusage(resource.RUSAGE_CHILDREN)
         load = os.getloadavg()[0]
         cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-        with (Path(tmp) / "runs/ppo-v1/evaluations.csv").open() as handle:
-            curve = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(handle)]
+        from train.learning.runs import read_evaluations
+
+        curve = read_evaluations(Path(tmp) / "runs/ppo-v1/evaluations.csv")
         best = json.loads((Path(tmp) / "runs/ppo-v1/run_state.json").read_text())["best"]
         cli([*EVALUATE, "--no-progress", "--out", "out"], tmp)
         rows = json.loads((Path(tmp) / "out" / "evaluation.json").read_text())

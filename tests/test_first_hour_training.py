@@ -40,6 +40,17 @@ def test_a_run_shorter_than_the_evaluation_period_is_evaluated_at_its_last_step(
     assert (run_dir / "best_model.zip").is_file()
 
 
+def test_the_evaluation_log_holds_no_nan_where_no_episode_arrives(tmp_path: Path) -> None:
+    from train.learning.runs import read_evaluations
+
+    run_dir = train(tiny(tmp_path / "run", 128, eval_freq=10**6), command=["test"])
+    text = (run_dir / "evaluations.csv").read_text()
+    rows = read_evaluations(run_dir / "evaluations.csv")
+    assert rows[0]["success_rate"] == 0.0  # the untrained policy at step 0 arrives nowhere in 4 episodes
+    assert "nan" not in text.lower() and "inf" not in text.lower()
+    assert math.isnan(rows[0]["arrival_time_mean"]) and math.isfinite(rows[0]["energy_mean"])
+
+
 def test_a_run_ending_on_an_evaluation_is_not_evaluated_twice(tmp_path: Path) -> None:
     run_dir = train(tiny(tmp_path / "run", 256, eval_freq=128), command=["test"])
     assert evaluated_steps(run_dir) == [0, 128, 256]

@@ -16,7 +16,7 @@ import pytest
 
 from train.learning.config import TrainConfig
 from train.learning.hyperparams import resolve_hyperparams
-from train.learning.runs import RunDirError, RunLock, resume_config, task_score
+from train.learning.runs import RunDirError, RunLock, read_evaluations, resume_config, task_score
 from train.learning.training import train
 
 
@@ -56,8 +56,7 @@ def test_same_seed_same_agent_and_resume_equals_the_uninterrupted_run(tmp_path: 
     assert [row for row in evaluations(split) if row[0] != "256"] == evaluations(first)
     steps = [int(row[0]) for row in evaluations(split)[1:]]
     assert steps == [0, 200, 256, 400, 512]
-    with (split / "evaluations.csv").open() as handle:
-        best = max(csv.DictReader(handle), key=lambda row: task_score({k: float(v) for k, v in row.items()}))
+    best = max(read_evaluations(split / "evaluations.csv"), key=task_score)
     assert json.loads((split / "run_state.json").read_text())["best"]["timesteps"] == int(best["timesteps"])
     wall = [float(row[1]) for row in list(csv.reader((split / "evaluations.csv").read_text().splitlines()))[1:]]
     assert wall == sorted(wall)  # wall time continues across the resume

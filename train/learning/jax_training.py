@@ -148,7 +148,7 @@ class JaxRun:
         import csv
 
         from train.evaluation.rollout import rollout
-        from train.learning.runs import EVAL_FIELDS, task_score
+        from train.learning.runs import EVAL_FIELDS, evaluation_cells, task_score
 
         if not self.csv_path.exists():
             with self.csv_path.open("w", newline="") as handle:
@@ -158,7 +158,7 @@ class JaxRun:
         summary = rollout(model, self.params, s.starts, s.goals, T_con=s.T_cons, env_kwargs=s.env_kwargs).summary()
         row = {"timesteps": steps, "wall_time": self.wall_time(), **{k: summary[k] for k in EVAL_FIELDS[2:]}}
         with self.csv_path.open("a", newline="") as handle:
-            csv.writer(handle).writerow([row[k] for k in EVAL_FIELDS])
+            csv.writer(handle).writerow(evaluation_cells(row))
         self.last_eval = steps
         score = task_score(row)  # the SB3 path's rule: in time first, then lower energy, then return
         if score > self.best:

@@ -33,6 +33,9 @@ LOCK_FILE = ".lock"
 EVAL_FIELDS = ("timesteps", "wall_time", "success_rate", "arrival_time_mean", "final_heading_error_mean",
                "energy_mean", "return_mean", "final_distance_mean")  # fmt: skip
 """The columns of evaluations.csv, one row per evaluation on the run's fixed scenario set."""
+MISSING = ""
+"""How evaluations.csv writes a mean over no episodes (``arrival_time_mean`` where none arrived): an empty cell,
+which :func:`read_evaluations` (and pandas) read back as NaN, so no file a user opens holds ``nan``."""
 RUN_OUTPUTS = (MODEL_FILE, "best_model.zip", EVAL_FILE, CONFIG_FILE, STATE_FILE, RESUME_FILE, "replay_buffer.pkl",
                "checkpoints", "tb")  # fmt: skip
 
@@ -204,6 +207,19 @@ def prepare_run_dir(config: TrainConfig) -> tuple[Path, RunLock]:
     return run_dir, lock
 
 
+def evaluation_cells(row: dict[str, Any]) -> list[Any]:
+    """A row of evaluations.csv in :data:`EVAL_FIELDS` order, a non-finite number written as :data:`MISSING`."""
+    return [MISSING if isinstance(row[k], float) and not math.isfinite(row[k]) else row[k] for k in EVAL_FIELDS]
+
+
+def read_evaluations(path: Path) -> list[dict[str, float]]:
+    """The rows of an evaluations.csv as numbers (an empty cell as NaN); [] if there is no such file."""
+    if not path.is_file():
+        return []
+    with path.open(newline="") as handle:
+        return [{k: math.nan if v == MISSING else float(v) for k, v in row.items()} for row in csv.DictReader(handle)]
+
+
 def truncate_log(path: Path, steps: int) -> None:
     """Drop evaluation rows logged after the checkpoint a run resumes from, so the log stays monotonic."""
     if not path.is_file():
@@ -232,8 +248,7 @@ def saved_best(state: dict[str, Any], csv_path: Path) -> tuple[float, float, flo
         return task_score(state["best"])
     best_return = float(state.get("best_score", -math.inf))
     if math.isfinite(best_return) and csv_path.is_file():
-        with csv_path.open(newline="") as handle:
-            rows = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(handle)]
+        rows = read_evaluations(csv_path)
         matching = [row for row in rows if math.isclose(row["return_mean"], best_return, rel_tol=1e-9, abs_tol=1e-12)]
         if matching:
             return task_score(matching[-1])

@@ -8,7 +8,6 @@ over seeds), the best configuration as an rl-zoo3 YAML and the learning curves a
 
 from __future__ import annotations
 
-import csv
 import itertools
 import json
 import math
@@ -131,11 +130,10 @@ def last_evaluation(run_dir: Path) -> dict[str, float] | None:
 
 
 def read_evaluations(run_dir: Path) -> list[dict[str, float]]:
-    path = run_dir / "evaluations.csv"
-    if not path.is_file():
-        return []
-    with path.open() as handle:
-        return [{k: float(v) for k, v in row.items()} for row in csv.DictReader(handle)]
+    from train.learning.runs import EVAL_FILE
+    from train.learning.runs import read_evaluations as read
+
+    return read(run_dir / EVAL_FILE)
 
 
 def run_one(base: dict[str, Any], hp: dict[str, Any], seed: int, run_dir: Path, config_id: str, report: Any) -> dict:

@@ -29,6 +29,7 @@ from train.learning.runs import (
     EVAL_FILE,
     MODEL_FILE,
     RESUME_FILE,
+    evaluation_cells,
     prepare_run_dir,
     read_state,
     resume_command,
@@ -152,7 +153,7 @@ def make_run_callback(
             row = {"timesteps": self.num_timesteps, "wall_time": self.wall_time(),
                    **{k: summary[k] for k in EVAL_FIELDS[2:]}}  # fmt: skip
             with self.csv_path.open("a", newline="") as handle:
-                csv.writer(handle).writerow([row[k] for k in EVAL_FIELDS])
+                csv.writer(handle).writerow(evaluation_cells(row))
             for key in EVAL_FIELDS[2:]:
                 self.logger.record(f"eval/{key}", row[key])
             self.last_eval = self.num_timesteps
