@@ -26,8 +26,9 @@ SHIPPED = {
     "residual-ppo": "residual_ppo_v1",
     "residual-ppo-astolfi": "residual_ppo_astolfi_v1",
 }
-"""SAC and TQC are not shipped: their best seeds of the benchmark arrive in under 1 % of episodes, and their model
-files (critics, replay-sized optimisers) are about 1 MB each; ``--also sac tqc`` ships them."""
+"""The registered names (train.learning.agents.PRETRAINED, in ``dwr-gym compare``'s default set). ``--also`` ships
+more entries as ``<entry>_v1`` without registering them (load them by path): the shipped ``sac_tuned_v1`` and
+``tqc_tuned_v1``, whose best seeds arrive in few episodes, are baselines to beat, not agents for the comparison."""
 
 
 def plot_curve(evaluations: Path, target: Path, title: str) -> None:
