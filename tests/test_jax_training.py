@@ -117,14 +117,13 @@ def test_settings_read_the_yaml_and_refuse_what_they_do_not_implement() -> None:
 
 
 def test_log_std_final_caps_the_noise_along_the_budget_and_ends_at_its_value() -> None:
-    import gymnax
-
+    from dwr_gym.jax_env.gymnax import make_gymnax_env
     from train.learning.jax_ppo import JaxPPO
 
     config = resolved(hyperparam_overrides={"log_std_final": -3.0})
     settings = PPOSettings.from_algo_kwargs({**config.algo_kwargs, "n_steps": 8, "batch_size": 16, "n_epochs": 1}, 4)
     assert settings.log_std_final == -3.0 and settings.log_std_init == 0.0
-    env, env_params = gymnax.make("Pendulum-v1")
+    env, env_params = make_gymnax_env("DWRPointStabilization-v1")
     ppo = JaxPPO(settings, env, env_params)
     runner = ppo.init(seed=0)
     for update in (1, 2, 3, 4):  # a budget of 4 updates of 32 steps: the cap falls by 0.75 per update
