@@ -170,3 +170,32 @@ def test_docs_keep_the_agents_of_earlier_runs_and_take_this_runs_rows(tmp_path: 
     assert merged["budgets"] == {"a": {"env_steps": 1}, "b": {"env_steps": 2}, "c": {"env_steps": 2}}
     assert merged["agent_versions"] == {"a": {"jax": "1"}, "b": {"jax": "2"}, "c": {"jax": "2"}}
     assert merged_with_docs(new, tmp_path / "none") is new
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "sac-utd:algo=sac,hyperparams=train/hyperparams/sac_tuned.yml,hyperparam_overrides={gradient_steps: 8}",
+        "ppo-x:backend=jax,hyperparams={log_std_final: -2.5, gamma: 1.0, learning_rate: lin_3e-4},action_repeat=2",
+        "res:algo=ppo,residual=true,expert=ptc,hyperparams={policy_kwargs: 'dict(net_arch=[64, 64], log_std_init=-3.0)'}",
+    ],
+)
+def test_a_runs_recorded_recipe_trains_the_same_configuration(
+    text: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """config.yaml's command (what benchmarks/retrain_pretrained.py runs again) is a valid dwr-gym train command
+    that resolves to the configuration the benchmark trained: the YAML file and the overrides together."""
+    import train.learning.training as training
+    from train.cli import main
+    from train.learning.benchmark import train_command, train_config
+
+    entry = parse_entry(text)
+    config = train_config(entry, 1, tmp_path / "run", {"env_steps": 4096, "eval_freq": 2048, "eval_episodes": 4})
+    captured = []
+    monkeypatch.setattr(training, "train", lambda cfg, command=None: captured.append(cfg))
+    command = train_command(entry, config)
+    assert command[:2] == ["dwr-gym", "train"] and main(command[1:]) == 0
+    (again,) = captured
+    for name in ("algo", "backend", "residual", "expert", "action_repeat", "hyperparams", "total_timesteps", "seed"):
+        assert getattr(again, name) == getattr(config, name), name
+    assert again.algo_kwargs == config.algo_kwargs

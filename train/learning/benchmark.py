@@ -118,17 +118,28 @@ def train_command(entry: Entry, config: TrainConfig) -> list[str]:
                "--eval-episodes", str(config.eval_episodes), "--eval-seed", str(config.eval_seed)]  # fmt: skip
     if config.time_limit is not None:
         command += ["--time-limit", str(config.time_limit)]
+    hyperparams: list[str] = []  # one --hyperparams: the YAML file, then the KEY=VALUE overrides (the CLI's only form)
     for key, value in entry.options.items():
         flag = "--" + key.replace("_", "-")
         if key in ("total_timesteps", "eval_freq", "checkpoint_freq", "eval_episodes", "eval_seed", "time_limit"):
             continue  # given above, from the config
-        if key == "hyperparams" and isinstance(value, dict):
-            command += [flag, *(f"{k}={v}" for k, v in value.items())]
+        if key in ("hyperparams", "hyperparam_overrides"):
+            pairs = [f"{k}={_cli_value(v)}" for k, v in value.items()] if isinstance(value, dict) else [str(value)]
+            hyperparams = [*pairs, *hyperparams] if not isinstance(value, dict) else [*hyperparams, *pairs]
+        elif key == "env_kwargs" and isinstance(value, dict):
+            command += [flag, *(f"{k}={_cli_value(v)}" for k, v in value.items())]
         elif isinstance(value, bool):
             command += [flag] if value else []
         else:
             command += [flag, str(value)]
+    if hyperparams:
+        command += ["--hyperparams", *hyperparams]
     return [*command, "--run-dir", str(config.run_dir)]
+
+
+def _cli_value(value: Any) -> str:
+    """A value as ``KEY=VALUE`` of the command line reads it back (YAML; JSON is YAML): a string as itself."""
+    return value if isinstance(value, str) else json.dumps(value)
 
 
 def run_one(entry: Entry, seed: int, out: Path, budget: dict[str, Any], progress: bool = False) -> dict[str, Any]:
