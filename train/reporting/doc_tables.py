@@ -242,6 +242,7 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "rl-benchmark-disturbed": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "disturbed")),
     "rl-diagnosis": ("docs/rl_benchmark/diagnosis.json", lambda data: rl_table(data, "diagnosis")),
     "rl-levers": ("docs/rl_benchmark/levers.json", lambda data: rl_table(data, "levers")),
+    "rl-rushing": ("docs/rl_benchmark/rushing.json", lambda data: rl_table(data, "rushing")),
     "datasets-suite": ("docs/datasets/suite.json", lambda data: dataset_tables.suite_table(data)),
     "datasets-baselines": ("docs/datasets/suite.json", lambda data: dataset_tables.baselines_table(data)),
     "datasets-speed": ("docs/datasets/speed.json", lambda data: dataset_tables.speed_table(data)),
@@ -266,6 +267,8 @@ def _rl_table(data: dict[str, Any], kind: str) -> str:
         return rl_benchmark.sweep_table(data)
     if kind == "residual":
         return rl_benchmark.residual_table(data)
+    if kind == "rushing":
+        return rl_benchmark.rushing_table(data)
     if kind == "goals":
         return rl_benchmark.goals_table(data["summary"])
     if kind == "readme":

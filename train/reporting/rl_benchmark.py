@@ -278,3 +278,19 @@ __all__ = [
     "sweep_table",
     "table",
 ]
+
+
+def rushing_table(data: dict[str, Any]) -> str:
+    """benchmarks/rl_rushing.py: E/opt split into the price of the arrival time and the price of the motion."""
+    lines = ["| policy | episodes | arrival / T_con | E/opt | timing: E_opt(t_arr) / E_opt(T_con) | "
+             "motion: E / E_opt(t_arr) |", "|---|---|---|---|---|---|"]  # fmt: skip
+    for name, r in data["policies"].items():
+        if not r.get("episodes"):
+            lines.append(f"| {name} | 0 | - | - | - | - |")
+            continue
+        lines.append(f"| {name} | {r['episodes']} | {r['arrival_share']:.2f} | {r['energy_ratio']:.2f} | "
+                     f"{r['timing']:.2f} | {r['motion']:.2f} |")  # fmt: skip
+    return "\n".join(lines) + (
+        f"\n\n*The episodes of the benchmark's nominal set (first {data['n']}, seed {data['seed']}) that arrive in "
+        "time; geometric means over them, so that E/opt = timing x motion; optima by CasADi (the goal pose).*\n"
+    )
