@@ -199,3 +199,25 @@ def test_a_runs_recorded_recipe_trains_the_same_configuration(
     for name in ("algo", "backend", "residual", "expert", "action_repeat", "hyperparams", "total_timesteps", "seed"):
         assert getattr(again, name) == getattr(config, name), name
     assert again.algo_kwargs == config.algo_kwargs
+
+
+def test_the_energy_split_multiplies_back_and_prices_early_arrival(capsys: pytest.CaptureFixture[str]) -> None:
+    """benchmarks/rl_rushing.py: E/opt = timing x motion per policy; arriving earlier never needs less than the
+    optimum by T_con (timing >= 1); the optimum's own arrival costs it (almost) nothing, PTC's more."""
+    pytest.importorskip("casadi")
+    import importlib.util
+
+    script = Path(__file__).resolve().parents[1] / "benchmarks" / "rl_rushing.py"
+    spec = importlib.util.spec_from_file_location("rl_rushing", script)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    assert module.main(["--controllers", "ptc", "optimal", "--n", "4"]) == 0
+    rows = {line.split(" ", 1)[0]: json.loads(line.split(" ", 1)[1])
+            for line in capsys.readouterr().out.splitlines() if line.startswith(("ptc {", "optimal {"))}  # fmt: skip
+    for row in rows.values():
+        assert row["episodes"] == 4 and 0 < row["arrival_share"] <= 1
+        assert row["energy_ratio"] == pytest.approx(row["timing"] * row["motion"], rel=1e-9)
+        assert row["timing"] >= 1 - 1e-3
+    assert rows["optimal"]["timing"] < 1.1 and rows["optimal"]["energy_ratio"] < 1.05
+    assert rows["ptc"]["energy_ratio"] > rows["optimal"]["energy_ratio"]
