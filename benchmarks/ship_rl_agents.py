@@ -62,13 +62,18 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--also", nargs="*", default=[], help="more entries to ship, as <entry>_v1 (e.g. sac tqc)")
     args = parser.parse_args(argv)
     out = Path(args.out)
-    data = json.loads((out / "benchmark.json").read_text())
+    # the best seeds of this --out's last report, and of the earlier runs that `--docs` merged into the docs' JSON
+    docs = ROOT / "docs" / "rl_benchmark" / "benchmark.json"
+    best = json.loads(docs.read_text())["best_seed"] if docs.is_file() else {}
+    if (out / "benchmark.json").is_file():
+        best.update(json.loads((out / "benchmark.json").read_text())["best_seed"])
     shipped = {**SHIPPED, **{name: f"{name.replace('-', '_')}_v1" for name in args.also}}
     for entry, directory in shipped.items():
-        if entry not in data["best_seed"]:
+        run = out / "runs" / f"{entry}-seed{best.get(entry)}"
+        if entry not in best or not (run / "model.zip").is_file():
+            print(f"not shipped: {entry} (no finished run {run})")
             continue
-        seed = data["best_seed"][entry]
-        run = out / "runs" / f"{entry}-seed{seed}"
+        seed = best[entry]
         target = ROOT / "train" / "pretrained" / directory
         shutil.rmtree(target, ignore_errors=True)
         target.mkdir(parents=True)

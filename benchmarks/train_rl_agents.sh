@@ -21,7 +21,10 @@ dwr-gym benchmark --agents 'sac-tuned:algo=sac,hyperparams=train/hyperparams/sac
   --eval-freq 250000 --disturbed-episodes 100 --out results/rl-benchmark --docs
 dwr-gym benchmark --agents 'tqc-tuned:algo=tqc,hyperparams=train/hyperparams/tqc_tuned.yml' --seeds 5 \
   --eval-freq 200000 --disturbed-episodes 100 --out results/rl-benchmark --docs
-python benchmarks/ship_rl_agents.py results/rl-benchmark
+python benchmarks/ship_rl_agents.py results/rl-benchmark --also sac-tuned tqc-tuned
 python benchmarks/rl_residual.py train/pretrained/residual_ppo_v1 train/pretrained/residual_ppo_astolfi_v1 --n 50 --docs
 python benchmarks/rl_diagnosis.py --n 200 --docs
+python benchmarks/rl_rushing.py train/pretrained/ppo_jax_v1 results/rl-benchmark/runs/ppo-jax-12m-seed2 \
+  results/rl-benchmark/runs/ppo-jax-anneal-seed3 train/pretrained/residual_ppo_v1 \
+  train/pretrained/residual_ppo_astolfi_v1 train/pretrained/robust --controllers ptc pt-astolfi optimal --n 50 --docs
 python -m train.reporting.doc_tables
