@@ -21,6 +21,8 @@ dwr-gym benchmark --agents 'sac-tuned:algo=sac,hyperparams=train/hyperparams/sac
   --eval-freq 250000 --disturbed-episodes 100 --out results/rl-benchmark --docs
 dwr-gym benchmark --agents 'tqc-tuned:algo=tqc,hyperparams=train/hyperparams/tqc_tuned.yml' --seeds 5 \
   --eval-freq 200000 --disturbed-episodes 100 --out results/rl-benchmark --docs
+dwr-gym benchmark --agents 'sac-utd8:algo=sac,hyperparams=train/hyperparams/sac_tuned.yml,hyperparam_overrides={gradient_steps: 8}' \
+  --seeds 5 --jobs 2 --eval-freq 250000 --disturbed-episodes 100 --out results/rl-benchmark --docs
 python benchmarks/ship_rl_agents.py results/rl-benchmark --also sac-tuned tqc-tuned
 python benchmarks/rl_residual.py train/pretrained/residual_ppo_v1 train/pretrained/residual_ppo_astolfi_v1 --n 50 --docs
 python benchmarks/rl_diagnosis.py --n 200 --docs
