@@ -118,22 +118,24 @@ def train_command(entry: Entry, config: TrainConfig) -> list[str]:
                "--eval-episodes", str(config.eval_episodes), "--eval-seed", str(config.eval_seed)]  # fmt: skip
     if config.time_limit is not None:
         command += ["--time-limit", str(config.time_limit)]
-    hyperparams: list[str] = []  # one --hyperparams: the YAML file, then the KEY=VALUE overrides (the CLI's only form)
+    files: list[str] = []  # one --hyperparams (the CLI's only form): the YAML file, then the KEY=VALUE overrides
+    overrides: list[str] = []
     for key, value in entry.options.items():
         flag = "--" + key.replace("_", "-")
         if key in ("total_timesteps", "eval_freq", "checkpoint_freq", "eval_episodes", "eval_seed", "time_limit"):
             continue  # given above, from the config
-        if key in ("hyperparams", "hyperparam_overrides"):
-            pairs = [f"{k}={_cli_value(v)}" for k, v in value.items()] if isinstance(value, dict) else [str(value)]
-            hyperparams = [*pairs, *hyperparams] if not isinstance(value, dict) else [*hyperparams, *pairs]
+        if key in ("hyperparams", "hyperparam_overrides") and isinstance(value, dict):
+            overrides += [f"{k}={_cli_value(v)}" for k, v in value.items()]
+        elif key == "hyperparams":
+            files.append(str(value))
         elif key == "env_kwargs" and isinstance(value, dict):
             command += [flag, *(f"{k}={_cli_value(v)}" for k, v in value.items())]
         elif isinstance(value, bool):
             command += [flag] if value else []
         else:
             command += [flag, str(value)]
-    if hyperparams:
-        command += ["--hyperparams", *hyperparams]
+    if files or overrides:
+        command += ["--hyperparams", *files, *overrides]
     return [*command, "--run-dir", str(config.run_dir)]
 
 

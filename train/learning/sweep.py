@@ -19,6 +19,7 @@ import numpy as np
 
 from train.learning.config import ConfigError, TrainConfig
 from train.learning.hyperparams import check_algo_kwargs, resolve_hyperparams
+from train.learning.runs import EVAL_FILE, read_evaluations
 
 SEARCHES = ("grid", "random", "optuna")
 DISTRIBUTIONS = ("uniform", "loguniform", "int")
@@ -125,15 +126,8 @@ def trial_config(base: dict[str, Any], hp: dict[str, Any], seed: int, run_dir: P
 
 def last_evaluation(run_dir: Path) -> dict[str, float] | None:
     """The final row of a run's evaluations.csv, or None."""
-    rows = read_evaluations(run_dir)
+    rows = read_evaluations(run_dir / EVAL_FILE)
     return rows[-1] if rows else None
-
-
-def read_evaluations(run_dir: Path) -> list[dict[str, float]]:
-    from train.learning.runs import EVAL_FILE
-    from train.learning.runs import read_evaluations as read
-
-    return read(run_dir / EVAL_FILE)
 
 
 def run_one(base: dict[str, Any], hp: dict[str, Any], seed: int, run_dir: Path, config_id: str, report: Any) -> dict:
@@ -180,7 +174,7 @@ def collect(out: Path) -> dict[str, dict[str, Any]]:
     groups: dict[str, dict[str, Any]] = {}
     for params_path in sorted(out.glob(f"runs/*/{PARAMS_FILE}")):
         meta = json.loads(params_path.read_text())
-        rows = read_evaluations(params_path.parent)
+        rows = read_evaluations(params_path.parent / EVAL_FILE)
         if not rows:
             continue
         group = groups.setdefault(meta["config_id"], {"hyperparams": meta["hyperparams"], "runs": {}})

@@ -265,21 +265,6 @@ def sweep_table(data: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-__all__ = [
-    "aggregate",
-    "best_seed",
-    "curve_band",
-    "diagnosis_table",
-    "disturbed_table",
-    "iqm_interval",
-    "levers_table",
-    "plot_curves",
-    "residual_table",
-    "sweep_table",
-    "table",
-]
-
-
 def rushing_table(data: dict[str, Any]) -> str:
     """benchmarks/rl_rushing.py: E/opt split into the price of the arrival time and the price of the motion."""
     lines = ["| policy | episodes | arrival / T_con | E/opt | timing: E_opt(t_arr) / E_opt(T_con) | "
@@ -294,3 +279,19 @@ def rushing_table(data: dict[str, Any]) -> str:
         f"\n\n*The episodes of the benchmark's nominal set (first {data['n']}, seed {data['seed']}) that arrive in "
         "time; geometric means over them, so that E/opt = timing x motion; optima by CasADi (the goal pose).*\n"
     )
+
+
+__all__ = [
+    "aggregate",
+    "best_seed",
+    "curve_band",
+    "diagnosis_table",
+    "disturbed_table",
+    "iqm_interval",
+    "levers_table",
+    "plot_curves",
+    "residual_table",
+    "rushing_table",
+    "sweep_table",
+    "table",
+]
