@@ -20,7 +20,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from train.reporting import dataset_tables
+from train.reporting import dataset_tables, incentive_tables
 
 ROOT = Path(__file__).resolve().parents[2]
 MARKER = re.compile(r"(<!-- table: (?P<name>[\w-]+) -->\n)(?P<body>.*?)(<!-- /table -->)", re.DOTALL)
@@ -247,6 +247,8 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "datasets-baselines": ("docs/datasets/suite.json", lambda data: dataset_tables.baselines_table(data)),
     "datasets-speed": ("docs/datasets/speed.json", lambda data: dataset_tables.speed_table(data)),
     "jax-env-step": ("docs/jax/env_step.json", jax_env_step_table),
+    "incentives-ranking": ("docs/rl_benchmark/incentives.json", lambda data: incentive_tables.ranking_table(data)),
+    "incentives-rushing": ("docs/rl_benchmark/incentives.json", lambda data: incentive_tables.rushing_table(data)),
 }
 
 
