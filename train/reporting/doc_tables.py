@@ -279,6 +279,8 @@ def _rl_table(data: dict[str, Any], kind: str) -> str:
         )
     if kind == "disturbed":
         return rl_benchmark.disturbed_table(data["summary"], data["references"])
+    if kind == "per-T_con":
+        return rl_benchmark.per_T_con_table(data["summary"], data["references"])
     return rl_benchmark.table(data["summary"], data["references"])
 
 
