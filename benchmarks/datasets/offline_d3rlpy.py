@@ -1,6 +1,6 @@
 """TD3+BC (Fujimoto and Gu 2021) of d3rlpy on a dwr-gym dataset, saved as a run ``dwr-gym evaluate`` loads.
 
-    /work/venv-d3rlpy/bin/python benchmarks/offline_d3rlpy.py dwr-gym/robust-pt-nominal-v0 runs/td3bc
+    /work/venv-d3rlpy/bin/python -m benchmarks run offline-d3rlpy dwr-gym/robust-pt-nominal-v0 runs/td3bc
 
 Runs in an interpreter with d3rlpy (which pins gymnasium 1.0.0: install it with ``pip install --no-deps d3rlpy``
 and its other requirements beside dwr-gym; docs/datasets.md says how). d3rlpy's TD3+BC actor (10 -> 256 -> 256 ->
@@ -17,7 +17,7 @@ from pathlib import Path
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="python -m benchmarks run offline-d3rlpy", description=__doc__.splitlines()[0])
     parser.add_argument("dataset_id")
     parser.add_argument("run_dir", type=Path)
     parser.add_argument(
@@ -78,7 +78,3 @@ def main(argv: list[str] | None = None) -> int:
                                                              sort_keys=False))  # fmt: skip
     print(json.dumps(offline))
     return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

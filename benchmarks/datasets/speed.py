@@ -1,6 +1,6 @@
 """How fast ``dwr-gym dataset`` makes 1 M transitions of an analytic expert (PTC): collection and Minari's write.
 
-    OMP_NUM_THREADS=1 python benchmarks/dataset_speed.py              # writes docs/datasets/speed.json
+    OMP_NUM_THREADS=1 python -m benchmarks run dataset-speed              # writes docs/datasets/speed.json
 
 The goal: 1 M transitions in at most 60 s on 2 cores, from the collection in the native vector env to the
 dataset on disk (without the optimum of each episode, which CasADi solves once per episode and caches: its time
@@ -19,13 +19,13 @@ import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "docs" / "datasets" / "speed.json"
 GOAL_SECONDS = 60.0
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="python -m benchmarks run dataset-speed", description=__doc__.splitlines()[0])
     parser.add_argument("--transitions", type=int, default=1_000_000)
     parser.add_argument("--out", type=Path, default=OUT)
     args = parser.parse_args(argv)
@@ -79,13 +79,9 @@ def main(argv: list[str] | None = None) -> int:
         "goal_met": total <= GOAL_SECONDS, "load_seconds": round(load_seconds, 2), "loaded_steps": steps_back,
         "fifth_episodes": fifth, "fifth_minari_write_seconds": round(unpatched, 2),
         "fifth_our_write_seconds": round(patched, 2), "cores": os.cpu_count(), "python": platform.python_version(),
-        "minari": minari.__version__, "command": "OMP_NUM_THREADS=1 python benchmarks/dataset_speed.py",
+        "minari": minari.__version__, "command": "OMP_NUM_THREADS=1 python -m benchmarks run dataset-speed",
     }  # fmt: skip
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(result, indent=1) + "\n")
     print(json.dumps(result, indent=1))
     return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

@@ -1,8 +1,8 @@
 """The prescribed-time goal of the learned agents, measured: any T_con, the full pose, less energy than PTC.
 
-    python benchmarks/prescribed_time_goal.py train/pretrained/dagger_handover
-    python benchmarks/prescribed_time_goal.py runs/dagger_handover_s0 runs/dagger_handover_s1 runs/dagger_handover_s2
-    python benchmarks/prescribed_time_goal.py train/pretrained/dagger_handover --out docs/prescribed_time/goal.json
+    python -m benchmarks run prescribed-time-goal train/pretrained/dagger_handover
+    python -m benchmarks run prescribed-time-goal runs/dagger_handover_s0 runs/dagger_handover_s1 runs/dagger_handover_s2
+    python -m benchmarks run prescribed-time-goal train/pretrained/dagger_handover --out docs/prescribed_time/goal.json
 
 On random starts 0.3-3 m away (500 per T_con, seed 0), at each T_con in {10, 20, 40, 60} s, it
 evaluates the given agents (several run directories are treated as training seeds of one agent:
@@ -29,12 +29,12 @@ ENV_KWARGS = {"start_distance": (0.3, 3.0)}
 KEYS = ("success_rate", "final_heading_error_mean", "energy_mean", "energy_ratio_mean")
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks run prescribed-time-goal", description=__doc__.splitlines()[0])
     parser.add_argument("agents", nargs="+", help="run directories: the training seeds of one agent")
     parser.add_argument("--n", type=int, default=500)
     parser.add_argument("--out", help="also write the rows and the verdicts as JSON to this file")
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     policies = {f"seed{i}": load_agent(path)[1] for i, path in enumerate(args.agents)}
     policies.update({name: name for name in ("ptc", "pt-astolfi", "astolfi")})
     rows = evaluate_sets(policies, ["random"], args.n, 0, ENV_KWARGS, progress=True, optimum="pose", T_cons=T_CONS)
@@ -77,7 +77,3 @@ def main() -> None:
         data = {"agents": args.agents, "n": args.n, "rows": rows, "verdicts": found}
         Path(args.out).write_text(json.dumps(json_safe(data), indent=2) + "\n")
         print(f"wrote {args.out}")
-
-
-if __name__ == "__main__":
-    main()

@@ -10,7 +10,7 @@ optimum's own energy. The return of the noisy law falls with sigma while its arr
 exploring agent sees is dominated by the noise's energy, which pays for arriving early (rushing), not for the
 minimum-energy motion the task asks for.
 
-    python benchmarks/rl_diagnosis.py --n 200 --docs     # writes docs/rl_benchmark/diagnosis.json
+    python -m benchmarks run rl-diagnosis --n 200 --docs     # writes docs/rl_benchmark/diagnosis.json
 """
 
 from __future__ import annotations
@@ -24,8 +24,7 @@ from typing import Any
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+ROOT = Path(__file__).resolve().parents[2]
 
 SIGMAS = (0.0, 0.05, 0.14, 0.22, 0.5, 1.0)
 """Noise levels: 0.22 is exp(-1.5), the residual agents' initial sigma; 1.0 is exp(0), SB3's PPO default."""
@@ -50,7 +49,7 @@ def clipped_second_moment(sigma: float, samples: int = 200_000) -> float:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="python -m benchmarks run rl-diagnosis", description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=int, default=200, help="episodes of the benchmark's nominal set (default 200)")
     parser.add_argument("--docs", action="store_true", help="write docs/rl_benchmark/diagnosis.json")
     args = parser.parse_args(argv)
@@ -88,7 +87,3 @@ def main(argv: list[str] | None = None) -> int:
         path.write_text(json.dumps(data, indent=1, default=lambda v: None if not math.isfinite(v) else v))
         print(f"wrote {path}")
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

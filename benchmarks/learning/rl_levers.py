@@ -5,7 +5,7 @@ of 2 busy cores decides the env steps); its learning curve (evaluations.csv on 1
 docs/rl_benchmark/levers.json. A first look, not the protocol: one seed, minutes each. ``--collect DIR`` reads
 runs already made in DIR/<lever>/ instead of training.
 
-    OMP_NUM_THREADS=1 nice -n 10 python benchmarks/rl_levers.py --seconds 300 --out runs/levers --docs
+    OMP_NUM_THREADS=1 nice -n 10 python -m benchmarks run rl-levers --seconds 300 --out runs/levers --docs
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 NORM = "--normalize-obs --normalize-reward"
 LOW_STD = "--hyperparams 'policy_kwargs=dict(net_arch=[64, 64], log_std_init={})'"
@@ -54,7 +54,7 @@ def curve(run_dir: Path, repeat: int) -> list[dict[str, float]]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="python -m benchmarks run rl-levers", description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=300.0, help="wall time per run (default 300)")
     parser.add_argument("--out", default="runs/levers", help="where the runs go (default runs/levers)")
     parser.add_argument("--collect", help="read the runs in this directory instead of training")
@@ -88,7 +88,3 @@ def main(argv: list[str] | None = None) -> int:
         path.write_text(json.dumps(data, indent=1))
         print(f"wrote {path}")
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

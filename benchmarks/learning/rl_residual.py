@@ -5,7 +5,7 @@ nominal set and reports the in-time rate, the energy, E/opt and the final headin
 mean |correction| of the linear and angular command (SI units) by the share of T_con elapsed and by the distance
 to the goal.
 
-    python benchmarks/rl_residual.py train/pretrained/residual_ppo_v1 --n 200 --docs
+    python -m benchmarks run rl-residual train/pretrained/residual_ppo_v1 --n 200 --docs
 """
 
 from __future__ import annotations
@@ -19,8 +19,7 @@ from typing import Any
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+ROOT = Path(__file__).resolve().parents[2]
 
 TIME_BINS = (0.0, 0.25, 0.5, 0.75, 1.0, 1.5)
 DISTANCE_BINS = (0.01, 0.1, 0.3, 1.0, 3.5)
@@ -54,7 +53,7 @@ def binned(rows: np.ndarray, column: int, bins: tuple[float, ...]) -> list[dict[
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="python -m benchmarks run rl-residual", description=__doc__.splitlines()[0])
     parser.add_argument("agents", nargs="+", help="run directories of residual agents")
     parser.add_argument("--n", type=int, default=200, help="episodes of the benchmark's nominal set (default 200)")
     parser.add_argument("--docs", action="store_true", help="write docs/rl_benchmark/residual.json")
@@ -89,7 +88,3 @@ def main(argv: list[str] | None = None) -> int:
         target.write_text(json.dumps(data, indent=1))
         print(f"wrote {target}")
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -7,7 +7,7 @@ exactly. Both optima are the same minimum-energy problem (``optimal_energies``, 
 agent's own arrival time as the deadline. Run on the benchmark's nominal set (seed 3232) for agents and
 controllers:
 
-    python benchmarks/rl_rushing.py train/pretrained/ppo_jax_v1 --controllers ptc pt-astolfi --n 50 --docs
+    python -m benchmarks run rl-rushing train/pretrained/ppo_jax_v1 --controllers ptc pt-astolfi --n 50 --docs
 """
 
 from __future__ import annotations
@@ -20,8 +20,7 @@ from typing import Any
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+ROOT = Path(__file__).resolve().parents[2]
 JSON_PATH = ROOT / "docs" / "rl_benchmark" / "rushing.json"
 
 
@@ -49,7 +48,7 @@ def decomposition(result: Any, optimum_at_arrival: np.ndarray) -> dict[str, Any]
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="python -m benchmarks run rl-rushing", description=__doc__.splitlines()[0])
     parser.add_argument("agents", nargs="*", help="run directories (or model .zip) of agents")
     parser.add_argument("--controllers", nargs="*", default=["ptc"], help="controllers beside them (default: ptc)")
     parser.add_argument("--n", type=int, default=50, help="episodes of the benchmark's nominal set (default 50)")
@@ -82,7 +81,3 @@ def main(argv: list[str] | None = None) -> int:
         JSON_PATH.write_text(json.dumps(data, indent=1))
         print(f"wrote {JSON_PATH}")
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

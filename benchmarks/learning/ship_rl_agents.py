@@ -5,7 +5,7 @@ E/opt). Each shipped directory gets the run's config.yaml (its ``command`` is th
 benchmarks/retrain_pretrained.py runs again; ``learned_from: reward``; ``runtime``), model.zip, the observation statistics if any, evaluations.csv and
 learning_curve.png.
 
-    python benchmarks/ship_rl_agents.py results/rl-benchmark
+    python -m benchmarks run ship-rl-agents results/rl-benchmark
 """
 
 from __future__ import annotations
@@ -16,8 +16,7 @@ import shutil
 import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+ROOT = Path(__file__).resolve().parents[2]
 
 #: benchmark entry -> directory under train/pretrained/ (the names of train.learning.agents.PRETRAINED).
 SHIPPED = {
@@ -57,7 +56,7 @@ def plot_curve(evaluations: Path, target: Path, title: str) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="python -m benchmarks run ship-rl-agents", description=__doc__.splitlines()[0])
     parser.add_argument("out", help="the --out of dwr-gym benchmark")
     parser.add_argument("--also", nargs="*", default=[], help="more entries to ship, as <entry>_v1 (e.g. sac tqc)")
     args = parser.parse_args(argv)
@@ -85,7 +84,3 @@ def main(argv: list[str] | None = None) -> int:
         plot_curve(run / "evaluations.csv", target / "learning_curve.png", f"{entry}, seed {seed} (dwr-gym benchmark)")
         print(f"shipped {run} as {target}")
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -1,8 +1,8 @@
 """Seconds per episode of the optimum: the cached reference plans and the NMPC controller ``optimal``.
 
-    python benchmarks/optimal.py                                        # paper-fig5, paper-fig7 and random --n 1000
-    python benchmarks/optimal.py --n 200                                # a quicker look
-    python benchmarks/optimal.py --out docs/benchmarks/optimal.json     # the rows of the docs' table
+    python -m benchmarks run optimal                                        # paper-fig5, paper-fig7 and random --n 1000
+    python -m benchmarks run optimal --n 200                                # a quicker look
+    python -m benchmarks run optimal --out docs/benchmarks/optimal.json     # the rows of the docs' table
 
 For each scenario set it times (1) solving the reference optimum of every episode on the env's grid
 (what ``evaluate``/``compare`` cache for the E/opt columns; the cache is bypassed here) and (2) a
@@ -30,12 +30,12 @@ from train.evaluation.rollout import rollout
 from train.evaluation.scenarios import controller_for, make_scenario
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks run optimal", description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=int, default=1000, help="random episodes (default: 1000)")
     parser.add_argument("--workers", type=int, default=0, help="solver processes (default: every core)")
     parser.add_argument("--out", help="also write the rows as JSON to this file")
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     os.environ["DWR_GYM_CACHE"] = tempfile.mkdtemp(prefix="dwr-gym-bench-")  # time the solves, not the cache
     workers = args.workers or min(os.cpu_count() or 1, 8)
     print(f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, {workers} worker processes")
@@ -71,7 +71,3 @@ def main() -> None:
         Path(args.out).parent.mkdir(parents=True, exist_ok=True)
         Path(args.out).write_text(json.dumps(rows, indent=2) + "\n")
         print(f"wrote {args.out}")
-
-
-if __name__ == "__main__":
-    main()

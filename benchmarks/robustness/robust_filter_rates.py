@@ -5,7 +5,7 @@ for a disturbance. This runs ``robust-pt`` with each rate on one magnitude of ea
 ``tests/test_robust.py``) and prints in-time rate and energy; ``--json`` writes the rows (docs/robust/filter_rates.json,
 the table of docs/robust.md).
 
-    python benchmarks/robust_filter_rates.py --n 24 --json docs/robust/filter_rates.json
+    python -m benchmarks run robust-filter-rates --n 24 --json docs/robust/filter_rates.json
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ def kinds() -> dict[str, dict[str, Any]]:
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0], allow_abbrev=False)
+    parser = argparse.ArgumentParser(prog="python -m benchmarks run robust-filter-rates", description=__doc__.splitlines()[0], allow_abbrev=False)
     parser.add_argument("--n", type=int, default=24, help="starts 0.3-3 m away per kind (default: 24)")
     parser.add_argument("--seed", type=int, default=5)
     parser.add_argument("--json", type=Path)
@@ -60,7 +60,3 @@ def main(argv: list[str] | None = None) -> None:
     if args.json:
         args.json.parent.mkdir(parents=True, exist_ok=True)
         args.json.write_text(json.dumps({"T_con": T_CON, "seed": args.seed, "rows": rows}, indent=1) + "\n")
-
-
-if __name__ == "__main__":
-    main()

@@ -10,7 +10,7 @@ PTC (the paper's law: the energy bar) and `robust-pt` (the expert), and prints e
   episode with CasADi and cached);
 - under `noise`, a command-rate RMS <= 2 times its nominal one.
 
-    python benchmarks/robust_goal.py --n 500 --json docs/robust/goal.json
+    python -m benchmarks run robust-goal --n 500 --json docs/robust/goal.json
 
 An agent is a run directory, optionally with ``#network`` (the network alone) or ``#no-plan`` (the network with
 ``robust-pt``'s analytic finish but no planner); the default is the shipped ``train/pretrained/robust`` whole, its
@@ -90,7 +90,7 @@ def verdicts(rows: list[dict[str, Any]], agent: str) -> list[dict[str, Any]]:
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0], allow_abbrev=False)
+    parser = argparse.ArgumentParser(prog="python -m benchmarks run robust-goal", description=__doc__.splitlines()[0], allow_abbrev=False)
     parser.add_argument("agents", nargs="*", help="run directories of agents (default: train/pretrained/robust)")
     parser.add_argument("--controllers", nargs="*", default=["ptc", "robust-pt"])
     parser.add_argument("--n", type=int, default=500, help="starts per (T_con, set) (default: 500)")
@@ -135,7 +135,3 @@ def main(argv: list[str] | None = None) -> None:
 
         args.json.write_text(json.dumps(json_safe(report), indent=1, allow_nan=False) + "\n")
         print(f"wrote {args.json}")
-
-
-if __name__ == "__main__":
-    main()

@@ -1,9 +1,9 @@
 """How long the main job, `dwr-gym compare` with its defaults, takes: wall clock and CPU time, the cache's state.
 
-    nice -n 10 python benchmarks/compare_time.py --docs      # writes docs/compare/timing.json and the block
-    python benchmarks/compare_time.py --render                 # docs/results.md's block from the JSON
+    nice -n 10 python -m benchmarks run compare-time --docs      # writes docs/compare/timing.json, renders the block
 
-docs/results.md needs a ``<!-- compare-time:begin -->`` ``<!-- compare-time:end -->`` pair for ``--docs`` to fill.
+A page shows the block where it holds the pair ``<!-- generated: compare-time by compare-time (python -m benchmarks
+run compare-time --docs) -->`` and ``<!-- /generated -->`` (on one line each).
 
 Runs `dwr-gym compare --out <tmp>` as a user would (a fresh process, the shared optimum cache of
 ``$DWR_GYM_CACHE`` or ``~/.cache/dwr-gym``), with ``--busy`` busy processes beside it, and records the wall time,
@@ -15,21 +15,20 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import platform
 import resource
 import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
 from typing import Any
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+from benchmarks.core.commands import dwr_gym
+from benchmarks.core.docs import NUMBER, Block, Schema
+from benchmarks.core.record import load_average, torch_machine, write_json
+from benchmarks.core.timing import background_load
+
+ROOT = Path(__file__).resolve().parents[2]
 JSON_PATH = ROOT / "docs" / "compare" / "timing.json"
-DOCS = ROOT / "docs" / "results.md"
-BLOCK = "compare-time"
 
 
 def cached_optima() -> int:
@@ -46,31 +45,22 @@ def cached_optima() -> int:
 
 
 def measure(busy: int) -> dict[str, Any]:
-    loads = [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(busy)]
-    try:
+    with background_load(busy, 6 * 3600.0):
         before_cache = cached_optima()
-        env = {**os.environ, "PYTHONPATH": str(ROOT), "MPLBACKEND": "Agg"}
         with tempfile.TemporaryDirectory() as tmp:
             before = resource.getrusage(resource.RUSAGE_CHILDREN)
             began = time.perf_counter()
-            subprocess.run([sys.executable, "-m", "train.cli", "compare", "--out", f"{tmp}/out", "--no-progress"],
-                           env=env, check=True, stdout=subprocess.DEVNULL, cwd=tmp)  # fmt: skip
+            dwr_gym(["compare", "--out", f"{tmp}/out", "--no-progress"], cwd=tmp, stdout=subprocess.DEVNULL)
             wall = time.perf_counter() - began
             after = resource.getrusage(resource.RUSAGE_CHILDREN)
-        load = os.getloadavg()[0]
-    finally:
-        for process in loads:
-            process.kill()
-            process.wait()
-    import torch
-
+        load = load_average()
     return {
-        "machine": f"{platform.machine()}, {os.cpu_count()} cores, torch {torch.__version__}",
+        "machine": torch_machine(),
         "command": "dwr-gym compare",
         "busy_processes": busy,
         "wall_seconds": round(wall, 1),
         "cpu_seconds": round((after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime), 1),
-        "load_average_1min_at_end": round(load, 2),
+        "load_average_1min_at_end": load,
         "optima_cached_before": before_cache,
         "optima_solved": cached_optima() - before_cache,
     }
@@ -83,41 +73,24 @@ def render(results: dict[str, Any]) -> str:
         f"\n`{results['command']}` with its defaults, {cache}, {results['busy_processes']} busy processes beside it: "
         f"{results['wall_seconds'] / 60:.1f} min of wall time at a load average of "
         f"{results['load_average_1min_at_end']:g} (1 min, at the end), {results['cpu_seconds'] / 60:.1f} min of CPU "
-        f"time over its processes ({results['machine']}; `benchmarks/compare_time.py`, `docs/compare/timing.json`).\n"
+        f"time over its processes ({results['machine']}; `python -m benchmarks run compare-time`, `docs/compare/timing.json`).\n"
     )
 
 
-def docs_block() -> str:
-    from train.reporting.doc_tables import block
-
-    return block(DOCS.read_text(), BLOCK)
-
-
-def write_docs(results: dict[str, Any]) -> None:
-    from train.reporting.doc_tables import with_block
-
-    DOCS.write_text(with_block(DOCS.read_text(), BLOCK, render(results)))
-    print(f"wrote {DOCS}")
-
-
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks run compare-time", description=__doc__.splitlines()[0])
     parser.add_argument("--busy", type=int, default=2, help="busy background processes (default: 2)")
-    parser.add_argument("--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} and the block")
-    parser.add_argument("--render", action="store_true", help="only render the block from the JSON")
-    args = parser.parse_args()
+    parser.add_argument("--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} (and render the block)")
+    args = parser.parse_args(argv)
     if args.busy < 0:
         parser.error(f"--busy={args.busy} is invalid: expected an integer >= 0")
-    if args.render:
-        write_docs(json.loads(JSON_PATH.read_text()))
-        return
     results = measure(args.busy)
     print(render(results))
     if args.docs:
-        JSON_PATH.write_text(json.dumps(results, indent=1) + "\n")
-        print(f"wrote {JSON_PATH}")
-        write_docs(results)
+        write_json(JSON_PATH, results)
 
 
-if __name__ == "__main__":
-    main()
+#: A sentence of docs/results.md.
+BLOCKS = (Block("compare-time", "docs/compare/timing.json", render,
+                Schema({"command": str, "busy_processes": int, "wall_seconds": NUMBER, "cpu_seconds": NUMBER,
+                        "load_average_1min_at_end": NUMBER, "optima_solved": int, "machine": str})),)  # fmt: skip

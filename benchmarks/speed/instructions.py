@@ -1,13 +1,13 @@
 """Instructions per step, counted by valgrind's callgrind, for our env and Gymnasium's CartPole.
 
-    python benchmarks/instructions.py           # single envs and vector envs at N = 4096 (5-10 minutes)
-    python benchmarks/instructions.py --single  # single envs only (about 1 minute)
-    python benchmarks/instructions.py --json docs/throughput/instructions.json   # also write the counts
+    python -m benchmarks run instructions           # single envs and vector envs at N = 4096 (5-10 minutes)
+    python -m benchmarks run instructions --single  # single envs only (about 1 minute)
+    python -m benchmarks run instructions --docs    # also write docs/throughput/instructions.json, render its block
 
 Time on a shared machine varies by tens of percent from one run to the next; the number of instructions a
 step executes does not (the same code, inputs and libraries give the same count). It is the measure to
 compare two versions of the code with: it counts the work, not the memory stalls, so it complements the
-timings of ``throughput.py`` and does not replace them. Each count is the difference between two runs
+timings of ``throughput`` and does not replace them. Each count is the difference between two runs
 that differ only in the number of steps, so start-up and imports cancel. Needs valgrind (Debian:
 ``apt install valgrind``). Our vector env runs as it does by default (torch's float64 kernels when torch
 is installed), with one OpenMP thread (its operations at N = 4096 run on one thread anyway).
@@ -25,7 +25,12 @@ import sys
 import tempfile
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
+from typing import Any
 
+from benchmarks.core.docs import Schema, fenced
+
+ROOT = Path(__file__).resolve().parents[2]
+DOCS_JSON = "docs/throughput/instructions.json"
 #: (label, env id, vector size or 0 for a single env, steps counted)
 CASES = (
     ("single env, ours (v0, gym.make)", "DWRPointStabilization-v0", 0, 3000),
@@ -66,11 +71,11 @@ def child(env_id: str, num_envs: int, steps: int) -> None:
 def collected(env_id: str, num_envs: int, steps: int) -> int:
     """Instructions callgrind collected for one child run."""
     with tempfile.TemporaryDirectory() as tmp:
-        command = ["valgrind", "--tool=callgrind", f"--callgrind-out-file={tmp}/out", sys.executable, __file__,
-                   "--child", env_id, str(num_envs), str(steps)]  # fmt: skip
+        command = ["valgrind", "--tool=callgrind", f"--callgrind-out-file={tmp}/out", sys.executable, "-m",
+                   "benchmarks", "run", "instructions", "--child", env_id, str(num_envs), str(steps)]  # fmt: skip
         # str hashes vary between runs, and with them dict work; idle OpenMP threads spin, and callgrind counts that
         env = {**os.environ, "PYTHONHASHSEED": "0", "OMP_NUM_THREADS": "1"}
-        result = subprocess.run(command, capture_output=True, text=True, check=True, env=env)
+        result = subprocess.run(command, capture_output=True, text=True, check=True, env=env, cwd=ROOT)
     match = re.search(r"Collected\s*:\s*(\d+)", result.stderr)
     if match is None:
         raise RuntimeError(f"callgrind printed no count:\n{result.stderr[-2000:]}")
@@ -82,15 +87,18 @@ def per_step(case: tuple[str, str, int, int]) -> float:
     return (collected(env_id, num_envs, steps) - collected(env_id, num_envs, 0)) / steps
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks run instructions", description=__doc__.splitlines()[0])
     parser.add_argument("--single", action="store_true", help="single envs only")
     parser.add_argument("--json", type=Path, help="also write the counts and ratios to this JSON file")
+    parser.add_argument("--docs", action="store_true", help=f"write {DOCS_JSON} (and render its block)")
     parser.add_argument("--child", nargs=3, metavar=("ENV_ID", "NUM_ENVS", "STEPS"), help=argparse.SUPPRESS)
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     if args.child:
         child(args.child[0], int(args.child[1]), int(args.child[2]))
-        return
+        return 0
+    if args.docs:
+        args.json = ROOT / DOCS_JSON
     if shutil.which("valgrind") is None:
         sys.exit("valgrind is not installed: this benchmark counts instructions with callgrind (apt install valgrind)")
     cases = [case for case in CASES if case[2] == 0 or not args.single]
@@ -108,8 +116,17 @@ def main() -> None:
         }
         args.json.write_text(json.dumps(record, indent=1) + "\n")
         print(f"wrote {args.json}")
+    return 0
 
 
-if __name__ == "__main__":
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-    main()
+def render_instructions(record: dict[str, Any]) -> list[str]:
+    """The lines of the docs block, from the record ``--json`` wrote."""
+    lines = [
+        f"{label:<40} {count:>12,.0f} instructions per step" for label, count in record["instructions_per_step"].items()
+    ]
+    lines += [f"ratio, {kind}: {ratio:.2f}x CartPole's" for kind, ratio in record["ratios"].items()]
+    return lines
+
+
+BLOCKS = (fenced("instructions", DOCS_JSON, render_instructions,
+                 Schema({"instructions_per_step": dict, "ratios": dict})),)  # fmt: skip

@@ -1,11 +1,11 @@
 """The functional (JAX) env's step alone against the native numpy vector env, N = 4096, on one thread budget.
 
-    python benchmarks/jax_env_step.py                # measure and print (2-4 minutes on 2 cores)
-    python benchmarks/jax_env_step.py --threads 2    # both sides may use 2 threads (XLA's; numpy's step uses one)
-    python benchmarks/jax_env_step.py --docs         # also write docs/jax/env_step.json and docs/jax.md's table
+    python -m benchmarks run jax-env-step                # measure and print (2-4 minutes on 2 cores)
+    python -m benchmarks run jax-env-step --threads 2    # both sides may use 2 threads (XLA's; numpy's step uses one)
+    python -m benchmarks run jax-env-step --docs         # also write docs/jax/env_step.json, render its table
 
 Env-steps per second, medians of interleaved repeats in one process (so drifts in the machine's load hit every
-case), each with the same fixed random actions (as ``throughput.py``), episodes ending and restarting as they do:
+case), each with the same fixed random actions (as ``throughput``), episodes ending and restarting as they do:
 
 - the native vector env (``gymnasium.make_vec("DWRPointStabilization-v1", num_envs=N)``), float64 and float32;
 - the gymnax adapter's step with auto-reset, ``jax.jit(jax.vmap(env.step))``, one Python call per step
@@ -19,17 +19,18 @@ case), each with the same fixed random actions (as ``throughput.py``), episodes 
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
 import statistics
-import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-ROOT = Path(__file__).resolve().parents[1]
+from benchmarks.core.docs import Schema, table
+from benchmarks.core.record import write_json
+
+ROOT = Path(__file__).resolve().parents[2]
 JSON_PATH = ROOT / "docs" / "jax" / "env_step.json"
 ENV_ID = "DWRPointStabilization-v1"
 
@@ -130,22 +131,21 @@ def measure(cases: dict[str, tuple[Callable[[int], None], int]], repeats: int) -
     return {name: (statistics.median(w for w, _ in v), statistics.median(c for _, c in v)) for name, v in times.items()}
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks run jax-env-step", description=__doc__.splitlines()[0])
     parser.add_argument("--num-envs", type=int, default=4096, help="robots per step (default 4096)")
     parser.add_argument("--threads", type=int, default=1, help="thread budget of both sides (default 1)")
     parser.add_argument("--repeats", type=int, default=7, help="interleaved repeats (default 7)")
     parser.add_argument("--steps", type=int, default=40, help="steps per repeat of the native env (default 40)")
     parser.add_argument("--scan", type=int, default=200, help="steps per compiled call in the scan case (default 200)")
-    parser.add_argument("--docs", action="store_true", help="write docs/jax/env_step.json and docs/jax.md's table")
-    args = parser.parse_args()
+    parser.add_argument("--docs", action="store_true", help="write docs/jax/env_step.json (and render docs/jax.md's table)")
+    args = parser.parse_args(argv)
     if args.num_envs < 1 or args.threads < 1 or args.repeats < 1 or args.steps < 1 or args.scan < 1:
         parser.error("--num-envs, --threads, --repeats, --steps and --scan must be positive integers")
     limit_threads(args.threads)
     import jax
     import numpy as np
 
-    sys.path.insert(0, str(ROOT))
     import dwr_gym  # noqa: F401
 
     actions = np.random.default_rng(0).uniform(-1, 1, (args.num_envs, 2)).astype(np.float32)
@@ -171,13 +171,9 @@ def main() -> None:
               "jax": jax.__version__, "numpy": np.__version__, "device": str(jax.devices()[0].platform),
               "load_average": [round(load_before, 1), round(os.getloadavg()[0], 1)]}  # fmt: skip
     if args.docs:
-        JSON_PATH.parent.mkdir(parents=True, exist_ok=True)
-        JSON_PATH.write_text(json.dumps(record, indent=1) + "\n")
-        from train.reporting.doc_tables import main as regenerate_tables
-
-        regenerate_tables([])
-        print(f"wrote {JSON_PATH.relative_to(ROOT)} and the tables")
+        write_json(JSON_PATH, record)
 
 
-if __name__ == "__main__":
-    main()
+#: The table of docs/jax.md.
+BLOCKS = (table("jax-env-step", Schema({"num_envs": int, "threads": int, "repeats": int, "env_id": str, "rows": list,
+                                        "machine": str, "jax": str, "device": str, "load_average": list})),)  # fmt: skip

@@ -1,6 +1,6 @@
 """Memory stays flat: the resident set size over 100,000 single-env steps (random actions, autoreset by hand).
 
-    python benchmarks/memory.py
+    python -m benchmarks run memory
 
 It prints the RSS after a warm-up and every 20,000 steps, and the growth from the warm-up to the end;
 the line ends "flat" when the growth is under 5 MiB (a leak of even 100 bytes a step would show 9.5 MiB).
@@ -8,8 +8,8 @@ the line ends "flat" when the growth is under 5 MiB (a leak of even 100 bytes a 
 
 from __future__ import annotations
 
+import argparse
 import resource
-import sys
 
 import gymnasium as gym
 import numpy as np
@@ -26,7 +26,12 @@ def rss_mib() -> float:
         return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**10
 
 
-def main(steps: int = 100_000) -> int:
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks run memory", description=__doc__.splitlines()[0])
+    parser.add_argument("--steps", type=int, default=100_000, help="steps after the warm-up (default 100000)")
+    steps = parser.parse_args(argv).steps
+    if steps < 20_000:
+        parser.error(f"--steps {steps} is invalid: expected at least 20000 (the RSS is printed every 20000)")
     env = gym.make("DWRPointStabilization-v0", render_mode=None)
     env.reset(seed=0)
     rng = np.random.default_rng(0)
@@ -44,7 +49,3 @@ def main(steps: int = 100_000) -> int:
     growth = rss_mib() - start
     print(f"growth over {steps:,} steps: {growth:+.2f} MiB: {'flat' if growth < 5.0 else 'NOT flat'}")
     return 0 if growth < 5.0 else 1
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -39,11 +39,9 @@ import contextlib
 import json
 import os
 import platform
-import signal
 import statistics
 import subprocess
 import sys
-import threading
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -53,79 +51,18 @@ import gymnasium as gym
 import numpy as np
 
 import dwr_gym  # noqa: F401
+from benchmarks.core.docs import Schema, fenced
+from benchmarks.core.record import write_json
+from benchmarks.core.timing import Stepper, background_load, interleaved, paired_ratio
+from benchmarks.speed.throughput_report import render
 from dwr_gym import model
 
-ROOT = Path(__file__).resolve().parents[1]
-DOCS = ROOT / "docs" / "throughput.md"
+ROOT = Path(__file__).resolve().parents[2]
 JSON_PATH = ROOT / "docs" / "throughput" / "throughput.json"
 SIZES = (1, 64, 1024, 4096, 16384)
 QUICK_SIZES = (1, 1024, 4096)
 CROSSOVER_SIZES = (1024, 1536, 2048, 3072, 4096)
 KERNELS = ("sin", "cos", "tanh", "arcsin", "arctan2")
-#: A busy loop, ended by itself after argv[1] seconds (if its parent cannot end it).
-BUSY_LOOP = "import sys, time\nend = time.monotonic() + float(sys.argv[1])\nwhile time.monotonic() < end:\n    pass\n"
-
-Stepper = tuple[Callable[[], Any], Callable[[], contextlib.AbstractContextManager[Any]]]
-
-
-@contextlib.contextmanager
-def background_load(processes: int, seconds: float) -> Iterator[list[subprocess.Popen[bytes]]]:
-    """``processes`` CPU-bound Python processes (yielded) running while the block runs; each ends by itself
-    after ``seconds`` at the latest, and all are killed when the block ends (on errors, Ctrl-C and SIGTERM too)."""
-    busy: list[subprocess.Popen[bytes]] = []
-    if processes < 1:
-        yield busy
-        return
-    main_thread = threading.current_thread() is threading.main_thread()  # (only it may set signal handlers)
-    previous = signal.getsignal(signal.SIGTERM)
-    if main_thread:
-        signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))  # a SIGTERM runs the finally below
-    try:
-        for _ in range(processes):
-            busy.append(subprocess.Popen([sys.executable, "-c", BUSY_LOOP, str(seconds)]))
-        time.sleep(0.5)  # until they run
-        yield busy
-    finally:
-        for process in busy:
-            process.kill()
-        for process in busy:
-            process.wait()
-        if main_thread:
-            signal.signal(signal.SIGTERM, previous)
-
-
-def median_seconds(fn: Callable[[], Any], number: int, repeats: int) -> float:
-    """Median over ``repeats`` of the time per call of ``fn`` (called ``number`` times per repeat)."""
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        for _ in range(number):
-            fn()
-        times.append((time.perf_counter() - start) / number)
-    return statistics.median(times)
-
-
-def interleaved(steppers: dict[str, Stepper], repeats: int, number: int) -> dict[str, list[float]]:
-    """Seconds per call of each stepper in each repeat, the steppers taking turns within a repeat, each
-    inside its context (a setting it needs, entered and left around its turn). A turn starts with one
-    untimed call: each stepper is timed with its data in the caches, as in a loop of its own, not as
-    the previous stepper left them. The order rotates from one repeat to the next, so that no stepper
-    always follows the same one."""
-    times: dict[str, list[float]] = {name: [] for name in steppers}
-    names = list(steppers)
-    for repeat in range(repeats):
-        for name in names[repeat % len(names) :] + names[: repeat % len(names)]:
-            step, context = steppers[name]
-            with context():
-                step()
-                times[name].append(median_seconds(step, number, 1))
-    return times
-
-
-def paired_ratio(times: dict[str, list[float]], name: str, reference: str) -> float:
-    """Median over the repeats of the speed of ``name`` relative to ``reference`` in the same repeat."""
-    return statistics.median(ref / own for own, ref in zip(times[name], times[reference], strict=True))
-
 
 @contextlib.contextmanager
 def numpy_only() -> Iterator[None]:
@@ -273,8 +210,8 @@ def crossover_without_avx512() -> dict[str, Any] | None:
         return None
     off = "X86_V4 AVX512_SKX AVX512_CLX AVX512_CNL AVX512_ICL AVX512_SPR"
     env = {**os.environ, "NPY_DISABLE_CPU_FEATURES": off, "ATEN_CPU_CAPABILITY": "avx2", "PYTHONWARNINGS": "ignore"}
-    result = subprocess.run([sys.executable, __file__, "--crossover-child"], env=env, capture_output=True, text=True,
-                            check=True)  # fmt: skip
+    result = subprocess.run([sys.executable, "-m", "benchmarks", "run", "throughput", "--crossover-child"], env=env,
+                            capture_output=True, text=True, check=True, cwd=ROOT)  # fmt: skip
     return json.loads(result.stdout.splitlines()[-1])
 
 
@@ -382,236 +319,30 @@ def run(quick: bool, load: int, load_seconds: float) -> dict[str, Any]:
     return results
 
 
-def verdict(ok: bool) -> str:
-    return "met" if ok else "not met"
+#: The results block of docs/throughput.md.
+BLOCKS = (fenced("throughput", "docs/throughput/throughput.json", render,
+                 Schema({"machine": dict, "quick": bool, "load_processes": int, "quiet": dict, "autoreset": dict,
+                         "ptc": dict, "crossover": dict})),)  # fmt: skip
 
 
-def goals(results: dict[str, Any]) -> list[str]:
-    """The goals of issues 14 and 23, each with the measured figure."""
-    lines = []
-    quiet = results["quiet"]
-    if "4096" in quiet["vector"]:
-        rates = quiet["vector"]["4096"]
-        lines += [
-            f"issue 14: vector env, float64, N = 4096, >= 10 M env-steps/s: {rates['f64'] / 1e6:.2f} M -> "
-            f"{verdict(rates['f64'] >= 1e7)}",
-            f"issue 23: vector env, float64, N = 4096, quiet, >= 0.5x CartPoleVectorEnv: {rates['f64/cart']:.2f}x -> "
-            f"{verdict(rates['f64/cart'] >= 0.5)}",
-        ]
-        if "loaded" in results:
-            loaded = results["loaded"]["vector"]["4096"]["f64/cart"]
-            lines.append(
-                f"issue 23: vector env, float64, N = 4096, {results['load_processes']} busy processes, >= 0.4x "
-                f"CartPoleVectorEnv: {loaded:.2f}x -> {verdict(loaded >= 0.4)}"
-            )
-    single = quiet["single"]["gym.make"]["ratio"]
-    lines.append(f"issue 23: single env step through gym.make, quiet, <= 1.5x CartPole-v1's: {single:.2f}x -> "
-                 f"{verdict(single <= 1.5)}")  # fmt: skip
-    threshold = results["machine"]["torch_min_size"]
-    for condition in ("quiet", "loaded"):
-        if condition not in results:
-            continue
-        ratios = {int(n): rates["f64/numpy"] for n, rates in results[condition]["vector"].items()}
-        same = [r for n, r in ratios.items() if n < threshold]  # the same code runs on both paths: the noise
-        floor = min([1.0, *same])
-        worst = min((n for n in ratios if n >= threshold), key=ratios.__getitem__, default=None)
-        if worst is not None:
-            noise = (
-                f"; below N = {threshold} both run the same code and measure {min(same):.2f}x-{max(same):.2f}x"
-                if same
-                else ""
-            )
-            lines.append(
-                f"issue 23: vector env not slower than its numpy-only path, {condition}: slowest float64/numpy-only "
-                f"ratio {ratios[worst]:.2f}x (N = {worst}){noise} -> {verdict(ratios[worst] >= floor)}"
-            )
-    return lines
-
-
-def render(results: dict[str, Any]) -> list[str]:
-    """The lines of the report, from the JSON alone."""
-    m = results["machine"]
-    torch = f"torch {m['torch']} ({m['torch_threads']} threads by default)" if m["torch"] else "no torch"
-    conditions = ["quiet"] + (["loaded"] if "loaded" in results else [])
-    load = results["load_processes"]
-    label = {"quiet": "quiet", "loaded": f"loaded ({load} busy processes)"}
-    lines = [
-        f"machine: {m['cpu']}, {m['cores']} cores; Python {m['python']}, numpy {m['numpy']}, "
-        f"gymnasium {m['gymnasium']}, {torch}",
-        f"computed by torch for large float64 arrays: {', '.join(m['torch_functions']) or 'none'}"
-        + (" (quick run)" if results["quick"] else ""),
-        "",
-        "== summary: " + " | ".join(label[c] for c in conditions) + " ==",
-    ]
-    rows = [
-        ("single env step / CartPole-v1's (gym.make)", lambda r: r["single"]["gym.make"]["ratio"], "x"),
-        ("single env step / CartPole-v1's (unwrapped)", lambda r: r["single"]["unwrapped"]["ratio"], "x"),
-        ("vector float64, N = 4096 / CartPoleVectorEnv", lambda r: r["vector"]["4096"]["f64/cart"], "x"),
-        ("vector float64, N = 4096 / numpy-only path", lambda r: r["vector"]["4096"]["f64/numpy"], "x"),
-        ("vector float64, N = 4096 [M env-steps/s]", lambda r: r["vector"]["4096"]["f64"] / 1e6, " M"),
-        ("CartPoleVectorEnv, N = 4096 [M env-steps/s]", lambda r: r["vector"]["4096"]["cart"] / 1e6, " M"),
-    ]
-    for title, get, unit in rows:
-        lines.append(f"{title:<46}" + "".join(f"{get(results[c]):>12.2f}{unit:<2}" for c in conditions))
-
-    for condition in conditions:
-        r = results[condition]
-        lines += [
-            "",
-            f"== {label[condition]}: float64 kernels at N = 4096: us per call (median of single calls, mean over "
-            "all), process CPU s per wall s ==",
-        ]
-        backends = [b[: -len(": median")] for b in next(iter(r["kernels"].values())) if b.endswith(": median")]
-        lines.append(f"{'':<8}" + "".join(f"{b:>26}" for b in backends))
-        lines.append(f"{'':<8}" + "   median     mean cpu/wall" * len(backends))
-        for name, costs in r["kernels"].items():
-            cells = (f"{costs[b + ': median']:>9.1f}{costs[b + ': mean']:>9.1f}{costs[b + ': cpu/wall']:>8.2f}"
-                     for b in backends)  # fmt: skip
-            lines.append(f"{name:<8}" + " ".join(cells))
-
-        lines += ["", f"== {label[condition]}: one step of a single env, fixed seeded action, reset at episode ends =="]
-        for kind, s in r["single"].items():
-            lines.append(f"{kind:>10}: ours {s['ours_us']:6.1f} us, CartPole-v1 {s['cartpole_us']:6.1f} us, ratio "
-                         f"{s['ratio']:5.2f}x (episodes of {s['ours_episode_steps']:.0f} and "
-                         f"{s['cartpole_episode_steps']:.1f} steps)")  # fmt: skip
-
-        lines += [
-            "",
-            f"== {label[condition]}: vector envs, M env-steps/s (median); numpy-only: DWR_GYM_TORCH=0; "
-            "torch 1 thr: torch.set_num_threads(1); ratios paired (f64/numpy: adjacent steps) ==",
-            f"{'N':>6} {'float64':>8} {'torch 1 thr':>11} {'numpy-only':>10} {'float32':>8} {'Sync(ours)':>10} "
-            f"{'CartPoleVec':>11} {'f64/Cart':>8} {'f64/numpy':>9} {'f32/Cart':>8}",
-        ]
-        for n, v in r["vector"].items():
-            lines.append(
-                f"{n:>6} {v['f64'] / 1e6:>8.2f} {v['f64_torch1'] / 1e6:>11.2f} {v['numpy'] / 1e6:>10.2f} "
-                f"{v['f32'] / 1e6:>8.2f} {v['sync'] / 1e6:>10.3f} {v['cart'] / 1e6:>11.2f} {v['f64/cart']:>8.2f} "
-                f"{v['f64/numpy']:>9.2f} {v['f32/cart']:>8.2f}"
-            )
-
-    a = results["autoreset"]
-    lines += [
-        "",
-        "== quiet: autoreset modes, N = 4096, T_con = 2 s and dt = 0.1 s (every episode ends within 30 steps) ==",
-    ]
-    for dtype in ("float64", "float32"):
-        next_step, same_step = a[f"next_step/{dtype}"], a[f"same_step/{dtype}"]
-        lines.append(f"{dtype}: NEXT_STEP (default) {next_step / 1e6:.2f} M, SAME_STEP {same_step / 1e6:.2f} M, "
-                     f"ratio {next_step / same_step:.2f}")  # fmt: skip
-    c = results["crossover"]
-    lines += [
-        "",
-        "== quiet: float64 step with torch's functions at every size / numpy-only, adjacent steps (TORCH_MIN_SIZE) ==",
-        f"{'N':>24}" + "".join(f"{n:>7}" for n in c["this_cpu"]),
-        f"{'this CPU':>24}" + "".join(f"{r:>7.2f}" for r in c["this_cpu"].values()),
-    ]
-    if c["without_avx512"]:
-        ratios = c["without_avx512"]["ratios"]
-        lines.append(f"{'AVX512 switched off':>24}" + "".join(f"{r:>7.2f}" for r in ratios.values())
-                     + f"   (torch computes {', '.join(c['without_avx512']['torch_functions'])})")  # fmt: skip
-    p = results["ptc"]
-    lines += [
-        "",
-        "== quiet: PTC law on the `random` scenario set (10,000 start poses, default T_con and dt) ==",
-        f"median {p['seconds']:.2f} s, success rate {p['success_rate']:.4f}",
-        "",
-        "== goals ==",
-        *goals(results),
-    ]
-    return lines
-
-
-def render_compare(record: dict[str, Any]) -> list[str]:
-    """The lines of the block of ``compare_commits.py --json``'s record."""
-    (old, new), load = record["commits"], record["load_processes"]
-    threads = record.get("omp_num_threads")
-    setting = f"OMP_NUM_THREADS={threads}" if threads else "default threads"
-    lines = [f"float64 vector env at N = {record['num_envs']}, {load} busy background processes, {setting}; speed "
-             "relative to CartPoleVectorEnv in the same process, per round:"]  # fmt: skip
-    for commit, ratios in zip(record["commits"], record["ratios"], strict=True):
-        lines.append(f"{commit:>8}: " + "  ".join(f"{r:.3f}x" for r in ratios))
-    old_median, new_median = record["median_ratios"]
-    lines.append(
-        f"median: {old} {old_median:.3f}x, {new} {new_median:.3f}x ({new_median / old_median:.1f} times as fast)"
-    )
-    return lines
-
-
-def render_instructions(record: dict[str, Any]) -> list[str]:
-    """The lines of the block of ``instructions.py --json``'s record."""
-    lines = [
-        f"{label:<40} {count:>12,.0f} instructions per step" for label, count in record["instructions_per_step"].items()
-    ]
-    lines += [f"ratio, {kind}: {ratio:.2f}x CartPole's" for kind, ratio in record["ratios"].items()]
-    return lines
-
-
-#: The generated blocks of docs/throughput.md: marker name -> (the JSON they are rendered from, the renderer).
-BLOCKS: dict[str, tuple[Path, Callable[[dict[str, Any]], list[str]]]] = {
-    "throughput": (JSON_PATH, render),
-    "compare": (JSON_PATH.parent / "compare_loaded.json", render_compare),
-    "compare_quiet": (JSON_PATH.parent / "compare_quiet_one_thread.json", render_compare),
-    "instructions": (JSON_PATH.parent / "instructions.json", render_instructions),
-}
-
-
-def rendered_block(name: str) -> str:
-    """The block ``name`` as rendered from its JSON file."""
-    path, renderer = BLOCKS[name]
-    return "\n```\n" + "\n".join(renderer(json.loads(path.read_text()))) + "\n```\n"
-
-
-def docs_block(name: str) -> str:
-    """The text between the markers of block ``name`` in docs/throughput.md."""
-    from train.reporting.doc_tables import block
-
-    return block(DOCS.read_text(), name)
-
-
-def write_docs() -> None:
-    """Render every block of docs/throughput.md whose JSON file exists from that file."""
-    from train.reporting.doc_tables import with_block
-
-    text = DOCS.read_text()
-    for name, (path, _) in BLOCKS.items():
-        if path.exists():
-            text = with_block(text, name, rendered_block(name))
-    DOCS.write_text(text)
-    print(f"wrote {DOCS}")
-
-
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks run throughput", description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="fewer repeats and sizes")
     parser.add_argument("--load", type=int, default=2, help="busy background processes of the loaded run (0: none)")
     parser.add_argument("--load-seconds", type=float, default=1200.0,
                         help="the longest the background processes run, if they cannot be ended (default 1200)")  # fmt: skip
-    parser.add_argument("--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} and render the "
-                        f"blocks of {DOCS.relative_to(ROOT)} from the JSON files")  # fmt: skip
+    parser.add_argument("--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} and render its block")
     parser.add_argument("--crossover-child", action="store_true", help=argparse.SUPPRESS)
-    parser.add_argument("--render", action="store_true", help=f"only render the blocks of {DOCS.relative_to(ROOT)} "
-                        "from the JSON files (of this benchmark, compare_commits.py and instructions.py)")  # fmt: skip
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     if not 0 <= args.load <= 64:
         parser.error(f"--load={args.load} is invalid: expected 0 to 64 background processes")
     if args.load_seconds <= 0:
         parser.error(f"--load-seconds={args.load_seconds} is invalid: expected a positive number of seconds")
     if args.crossover_child:
         print(json.dumps({"torch_functions": sorted(model.TORCH_FUNCTIONS), "ratios": torch_crossover()}))
-        return
-    if args.render:
-        if not JSON_PATH.exists():
-            sys.exit(f"{JSON_PATH} does not exist: run `python benchmarks/throughput.py --docs` first")
-        write_docs()
-        return
+        return 0
     results = run(args.quick, args.load, args.load_seconds)
     print("\n".join(render(results)))
     if args.docs:
-        JSON_PATH.parent.mkdir(parents=True, exist_ok=True)
-        JSON_PATH.write_text(json.dumps(results, indent=1) + "\n")
-        print(f"wrote {JSON_PATH}")
-        write_docs()  # the blocks from the JSON files as written
-
-
-if __name__ == "__main__":
-    main()
+        write_json(JSON_PATH, results)
+    return 0

@@ -1,7 +1,7 @@
 """Fuzz the env, the vector env and every controller over random and edge states; print the NaN/inf count.
 
-    python benchmarks/fuzz.py            # 1e6 vector-env states, 5e4 single-env steps, 5e6 controller calls
-    python benchmarks/fuzz.py --states 1e5
+    python -m benchmarks run fuzz            # 1e6 vector-env states, 5e4 single-env steps, 5e6 controller calls
+    python -m benchmarks run fuzz --states 1e5
 
 States mix uniform draws with edge values: distance 0, 1e-12 and up to 1e6 m, headings at +-pi and at the
 singular angles +-pi/2 of the law, t at and past T_con, T_con from 1e-3 s to 1e6 s, dt equal to T_con.
@@ -93,11 +93,11 @@ def fuzz_controllers(rng: np.random.Generator, n_states: int) -> tuple[int, int]
     return n_states * len(CONTROLLERS), bad
 
 
-def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks run fuzz", description=__doc__.splitlines()[0])
     parser.add_argument("--states", type=float, default=1e6, help="env states to try (default: 1e6)")
     parser.add_argument("--seed", type=int, default=0)
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     rng = np.random.default_rng(args.seed)
     start = time.time()
     single_states, single_bad = fuzz_single_env(rng, int(args.states) // 20)
@@ -109,7 +109,3 @@ def main() -> int:
     print(f"controllers:      {calls} calls, {controller_bad} NaN/inf")
     print(f"NaN/inf count: {env_bad + controller_bad} ({time.time() - start:.0f} s)")
     return 0 if env_bad + controller_bad == 0 else 1
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

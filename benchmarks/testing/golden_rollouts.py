@@ -1,7 +1,7 @@
 """Record (or check) the seeded float64 rollouts that pin the env's results while it is made faster.
 
-    python benchmarks/golden_rollouts.py --write   # record tests/data/golden_rollouts.npz (done once, before a change)
-    python benchmarks/golden_rollouts.py           # largest difference of the current code from the record
+    python -m benchmarks run golden-rollouts --write   # record tests/data/golden_rollouts.npz (done once, before a change)
+    python -m benchmarks run golden-rollouts           # largest difference of the current code from the record
 
 The record holds, for DWRPointStabilization-v0 and -v1: 300 steps of the native vector env (16 robots,
 random actions, autoreset) and of the PTC law in it, and one single-env episode under random actions;
@@ -84,10 +84,10 @@ def rollouts(num_envs: int = RECORDED) -> dict[str, np.ndarray]:
     return arrays
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks run golden-rollouts", description=__doc__.splitlines()[0])
     parser.add_argument("--write", action="store_true", help="record the current code's rollouts")
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     if args.write:
         arrays = rollouts()
         np.savez_compressed(PATH, **arrays)
@@ -98,7 +98,3 @@ def main() -> None:
         arrays = rollouts(num_envs)
         worst = max((float(np.max(np.abs(arrays[k] - golden[k]))), k) for k in golden.files)
         print(f"num_envs={num_envs}: largest difference from the record {worst[0]:.3e} ({worst[1]})")
-
-
-if __name__ == "__main__":
-    main()

@@ -1,8 +1,8 @@
 """Plant each bug of issue 26's audit in a copy of the tree, run the test suite there, and record what fails.
 
-    python benchmarks/planted_bugs.py              # every bug, one suite run each (~5 min each on 2 cores)
-    python benchmarks/planted_bugs.py --bugs sinc_1_over_24
-    python benchmarks/planted_bugs.py --bugs truncated_is_terminated --tests tests/test_sb3.py  # only these tests
+    python -m benchmarks run planted-bugs              # every bug, one suite run each (~5 min each on 2 cores)
+    python -m benchmarks run planted-bugs --bugs sinc_1_over_24
+    python -m benchmarks run planted-bugs --bugs truncated_is_terminated --tests tests/test_sb3.py  # only these tests
 
 A golden or pinned record (tests/test_golden.py, the pinned v0 returns and trajectories) detects a change,
 not a bug that was there when it was recorded; so each bug must also fail another test. The source tree
@@ -22,7 +22,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 RESULTS = ROOT / "docs" / "testing" / "planted_bugs.json"
 #: Tests that compare with a recorded output rather than with an independent reference.
 PINNED = re.compile(r"test_golden\.py|test_v0_returns_|test_v0_defaults_are_bit_for_bit")
@@ -113,12 +113,12 @@ def run_suite(root: Path, tests: list[str] | None = None) -> tuple[list[str], st
     return failed, output.strip().splitlines()[-1] if output.strip() else ""
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks run planted-bugs", description=__doc__.split("\n\n")[0])
     parser.add_argument("--bugs", nargs="+", choices=list(BUGS), default=list(BUGS))
     parser.add_argument("--work", type=Path, default=Path("/tmp/dwr-gym-planted"))
     parser.add_argument("--tests", nargs="+", help="run only these tests (files or node ids) instead of the suite")
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     results = json.loads(RESULTS.read_text()) if RESULTS.is_file() else {}
     for bug in args.bugs:
         failed, last = run_suite(plant(bug, args.work), args.tests)
@@ -128,7 +128,3 @@ def main() -> None:
         print(f"{bug}: {len(failed)} failed, {len(independent)} of them not a golden/pinned record ({last})")
         RESULTS.parent.mkdir(parents=True, exist_ok=True)
         RESULTS.write_text(json.dumps(results, indent=1) + "\n")
-
-
-if __name__ == "__main__":
-    main()

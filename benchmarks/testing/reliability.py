@@ -1,7 +1,7 @@
 """The reliability check of issue 11: fuzz count, bad-input table, interrupt/resume. Everything must be green.
 
-    OMP_NUM_THREADS=1 python benchmarks/reliability.py              # about 2 minutes on 2 cores
-    python benchmarks/reliability.py --states 1e6                   # the full fuzz (benchmarks/fuzz.py)
+    OMP_NUM_THREADS=1 python -m benchmarks run reliability              # about 2 minutes on 2 cores
+    python -m benchmarks run reliability --states 1e6                   # the full fuzz (benchmarks/fuzz.py)
 
 1. Fuzz: NaN/inf count over random and edge states of the env, the vector env and every controller (must be 0).
 2. Bad input: every row is a bad input a user can give; each must end in one line naming it, exit code 2
@@ -206,10 +206,10 @@ def check_interrupt_and_resume() -> None:
         report(same, "a run resumed at 256 of 512 steps equals the uninterrupted run (same seed)")
 
 
-def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks run reliability", description=__doc__.splitlines()[0])
     parser.add_argument("--states", type=float, default=1e5, help="fuzzed env states (default: 1e5)")
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     from fuzz import fuzz_controllers, fuzz_env, fuzz_single_env
 
     print("1. fuzz")
@@ -226,7 +226,3 @@ def main() -> int:
     colour = GREEN if passed == len(results) else RED
     print(f"{colour}{passed}/{len(results)} checks passed{RESET}")
     return 0 if passed == len(results) else 1
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

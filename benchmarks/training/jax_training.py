@@ -1,10 +1,9 @@
 """The jitted PPO of `dwr-gym train --backend jax` against `dwr-gym train`'s stable-baselines3 PPO (issue 36).
 
-    nice -n 10 python benchmarks/jax_training.py speed --threads 1 --docs   # docs/jax/training_speed_1thread.json
-    nice -n 10 python benchmarks/jax_training.py speed --threads 2 --docs   # docs/jax/training_speed_2thread.json
-    nice -n 5 python benchmarks/jax_training.py learn --budget 1380 --eval-every 30 --docs \
+    nice -n 10 python -m benchmarks run jax-training speed --threads 1 --docs   # docs/jax/training_speed_1thread.json
+    nice -n 10 python -m benchmarks run jax-training speed --threads 2 --docs   # docs/jax/training_speed_2thread.json
+    nice -n 5 python -m benchmarks run jax-training learn --budget 1380 --eval-every 30 --docs \
         --hyperparams "policy_kwargs=dict(net_arch=[64, 64], normalize_observations=True)"  # time_to_criteria.json
-    python benchmarks/jax_training.py --render                              # docs/jax-training.md's blocks from the JSON
 
 ``speed``: env steps per second including the updates, on DWRPointStabilization-v1 with the defaults of
 train/hyperparams/ppo.yml (256 robots, rollouts of 64 steps, 4 epochs over minibatches of 1024), in one process
@@ -23,8 +22,17 @@ the time it takes counts. Process CPU time is recorded beside wall time, since t
 from __future__ import annotations
 
 import argparse
+import itertools
+import math
 import os
-import sys
+import platform
+import statistics
+import time
+from pathlib import Path
+from typing import Any
+
+from benchmarks.core.docs import Schema, fenced
+from benchmarks.core.record import write_json
 
 
 def set_threads(threads: int) -> None:
@@ -36,25 +44,8 @@ def set_threads(threads: int) -> None:
         os.environ["XLA_FLAGS"] = f"{os.environ.get('XLA_FLAGS', '')} {flags}".strip()
 
 
-if __name__ == "__main__":
-    _threads = next((int(a.split("=")[1]) for a in sys.argv if a.startswith("--threads=")), None)
-    if "--threads" in sys.argv[:-1]:
-        _threads = int(sys.argv[sys.argv.index("--threads") + 1])
-    set_threads(_threads or 1)
-
-import itertools  # noqa: E402
-import json  # noqa: E402
-import math  # noqa: E402
-import platform  # noqa: E402
-import statistics  # noqa: E402
-import time  # noqa: E402
-from pathlib import Path  # noqa: E402
-from typing import Any  # noqa: E402
-
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "docs" / "jax"
-DOCS = ROOT / "docs" / "jax-training.md"
 SPEED_GOALS = {"ratio_to_sb3": 10.0, "steps_per_second": 200_000.0, "vmap_ratio": 3.0}
 CRITERIA = {"in_time": 0.99, "energy_ratio": 1.5, "final_heading": 0.1}
 TIME_GOAL_S = 300.0
@@ -278,36 +269,19 @@ def render_learn(data: dict[str, Any]) -> list[str]:
     return lines
 
 
-BLOCKS = {"jax-training-speed": ("training_speed_1thread.json", render_speed),
-          "jax-training-speed-2threads": ("training_speed_2thread.json", render_speed),
-          "jax-time-to-criteria": ("time_to_criteria.json", render_learn)}  # fmt: skip
+SPEED = Schema({"machine": str, "load_average_1min_at_end": (int, float), "settings": dict, "steps_per_round": int,
+                "seeds": int, "compile_seconds": dict, "rounds": list, "median_fps": dict, "ratio_to_sb3": (int, float),
+                "vmap_ratio_to_sequential": (int, float), "update_share": (int, float), "goals": dict, "met": dict})
+#: The blocks of docs/jax-training.md.
+BLOCKS = (fenced("jax-training-speed", "docs/jax/training_speed_1thread.json", render_speed, SPEED),
+          fenced("jax-training-speed-2threads", "docs/jax/training_speed_2thread.json", render_speed, SPEED),
+          fenced("jax-time-to-criteria", "docs/jax/time_to_criteria.json", render_learn,
+                 Schema({"machine": str, "settings": dict, "seeds": int, "criteria": dict, "reached": list,
+                         "curves": list, "goal_s": (int, float), "met": bool, "median_time_s": (int, float)})))  # fmt: skip
 
 
-def rendered_block(name: str, data: dict[str, Any]) -> str:
-    """The docs block ``name`` rendered from its JSON ``data``."""
-    return "\n```\n" + "\n".join(BLOCKS[name][1](data)) + "\n```\n"
-
-
-def docs_block(name: str) -> str:
-    """The text between the markers of block ``name`` in the docs page."""
-    from train.reporting.doc_tables import block
-
-    return block(DOCS.read_text(), name)
-
-
-def write_docs() -> None:
-    from train.reporting.doc_tables import with_block
-
-    text = DOCS.read_text()
-    for name, (file, _) in BLOCKS.items():
-        if (OUT / file).is_file():
-            text = with_block(text, name, rendered_block(name, json.loads((OUT / file).read_text())))
-    DOCS.write_text(text)
-    print(f"wrote {DOCS}")
-
-
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks run jax-training", description=__doc__.splitlines()[0])
     parser.add_argument("what", nargs="?", choices=("speed", "learn"), help="the measurement to run")
     parser.add_argument("--threads", type=int, default=1, help="XLA and torch threads (default: 1)")
     parser.add_argument("--repeats", type=int, default=3, help="speed: alternating rounds (default: 3)")
@@ -316,17 +290,14 @@ def main() -> None:
     parser.add_argument("--eval-every", type=int, default=10, help="learn: updates between evaluations (default: 10)")
     parser.add_argument("--budget", type=float, default=1800.0, help="learn: wall-clock budget, s (default: 1800)")
     parser.add_argument("--hyperparams", nargs="*", default=[], metavar="KEY=VALUE", help="learn: overrides")
-    parser.add_argument("--docs", action="store_true", help="write docs/jax/*.json and docs/jax-training.md's blocks")
-    parser.add_argument("--render", action="store_true", help="only render docs/jax-training.md's blocks from the JSON")
-    args = parser.parse_args()
-    if args.render:
-        write_docs()
-        return
+    parser.add_argument("--docs", action="store_true", help="write docs/jax/*.json and render docs/jax-training.md's blocks")
+    args = parser.parse_args(argv)
     if args.what is None:
-        parser.error("expected speed or learn (or --render)")
+        parser.error("expected speed or learn")
     for name in ("threads", "repeats", "updates", "seeds", "eval_every"):
         if getattr(args, name) < 1:
             parser.error(f"--{name.replace('_', '-')}={getattr(args, name)} is invalid: expected a positive integer")
+    set_threads(args.threads)  # before jax and torch are imported
     if args.what == "speed":
         data, file = (
             speed(args.threads, args.repeats, args.updates, args.seeds),
@@ -340,11 +311,4 @@ def main() -> None:
         file, lines = "time_to_criteria.json", render_learn(data)
     print("\n".join(lines))
     if args.docs:
-        OUT.mkdir(parents=True, exist_ok=True)
-        (OUT / file).write_text(json.dumps(data, indent=1) + "\n")
-        print(f"wrote {OUT / file}")
-        write_docs()
-
-
-if __name__ == "__main__":
-    main()
+        write_json(OUT / file, data)

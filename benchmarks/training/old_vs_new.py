@@ -1,7 +1,7 @@
 """Learning against wall-clock time: `dwr-gym train`'s old defaults against the new, PPO, residual PPO and SAC.
 
-    OMP_NUM_THREADS=1 nice -n 10 python benchmarks/training_old_vs_new.py --docs      # 18 runs of --cap seconds
-    python benchmarks/training_old_vs_new.py --render                                  # figure and docs block
+    OMP_NUM_THREADS=1 nice -n 10 python -m benchmarks run training-old-vs-new --docs   # 18 runs of --cap seconds
+    python -m benchmarks run training-old-vs-new --render                               # the figure from the JSON
 
 Each run is the `dwr-gym train` command line (DWRPointStabilization-v1, seeds 0, 1, 2), stopped by Ctrl-C
 (SIGINT, which saves the model) after ``--cap`` seconds of wall time: the full budgets do not fit on 2
@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import argparse
 import csv
-import json
 import os
 import platform
 import signal
@@ -29,11 +28,12 @@ import time
 from pathlib import Path
 from typing import Any
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+from benchmarks.core.docs import NUMBER, Schema, fenced
+from benchmarks.core.record import load_average, read_json, write_json
+
+ROOT = Path(__file__).resolve().parents[2]
 JSON_PATH = ROOT / "docs" / "training" / "old_vs_new.json"
 FIGURE = ROOT / "docs" / "training" / "old_vs_new.png"
-DOCS = ROOT / "docs" / "training.md"
 AGENTS = {"ppo": ["--algo", "ppo"], "residual_ppo": ["--algo", "ppo", "--residual"], "sac": ["--algo", "sac"]}
 OLD = {"ppo": ["--num-envs", "16", "--hyperparams", "n_steps=256", "batch_size=512", "n_epochs=10"],
        "sac": ["--num-envs", "16"]}  # fmt: skip
@@ -122,7 +122,7 @@ def run(cap: float, seeds: list[int], out: Path) -> dict[str, Any]:
                       f"success {last['success_rate']:.2f}, return {last['return_mean']:.2f}", flush=True)  # fmt: skip
     return {"machine": f"{platform.machine()}, {os.cpu_count()} cores, torch {torch.__version__}, "
             f"OMP_NUM_THREADS={os.environ.get('OMP_NUM_THREADS')}",
-            "load_average_1min_at_end": round(os.getloadavg()[0], 2), "cap_seconds": cap, "seeds": seeds,
+            "load_average_1min_at_end": load_average(), "cap_seconds": cap, "seeds": seeds,
             "env_id": "DWRPointStabilization-v1", "old_arguments": {"ppo": OLD["ppo"] + OLD_COMMON,
             "sac": OLD["sac"] + OLD_COMMON}, "runs": runs}  # fmt: skip
 
@@ -192,31 +192,13 @@ def plot(results: dict[str, Any], path: Path) -> None:
     print(f"wrote {path}")
 
 
-def rendered_block(results: dict[str, Any]) -> str:
-    return "\n```\n" + "\n".join(render(results)) + "\n```\n"
-
-
-def docs_block(name: str = "old-vs-new") -> str:
-    """The text between the markers of block ``name`` in docs/training.md."""
-    from train.reporting.doc_tables import block
-
-    return block(DOCS.read_text(), name)
-
-
-def write_docs(results: dict[str, Any], name: str = "old-vs-new") -> None:
-    from train.reporting.doc_tables import with_block
-
-    DOCS.write_text(with_block(DOCS.read_text(), name, rendered_block(results)))
-    print(f"wrote {DOCS}")
-
-
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks run training-old-vs-new", description=__doc__.splitlines()[0])
     parser.add_argument("--cap", type=float, default=60.0, help="wall-clock seconds per run (default: 60)")
     parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
     parser.add_argument("--out", default="runs/old_vs_new", help="where the runs go (default: runs/old_vs_new)")
-    parser.add_argument("--docs", action="store_true", help="write the JSON, the figure and the docs block")
-    parser.add_argument("--render", action="store_true", help="only the figure and the docs block, from the JSON")
+    parser.add_argument("--docs", action="store_true", help="write the JSON and the figure (and render the block)")
+    parser.add_argument("--render", action="store_true", help="only the figure, from the JSON")
     parser.add_argument(
         "--redo",
         nargs=2,
@@ -225,35 +207,34 @@ def main() -> None:
         "reason given by --why (e.g. a run starved of CPU by another process)",
     )
     parser.add_argument("--why", default="", help="the reason for --redo, recorded in the JSON and the docs block")
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     if not args.cap > 0:
         parser.error(f"--cap={args.cap} is invalid: expected a positive number of seconds")
     if args.redo:
         agent, seed = args.redo[0], int(args.redo[1])
         if agent not in AGENTS or not args.why:
             parser.error(f"--redo {agent} {seed} is invalid: expected an agent of {sorted(AGENTS)} and a --why")
-        results = json.loads(JSON_PATH.read_text())
+        results = read_json(JSON_PATH)
         for setting in ("old", "new"):
             runs = results["runs"][agent][setting]
             index = [r["seed"] for r in runs].index(seed)
             runs[index] = one_run(agent, setting, seed, Path(args.out).resolve(), results["cap_seconds"])
         results.setdefault("redone", []).append({"agent": agent, "seed": seed, "why": args.why})
-        JSON_PATH.write_text(json.dumps(results, indent=1) + "\n")
+        write_json(JSON_PATH, results)
     elif args.render:
-        results = json.loads(JSON_PATH.read_text())
+        results = read_json(JSON_PATH)
     else:
         began = time.time()
         results = run(args.cap, args.seeds, Path(args.out).resolve())
         results["total_seconds"] = round(time.time() - began, 1)
     print("\n".join(render(results)))
+    if args.docs:
+        write_json(JSON_PATH, results)
     if args.docs or args.render or args.redo:
-        JSON_PATH.parent.mkdir(parents=True, exist_ok=True)
-        if args.docs:
-            JSON_PATH.write_text(json.dumps(results, indent=1) + "\n")
-            print(f"wrote {JSON_PATH}")
         plot(results, FIGURE)
-        write_docs(results)
 
 
-if __name__ == "__main__":
-    main()
+#: The block of docs/training.md.
+BLOCKS = (fenced("old-vs-new", "docs/training/old_vs_new.json", render,
+                 Schema({"machine": str, "load_average_1min_at_end": NUMBER, "cap_seconds": NUMBER, "seeds": list,
+                         "env_id": str, "runs": dict})),)  # fmt: skip

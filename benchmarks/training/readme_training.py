@@ -1,7 +1,6 @@
 """The README's training example, run as a user runs it: its wall and CPU time, and whether the agent arrives.
 
-    nice -n 10 python benchmarks/readme_training.py --docs     # writes docs/training/readme_example.json, ~5-30 min
-    python benchmarks/readme_training.py --render              # the README's block from the JSON
+    nice -n 10 python -m benchmarks run readme-training --docs     # writes docs/training/readme_example.json, ~5-30 min
 
 Runs ``COMMAND`` (a fresh `dwr-gym train` process, in a temporary directory), times it (wall clock, and the CPU time
 of the process and its children: on an idle machine the wall time of a run on one thread), then evaluates the
@@ -13,21 +12,19 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import platform
 import resource
 import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
 from typing import Any
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+from benchmarks.core.commands import checkout_env, dwr_gym
+from benchmarks.core.docs import NUMBER, Block, Schema
+from benchmarks.core.record import load_average, torch_machine, write_json
+
+ROOT = Path(__file__).resolve().parents[2]
 JSON_PATH = ROOT / "docs" / "training" / "readme_example.json"
-README = ROOT / "README.md"
-BLOCK = "readme-training"
 COMMAND = ["dwr-gym", "train", "--run-dir", "runs/ppo-v1"]
 EVALUATE = ["dwr-gym", "evaluate", "--agents", "runs/ppo-v1", "--controllers", "ptc", "--scenarios", "random",
             "--n", "200", "--optimum", "none"]  # fmt: skip
@@ -37,11 +34,10 @@ KEPT = ("policy", "n", "success_rate", "energy_mean", "final_heading_error_mean"
 
 
 def cli(args: list[str], cwd: str) -> subprocess.CompletedProcess[str]:
-    """``dwr-gym ...`` as this checkout's code, in ``cwd``."""
-    env = {**os.environ, "PYTHONPATH": str(ROOT), "MPLBACKEND": "Agg"}
+    """``dwr-gym ...`` (``args`` as the README types them) as this checkout's code, in ``cwd``."""
+    env = checkout_env()
     env.pop("OMP_NUM_THREADS", None)  # the user's setting: none
-    command = [sys.executable, "-m", "train.cli", *args[1:]]
-    return subprocess.run(command, cwd=cwd, env=env, check=True, capture_output=True, text=True)
+    return dwr_gym(args[1:], cwd, env=env, capture_output=True)
 
 
 def measure() -> dict[str, Any]:
@@ -52,7 +48,7 @@ def measure() -> dict[str, Any]:
         cli([*COMMAND, "--no-progress"], tmp)
         wall = time.perf_counter() - began
         after = resource.getrusage(resource.RUSAGE_CHILDREN)
-        load = os.getloadavg()[0]
+        load = load_average()
         cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
         from train.learning.runs import read_evaluations
 
@@ -60,15 +56,13 @@ def measure() -> dict[str, Any]:
         best = json.loads((Path(tmp) / "runs/ppo-v1/run_state.json").read_text())["best"]
         cli([*EVALUATE, "--no-progress", "--out", "out"], tmp)
         rows = json.loads((Path(tmp) / "out" / "evaluation.json").read_text())
-    import torch
-
     return {
-        "machine": f"{platform.machine()}, {os.cpu_count()} cores, torch {torch.__version__}",
+        "machine": torch_machine(),
         "command": " ".join(COMMAND),
         "evaluate": " ".join(EVALUATE),
         "wall_seconds": round(wall, 1),
         "cpu_seconds": round(cpu, 1),
-        "load_average_1min_at_end": round(load, 2),
+        "load_average_1min_at_end": load,
         "curve": curve,
         "best": best,
         "evaluation": [{k: row[k] for k in KEPT} for row in rows],
@@ -89,39 +83,21 @@ def render(results: dict[str, Any]) -> str:
         f"{agent['success_rate']:.0%} of the 200 random starts of the task, with a mean energy of {agent['energy_mean']:.2f} "
         f"(PTC: {ptc['success_rate']:.0%}, {ptc['energy_mean']:.2f}); final heading error "
         f"{agent['final_heading_error_mean']:.2f} rad on average (PTC: {ptc['final_heading_error_mean']:.2f}). "
-        "One seed, from `docs/training/readme_example.json` (`benchmarks/readme_training.py`).\n"
+        "One seed, from `docs/training/readme_example.json` (`python -m benchmarks run readme-training`).\n"
     )
 
 
-def readme_block() -> str:
-    from train.reporting.doc_tables import block
-
-    return block(README.read_text(), BLOCK)
-
-
-def write_readme(results: dict[str, Any]) -> None:
-    from train.reporting.doc_tables import with_block
-
-    README.write_text(with_block(README.read_text(), BLOCK, render(results)))
-    print(f"wrote {README}")
-
-
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} and the README block")
-    parser.add_argument("--render", action="store_true", help="only render the README block from the JSON")
-    args = parser.parse_args()
-    if args.render:
-        write_readme(json.loads(JSON_PATH.read_text()))
-        return
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks run readme-training", description=__doc__.splitlines()[0])
+    parser.add_argument("--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} and render its block")
+    args = parser.parse_args(argv)
     results = measure()
     print(render(results))
     if args.docs:
-        JSON_PATH.parent.mkdir(parents=True, exist_ok=True)
-        JSON_PATH.write_text(json.dumps(results, indent=1) + "\n")
-        print(f"wrote {JSON_PATH}")
-        write_readme(results)
+        write_json(JSON_PATH, results)
 
 
-if __name__ == "__main__":
-    main()
+#: The block of the README.
+BLOCKS = (Block("readme-training", "docs/training/readme_example.json", render,
+                Schema({"machine": str, "command": str, "evaluate": str, "wall_seconds": NUMBER, "cpu_seconds": NUMBER,
+                        "load_average_1min_at_end": NUMBER, "curve": list, "best": dict, "evaluation": list})),)  # fmt: skip

@@ -1,8 +1,7 @@
 """Retrain every shipped agent (train/pretrained/*) from its recipe over 3 seeds; mean +- sd beside the shipped one.
 
-    OMP_NUM_THREADS=1 nice -n 10 python benchmarks/retrain_pretrained.py --docs        # full budgets, 3 seeds
-    python benchmarks/retrain_pretrained.py --agents ppo --seeds 0 --budget 0.1        # a quicker check
-    python benchmarks/retrain_pretrained.py --render                                   # docs block from the JSON
+    OMP_NUM_THREADS=1 nice -n 10 python -m benchmarks run retrain-pretrained --docs        # full budgets, 3 seeds
+    python -m benchmarks run retrain-pretrained --agents ppo --seeds 0 --budget 0.1        # a quicker check
 
 The recipe of an agent is the ``command:`` its run recorded in config.yaml (``dwr-gym train ...``,
 ``python -m train.learning.dagger ...``, or any other module with ``--run-dir`` and ``--seed``; a later
@@ -24,7 +23,6 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
-import json
 import math
 import os
 import platform
@@ -39,11 +37,12 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+from benchmarks.core.docs import NUMBER, Schema, fenced
+from benchmarks.core.record import load_average, write_json
+
+ROOT = Path(__file__).resolve().parents[2]
 PRETRAINED = ROOT / "train" / "pretrained"
 JSON_PATH = ROOT / "docs" / "training" / "retrain.json"
-DOCS = ROOT / "docs" / "training.md"
 GOAL_MINUTES = 30.0
 BUDGET_FLAGS = ("--total-timesteps", "--episodes", "--dagger-episodes")
 METRICS = (("success_rate", "success", "{:.1%}"), ("arrival_time_mean", "arrival [s]", "{:.2f}"),
@@ -166,7 +165,7 @@ def run(
     training_seconds = time.time() - began
     results: dict[str, Any] = {"machine": f"{platform.machine()}, {os.cpu_count()} cores, torch {torch.__version__}, "
                                f"OMP_NUM_THREADS={os.environ.get('OMP_NUM_THREADS')}",
-                               "load_average_1min_at_end": round(os.getloadavg()[0], 2),
+                               "load_average_1min_at_end": load_average(),
                                "seeds": sorted({s for agent in agents for s in seeds[agent.name]}), "jobs": jobs,
                                "n": n, "agents": {}}  # fmt: skip
     for agent in agents:
@@ -217,26 +216,8 @@ def render(results: dict[str, Any]) -> list[str]:
     return lines
 
 
-def rendered_block(results: dict[str, Any]) -> str:
-    return "\n```\n" + "\n".join(render(results)) + "\n```\n"
-
-
-def docs_block(name: str = "retrain") -> str:
-    """The text between the markers of block ``name`` in docs/training.md."""
-    from train.reporting.doc_tables import block
-
-    return block(DOCS.read_text(), name)
-
-
-def write_docs(results: dict[str, Any], name: str = "retrain") -> None:
-    from train.reporting.doc_tables import with_block
-
-    DOCS.write_text(with_block(DOCS.read_text(), name, rendered_block(results)))
-    print(f"wrote {DOCS}")
-
-
-def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks run retrain-pretrained", description=__doc__.splitlines()[0])
     parser.add_argument("--agents", nargs="+", help="names under train/pretrained/ (default: every one)")
     parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
     parser.add_argument("--budget", type=float, default=1.0, help="fraction of each recipe's budget (default: 1)")
@@ -246,12 +227,8 @@ def main() -> int:
     parser.add_argument("--jobs", type=int, default=2, help="recipes run at once (default: 2, one per core)")
     parser.add_argument("--out", default="runs/retrain", help="where the runs go (default: runs/retrain)")
     parser.add_argument("--pretrained", default=str(PRETRAINED), help="the agents' directory")
-    parser.add_argument("--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} and the docs block")
-    parser.add_argument("--render", action="store_true", help="only render the docs block from the JSON")
-    args = parser.parse_args()
-    if args.render:
-        write_docs(json.loads(JSON_PATH.read_text()))
-        return 0
+    parser.add_argument("--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} and render its block")
+    args = parser.parse_args(argv)
     shipped = sorted(p.parent for p in Path(args.pretrained).glob("*/config.yaml"))
     budgets = {p.name: args.budget for p in shipped}
     for item in args.budget_of:
@@ -287,12 +264,11 @@ def main() -> int:
     results["all_agents"] = len(shipped) == everyone
     print("\n".join(render(results)))
     if args.docs:
-        JSON_PATH.parent.mkdir(parents=True, exist_ok=True)
-        JSON_PATH.write_text(json.dumps(results, indent=1) + "\n")
-        print(f"wrote {JSON_PATH}")
-        write_docs(results)
+        write_json(JSON_PATH, results)
     return 0
 
 
-if __name__ == "__main__":
-    raise SystemExit(main())
+#: The block of docs/training.md.
+BLOCKS = (fenced("retrain", "docs/training/retrain.json", render,
+                 Schema({"machine": str, "load_average_1min_at_end": NUMBER, "seeds": list, "jobs": int, "n": int,
+                         "agents": dict, "wall_seconds": NUMBER, "goal_minutes": NUMBER})),)  # fmt: skip

@@ -1,7 +1,6 @@
 """`dwr-gym train` with its defaults against stable-baselines3's PPO with its defaults on CartPole-v1, in one run.
 
-    OMP_NUM_THREADS=1 nice -n 10 python benchmarks/training_speed.py --docs       # writes docs/training/speed.json
-    python benchmarks/training_speed.py --render                                   # docs/training.md from the JSON
+    OMP_NUM_THREADS=1 nice -n 10 python -m benchmarks run training-speed --docs   # docs/training/speed.json, its block
 
 Issue 23's goal: `dwr-gym train` with its defaults (PPO on DWRPointStabilization-v1, evaluations and
 checkpoints included) runs at >= 20x the env steps per second of ``PPO("MlpPolicy", "CartPole-v1")``,
@@ -19,19 +18,18 @@ import os
 os.environ.setdefault("OMP_NUM_THREADS", "1")  # before torch is imported: one thread, as the goal says
 
 import argparse
-import json
 import platform
-import statistics
-import sys
 import tempfile
 import time
 from pathlib import Path
 from typing import Any
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+from benchmarks.core.docs import NUMBER, Schema, fenced
+from benchmarks.core.record import load_average, write_json
+from benchmarks.core.timing import median_ratio, medians
+
+ROOT = Path(__file__).resolve().parents[2]
 JSON_PATH = ROOT / "docs" / "training" / "speed.json"
-DOCS = ROOT / "docs" / "training.md"
 GOAL = 20.0
 OLD_DEFAULTS = {"num_envs": 16, "eval_freq": 20_000, "checkpoint_freq": 50_000,
                 "hyperparam_overrides": {"n_steps": 256, "batch_size": 512, "n_epochs": 10}}  # fmt: skip
@@ -81,19 +79,17 @@ def run(repeats: int, cartpole_steps: int, new_steps: int, old_steps: int) -> di
         print(
             f"round {index + 1}/{repeats}: " + ", ".join(f"{k} {v:,.0f} steps/s" for k, v in entry.items()), flush=True
         )
-    ratio = statistics.median(r["train_defaults"] / r["cartpole_sb3_ppo"] for r in rounds)
+    ratio = median_ratio(rounds, "train_defaults", "cartpole_sb3_ppo")
     return {
         "machine": f"{platform.machine()}, {os.cpu_count()} cores, torch {torch.__version__}, "
         f"OMP_NUM_THREADS={os.environ.get('OMP_NUM_THREADS')}, torch threads {torch.get_num_threads()}",
-        "load_average_1min_at_end": round(os.getloadavg()[0], 2),
+        "load_average_1min_at_end": load_average(),
         "steps": {"cartpole_sb3_ppo": cartpole_steps, "train_defaults": new_steps, "train_old_defaults": old_steps},
         "rounds": rounds,
-        "median_fps": {key: statistics.median(r[key] for r in rounds) for key in rounds[0]},
+        "median_fps": medians(rounds),
         "ratio_train_defaults_to_cartpole": ratio,
-        "ratio_train_old_defaults_to_cartpole": statistics.median(
-            r["train_old_defaults"] / r["cartpole_sb3_ppo"] for r in rounds
-        ),
-        "ratio_new_to_old_defaults": statistics.median(r["train_defaults"] / r["train_old_defaults"] for r in rounds),
+        "ratio_train_old_defaults_to_cartpole": median_ratio(rounds, "train_old_defaults", "cartpole_sb3_ppo"),
+        "ratio_new_to_old_defaults": median_ratio(rounds, "train_defaults", "train_old_defaults"),
         "goal": GOAL,
         "met": ratio >= GOAL,
     }
@@ -109,7 +105,7 @@ def render(results: dict[str, Any]) -> list[str]:
              f"{len(results['rounds'])} rounds, alternating; medians", "",
              f"{'run':<62}{'env steps':>11}{'steps/s':>10}{'/ CartPole':>12}"]  # fmt: skip
     for key, name in names.items():
-        ratio = statistics.median(r[key] / r["cartpole_sb3_ppo"] for r in results["rounds"])
+        ratio = median_ratio(results["rounds"], key, "cartpole_sb3_ppo")
         lines.append(f"{name:<62}{steps[key]:>11,}{fps[key]:>10,.0f}{ratio:>11.1f}x")
     verdict = "met" if results["met"] else "NOT met"
     per_round = ", ".join(f"{r['train_defaults'] / r['cartpole_sb3_ppo']:.1f}x" for r in results["rounds"])
@@ -120,48 +116,26 @@ def render(results: dict[str, Any]) -> list[str]:
     return lines
 
 
-def rendered_block(results: dict[str, Any]) -> str:
-    return "\n```\n" + "\n".join(render(results)) + "\n```\n"
-
-
-def docs_block(name: str = "training-speed") -> str:
-    """The text between the markers of block ``name`` in docs/training.md."""
-    from train.reporting.doc_tables import block
-
-    return block(DOCS.read_text(), name)
-
-
-def write_docs(results: dict[str, Any], name: str = "training-speed") -> None:
-    from train.reporting.doc_tables import with_block
-
-    DOCS.write_text(with_block(DOCS.read_text(), name, rendered_block(results)))
-    print(f"wrote {DOCS}")
-
-
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks run training-speed", description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3, help="alternating rounds (default: 3)")
     parser.add_argument("--cartpole-steps", type=int, default=16_384, help="SB3 PPO on CartPole (default: 16384)")
     parser.add_argument("--steps", type=int, default=524_288,
                         help="dwr-gym train with its defaults (default: 524288: 2 evaluations, 1 checkpoint)")  # fmt: skip
     parser.add_argument("--old-steps", type=int, default=65_536, help="dwr-gym train, old defaults (default: 65536)")
-    parser.add_argument("--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} and the docs block")
-    parser.add_argument("--render", action="store_true", help="only render the docs block from the JSON")
-    args = parser.parse_args()
+    parser.add_argument("--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} and render its block")
+    args = parser.parse_args(argv)
     for name in ("repeats", "cartpole_steps", "steps", "old_steps"):
         if getattr(args, name) < 1:
             parser.error(f"--{name.replace('_', '-')}={getattr(args, name)} is invalid: expected a positive integer")
-    if args.render:
-        write_docs(json.loads(JSON_PATH.read_text()))
-        return
     results = run(args.repeats, args.cartpole_steps, args.steps, args.old_steps)
     print("\n".join(render(results)))
     if args.docs:
-        JSON_PATH.parent.mkdir(parents=True, exist_ok=True)
-        JSON_PATH.write_text(json.dumps(results, indent=1) + "\n")
-        print(f"wrote {JSON_PATH}")
-        write_docs(results)
+        write_json(JSON_PATH, results)
 
 
-if __name__ == "__main__":
-    main()
+#: The block of docs/training.md.
+BLOCKS = (fenced("training-speed", "docs/training/speed.json", render,
+                 Schema({"machine": str, "load_average_1min_at_end": NUMBER, "steps": dict, "rounds": list,
+                         "median_fps": dict, "ratio_train_defaults_to_cartpole": NUMBER,
+                         "ratio_new_to_old_defaults": NUMBER, "goal": NUMBER, "met": bool})),)  # fmt: skip

@@ -1,7 +1,6 @@
 """`dwr-gym train` on a busy machine: its defaults against `OMP_NUM_THREADS=1`, under the same load, in one run.
 
-    nice -n 10 python benchmarks/training_threads.py --docs     # writes docs/training/threads.json, ~10 min on 2 cores
-    python benchmarks/training_threads.py --render               # docs/training.md's block from the JSON
+    nice -n 10 python -m benchmarks run training-threads --docs   # docs/training/threads.json and its block, ~10 min
 
 Issue 35's goal: with two busy processes beside it (``python -c 'while True: pass'``), `dwr-gym train` with its
 default settings runs at >= 0.8x the speed of the same command under ``OMP_NUM_THREADS=1``, for PPO and SAC.
@@ -15,10 +14,7 @@ collapse. The busy processes are started before the first run and stopped after 
 from __future__ import annotations
 
 import argparse
-import json
 import os
-import platform
-import statistics
 import subprocess
 import sys
 import tempfile
@@ -26,11 +22,12 @@ import time
 from pathlib import Path
 from typing import Any
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+from benchmarks.core.docs import NUMBER, Schema, fenced
+from benchmarks.core.record import load_average, torch_machine, write_json
+from benchmarks.core.timing import background_load, median_ratio, medians
+
+ROOT = Path(__file__).resolve().parents[2]
 JSON_PATH = ROOT / "docs" / "training" / "threads.json"
-DOCS = ROOT / "docs" / "training.md"
-BLOCK = "training-threads"
 GOAL = 0.8
 STEPS = {"ppo": 32_768, "sac": 4_096}
 """Env steps per run: PPO's are two rollouts of 256 robots; SAC's pass learning_starts (2,000) so that it trains."""
@@ -62,9 +59,7 @@ def timed_run(
 def run(repeats: int, busy: int, reference: bool, save: Any = None) -> dict[str, Any]:
     """The rounds, under ``busy`` busy processes; the medians and ratios (given to ``save`` after each round too,
     so that a run cut short keeps what it measured)."""
-    loads = [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(busy)]
-    try:
-        time.sleep(1.0)
+    with background_load(busy, 6 * 3600.0):  # (ended with the block, a SIGTERM included)
         rounds: list[dict[str, Any]] = []
         for index in range(repeats):
             entry: dict[str, Any] = {}
@@ -85,27 +80,19 @@ def run(repeats: int, busy: int, reference: bool, save: Any = None) -> dict[str,
                 print(f"{algo} --threads {cores}: {collapse[algo]:,.0f} steps/s", flush=True)
                 if save is not None:
                     save(summarize(rounds, collapse, busy))
-    finally:
-        for process in loads:
-            process.kill()
-            process.wait()
     return summarize(rounds, collapse, busy)
 
 
 def summarize(rounds: list[dict[str, Any]], collapse: dict[str, float], busy: int) -> dict[str, Any]:
     """The results of the rounds so far: medians, ratios, the verdict."""
-    import torch
-
-    load = os.getloadavg()[0]
-    ratios = {algo: statistics.median(r[f"{algo} defaults"] / r[f"{algo} OMP_NUM_THREADS=1"] for r in rounds)
-              for algo in STEPS}  # fmt: skip
+    ratios = {algo: median_ratio(rounds, f"{algo} defaults", f"{algo} OMP_NUM_THREADS=1") for algo in STEPS}
     return {
-        "machine": f"{platform.machine()}, {os.cpu_count()} cores, torch {torch.__version__}",
+        "machine": torch_machine(),
         "busy_processes": busy,
-        "load_average_1min_at_end": round(load, 2),
+        "load_average_1min_at_end": load_average(),
         "steps": STEPS,
         "rounds": rounds,
-        "median_fps": {key: statistics.median(r[key] for r in rounds) for key in rounds[0]},
+        "median_fps": medians(rounds),
         "threads_cores_fps": collapse,
         "reference_limit_seconds": REFERENCE_LIMIT,
         "cores": os.cpu_count(),
@@ -143,54 +130,26 @@ def render(results: dict[str, Any]) -> list[str]:
     return lines
 
 
-def rendered_block(results: dict[str, Any]) -> str:
-    return "\n```\n" + "\n".join(render(results)) + "\n```\n"
-
-
-def docs_block(name: str = BLOCK) -> str:
-    """The text between the markers of block ``name`` in docs/training.md."""
-    from train.reporting.doc_tables import block
-
-    return block(DOCS.read_text(), name)
-
-
-def write_docs(results: dict[str, Any]) -> None:
-    from train.reporting.doc_tables import with_block
-
-    DOCS.write_text(with_block(DOCS.read_text(), BLOCK, rendered_block(results)))
-    print(f"wrote {DOCS}")
-
-
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks run training-threads", description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3, help="alternating rounds (default: 3)")
     parser.add_argument("--busy", type=int, default=2, help="busy background processes (default: 2)")
     parser.add_argument("--no-reference", action="store_true", help="skip the --threads <cores> runs (slow)")
-    parser.add_argument("--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} and the docs block")
-    parser.add_argument("--render", action="store_true", help="only render the docs block from the JSON")
-    args = parser.parse_args()
+    parser.add_argument("--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} (after each round)")
+    args = parser.parse_args(argv)
     for name in ("repeats", "busy"):
         if getattr(args, name) < (1 if name == "repeats" else 0):
             parser.error(f"--{name}={getattr(args, name)} is invalid: expected a positive integer")
-    if args.render:
-        write_docs(json.loads(JSON_PATH.read_text()))
-        return
-
-    import signal
-
-    signal.signal(signal.SIGTERM, lambda signum, frame: sys.exit(143))  # a timeout still stops the busy processes
-
-    def save(results: dict[str, Any]) -> None:
-        JSON_PATH.parent.mkdir(parents=True, exist_ok=True)
-        JSON_PATH.write_text(json.dumps(results, indent=1) + "\n")
-        write_docs(results)
-
-    results = run(args.repeats, args.busy, not args.no_reference, save if args.docs else None)
+    save = (lambda results: write_json(JSON_PATH, results)) if args.docs else None  # a run cut short keeps its rounds
+    results = run(args.repeats, args.busy, not args.no_reference, save)
     print("\n".join(render(results)))
-    if args.docs:
+    if save is not None:
         save(results)
-        print(f"wrote {JSON_PATH}")
 
 
-if __name__ == "__main__":
-    main()
+#: The block of docs/training.md.
+BLOCKS = (fenced("training-threads", "docs/training/threads.json", render,
+                 Schema({"machine": str, "busy_processes": int, "load_average_1min_at_end": NUMBER, "steps": dict,
+                         "rounds": list, "median_fps": dict, "threads_cores_fps": dict,
+                         "reference_limit_seconds": NUMBER, "cores": int, "ratio_defaults_to_omp1": dict,
+                         "goal": NUMBER, "met": bool})),)  # fmt: skip

@@ -1,7 +1,7 @@
 """Where a PPO run's time goes: env step, expert, policy forward (rollout collection) and the update.
 
-    python benchmarks/training_time.py                    # PPO and residual PPO on PTC, 16 envs, 65,536 steps
-    python benchmarks/training_time.py --steps 200000 --num-envs 64
+    python -m benchmarks run training-time                    # PPO and residual PPO on PTC, 16 envs, 65,536 steps
+    python -m benchmarks run training-time --steps 200000 --num-envs 64
 
 It trains with the same pieces as ``dwr-gym train`` (the native vector env behind the SB3 adapter, which keeps
 the episode statistics, and the residual wrapper) and times, with a wrapper around each: the env's ``step_wait``,
@@ -78,11 +78,11 @@ def profile(residual: bool, steps: int, num_envs: int) -> dict[str, float]:
     return parts
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks run training-time", description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=65_536)
     parser.add_argument("--num-envs", type=int, default=16)
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     torch.set_num_threads(max(1, (os.cpu_count() or 1)))
     print(f"{platform.machine()}, {os.cpu_count()} cores, torch {torch.__version__}, {torch.get_num_threads()} threads")
     for residual in (False, True):
@@ -92,7 +92,3 @@ def main() -> None:
         print(f"\n{label}: {args.steps} steps, {args.num_envs} envs, {total:.1f} s, {args.steps / total:,.0f} steps/s")
         for name, seconds in sorted(parts.items(), key=lambda item: -item[1]):
             print(f"  {name:<28} {seconds:7.2f} s  {100 * seconds / total:5.1f} %")
-
-
-if __name__ == "__main__":
-    main()
