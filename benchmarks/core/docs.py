@@ -49,7 +49,7 @@ class Schema:
             for key, types in self.keys.items():
                 if key not in item:
                     found.append(f"{where}{key!r} is missing")
-                elif not isinstance(item[key], types) or isinstance(item[key], bool) and bool not in _tuple(types):
+                elif not isinstance(item[key], types) or (isinstance(item[key], bool) and bool not in _tuple(types)):
                     found.append(f"{where}{key!r} is {type(item[key]).__name__}, expected {_names(types)}")
         return found
 

@@ -2,7 +2,7 @@
 
     python -m benchmarks run prescribed-time-goal train/pretrained/dagger_handover
     python -m benchmarks run prescribed-time-goal runs/dagger_handover_s0 runs/dagger_handover_s1 runs/dagger_handover_s2
-    python -m benchmarks run prescribed-time-goal train/pretrained/dagger_handover --out docs/prescribed_time/goal.json
+    python -m benchmarks run prescribed-time-goal train/pretrained/dagger_handover --n 200 --docs   # goal.json, table
 
 On random starts 0.3-3 m away (500 per T_con, seed 0), at each T_con in {10, 20, 40, 60} s, it
 evaluates the given agents (several run directories are treated as training seeds of one agent:
@@ -15,15 +15,18 @@ heading 0, at T_con), and checks the goal for the agents: arrival by T_con in
 from __future__ import annotations
 
 import argparse
-import json
 from collections import defaultdict
 from pathlib import Path
 
 import numpy as np
 
+from benchmarks.core import docs
+from benchmarks.core.record import write_json
 from train.evaluation.evaluate import evaluate_sets
 from train.learning.agents import load_agent
 
+ROOT = Path(__file__).resolve().parents[2]
+DOCS_JSON = "docs/prescribed_time/goal.json"
 T_CONS = [10.0, 20.0, 40.0, 60.0]
 ENV_KWARGS = {"start_distance": (0.3, 3.0)}
 KEYS = ("success_rate", "final_heading_error_mean", "energy_mean", "energy_ratio_mean")
@@ -34,7 +37,10 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("agents", nargs="+", help="run directories: the training seeds of one agent")
     parser.add_argument("--n", type=int, default=500)
     parser.add_argument("--out", help="also write the rows and the verdicts as JSON to this file")
+    parser.add_argument("--docs", action="store_true", help=f"write them to {DOCS_JSON} (and render its table)")
     args = parser.parse_args(argv)
+    if args.docs:
+        args.out = str(ROOT / DOCS_JSON)
     policies = {f"seed{i}": load_agent(path)[1] for i, path in enumerate(args.agents)}
     policies.update({name: name for name in ("ptc", "pt-astolfi", "astolfi")})
     rows = evaluate_sets(policies, ["random"], args.n, 0, ENV_KWARGS, progress=True, optimum="pose", T_cons=T_CONS)
@@ -71,9 +77,8 @@ def main(argv: list[str] | None = None) -> None:
         print(f"[{'met' if all(verdicts) else 'not met':>7}] {text} (every seed): {detail}")
         found[text] = dict(zip((f"{T:g}" for T in T_CONS), verdicts, strict=True))
     if args.out:
-        from train.reporting.results import json_safe
-
-        Path(args.out).parent.mkdir(parents=True, exist_ok=True)
         data = {"agents": args.agents, "n": args.n, "rows": rows, "verdicts": found}
-        Path(args.out).write_text(json.dumps(json_safe(data), indent=2) + "\n")
-        print(f"wrote {args.out}")
+        write_json(Path(args.out), data, safe=True)
+
+
+BLOCKS = (docs.table("prescribed-time-goal", docs.Schema({"agents": list, "n": int, "rows": list, "verdicts": dict})),)

@@ -16,13 +16,13 @@ minimum-energy motion the task asks for.
 from __future__ import annotations
 
 import argparse
-import json
-import math
-import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from benchmarks.core.docs import NUMBER, Schema, table
+from benchmarks.core.record import write_json
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -51,7 +51,7 @@ def clipped_second_moment(sigma: float, samples: int = 200_000) -> float:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m benchmarks run rl-diagnosis", description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=int, default=200, help="episodes of the benchmark's nominal set (default 200)")
-    parser.add_argument("--docs", action="store_true", help="write docs/rl_benchmark/diagnosis.json")
+    parser.add_argument("--docs", action="store_true", help="write docs/rl_benchmark/diagnosis.json (and its table)")
     args = parser.parse_args(argv)
 
     from baselines.expert import ExpertPolicy
@@ -82,8 +82,9 @@ def main(argv: list[str] | None = None) -> int:
     data = {"env_id": TASK_ENV_ID, "n": args.n, "seed": EVAL_SEED, "energy_weight": params.energy_weight,
             "arrival_bonus": params.arrival_bonus, "rows": rows}  # fmt: skip
     if args.docs:
-        path = ROOT / "docs" / "rl_benchmark" / "diagnosis.json"
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(json.dumps(data, indent=1, default=lambda v: None if not math.isfinite(v) else v))
-        print(f"wrote {path}")
+        write_json(ROOT / "docs" / "rl_benchmark" / "diagnosis.json", data)
     return 0
+
+
+BLOCKS = (table("rl-diagnosis", Schema({"env_id": str, "n": int, "seed": int, "energy_weight": NUMBER,
+                                        "arrival_bonus": NUMBER, "rows": list})),)  # fmt: skip

@@ -12,12 +12,13 @@ from __future__ import annotations
 
 import argparse
 import csv
-import json
 import os
 import shlex
-import subprocess
-import sys
 from pathlib import Path
+
+from benchmarks.core.commands import dwr_gym
+from benchmarks.core.docs import NUMBER, Schema, table
+from benchmarks.core.record import write_json
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -58,33 +59,20 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seconds", type=float, default=300.0, help="wall time per run (default 300)")
     parser.add_argument("--out", default="runs/levers", help="where the runs go (default runs/levers)")
     parser.add_argument("--collect", help="read the runs in this directory instead of training")
-    parser.add_argument("--docs", action="store_true", help="write docs/rl_benchmark/levers.json")
-    parser.add_argument(
-        "--sweep", help="also copy the trials.csv of this dwr-gym sweep --out to docs/rl_benchmark/sweep.json"
-    )
-    parser.add_argument("--sweep-json", default="sweep.json", help="the file under docs/rl_benchmark/ it writes")
+    parser.add_argument("--docs", action="store_true", help="write docs/rl_benchmark/levers.json (and render its table)")
     args = parser.parse_args(argv)
-    if args.sweep:
-        with (Path(args.sweep) / "trials.csv").open() as handle:
-            trials = list(csv.DictReader(handle))
-        target = ROOT / "docs" / "rl_benchmark" / args.sweep_json
-        target.write_text(json.dumps({"out": args.sweep, "trials": trials}, indent=1))
-        print(f"wrote {target}")
-        return 0
     out = Path(args.collect or args.out)
     data = {"seconds": args.seconds, "machine": f"{os.cpu_count()} cores, shared", "levers": {}}
     for lever, options in LEVERS.items():
         run_dir = out / DIRS[lever]
         if not args.collect:
-            command = [sys.executable, "-m", "train.cli", "train", "--run-dir", str(run_dir), "--overwrite",
-                       "--no-progress", "--threads", "1", "--total-timesteps", "100000000",
-                       "--time-limit", str(args.seconds), *shlex.split(options)]  # fmt: skip
-            subprocess.run(command, check=True, cwd=ROOT)
+            dwr_gym(["train", "--run-dir", str(run_dir), "--overwrite", "--no-progress", "--threads", "1",
+                     "--total-timesteps", "100000000", "--time-limit", str(args.seconds), *shlex.split(options)])  # fmt: skip
         if (run_dir / "evaluations.csv").is_file():
             data["levers"][lever] = {"options": options, "curve": curve(run_dir, repeat_of(options))}
     if args.docs:
-        path = ROOT / "docs" / "rl_benchmark" / "levers.json"
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(json.dumps(data, indent=1))
-        print(f"wrote {path}")
+        write_json(ROOT / "docs" / "rl_benchmark" / "levers.json", data)
     return 0
+
+
+BLOCKS = (table("rl-levers", Schema({"seconds": NUMBER, "machine": str, "levers": dict})),)

@@ -13,11 +13,13 @@ from __future__ import annotations
 import argparse
 import itertools
 import json
-import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from benchmarks.core.docs import Schema, table
+from benchmarks.core.record import write_json
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -56,7 +58,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m benchmarks run rl-residual", description=__doc__.splitlines()[0])
     parser.add_argument("agents", nargs="+", help="run directories of residual agents")
     parser.add_argument("--n", type=int, default=200, help="episodes of the benchmark's nominal set (default 200)")
-    parser.add_argument("--docs", action="store_true", help="write docs/rl_benchmark/residual.json")
+    parser.add_argument("--docs", action="store_true", help="write docs/rl_benchmark/residual.json (and its table)")
     args = parser.parse_args(argv)
 
     from train.env_ids import TASK_ENV_ID, env_keywords
@@ -84,7 +86,8 @@ def main(argv: list[str] | None = None) -> int:
         }
         print(json.dumps(data["agents"][Path(path).name], indent=1))
     if args.docs:
-        target = ROOT / "docs" / "rl_benchmark" / "residual.json"
-        target.write_text(json.dumps(data, indent=1))
-        print(f"wrote {target}")
+        write_json(ROOT / "docs" / "rl_benchmark" / "residual.json", data)
     return 0
+
+
+BLOCKS = (table("rl-residual", Schema({"n": int, "seed": int, "agents": dict})),)

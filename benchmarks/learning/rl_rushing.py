@@ -14,11 +14,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from benchmarks.core.docs import Schema, table
+from benchmarks.core.record import write_json
 
 ROOT = Path(__file__).resolve().parents[2]
 JSON_PATH = ROOT / "docs" / "rl_benchmark" / "rushing.json"
@@ -52,7 +54,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("agents", nargs="*", help="run directories (or model .zip) of agents")
     parser.add_argument("--controllers", nargs="*", default=["ptc"], help="controllers beside them (default: ptc)")
     parser.add_argument("--n", type=int, default=50, help="episodes of the benchmark's nominal set (default 50)")
-    parser.add_argument("--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)}")
+    parser.add_argument("--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} (and its table)")
     args = parser.parse_args(argv)
     if args.n < 1:
         parser.error(f"--n {args.n} is invalid: expected >= 1")
@@ -78,6 +80,8 @@ def main(argv: list[str] | None = None) -> int:
         print(name, json.dumps(rows[name]))
     data = {"n": args.n, "seed": EVAL_SEED, "policies": rows}
     if args.docs:
-        JSON_PATH.write_text(json.dumps(data, indent=1))
-        print(f"wrote {JSON_PATH}")
+        write_json(JSON_PATH, data)
     return 0
+
+
+BLOCKS = (table("rl-rushing", Schema({"n": int, "seed": int, "policies": dict})),)

@@ -2,20 +2,24 @@
 
 Faster rates follow a push that changes quickly; but the filter then takes the late response of a delayed robot
 for a disturbance. This runs ``robust-pt`` with each rate on one magnitude of each kind of disturbance (those of
-``tests/test_robust.py``) and prints in-time rate and energy; ``--json`` writes the rows (docs/robust/filter_rates.json,
+``tests/test_robust.py``) and prints in-time rate and energy; ``--docs`` writes the rows (docs/robust/filter_rates.json,
 the table of docs/robust.md).
 
-    python -m benchmarks run robust-filter-rates --n 24 --json docs/robust/filter_rates.json
+    python -m benchmarks run robust-filter-rates --n 24 --docs
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 from typing import Any
 
+from benchmarks.core.docs import NUMBER, Schema, table
+from benchmarks.core.record import write_json
+
+ROOT = Path(__file__).resolve().parents[2]
+DOCS_JSON = "docs/robust/filter_rates.json"
 RATES = ((0.02, 0.1), (0.05, 0.25), (0.1, 0.5))
 T_CON = 20.0
 
@@ -37,8 +41,11 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m benchmarks run robust-filter-rates", description=__doc__.splitlines()[0], allow_abbrev=False)
     parser.add_argument("--n", type=int, default=24, help="starts 0.3-3 m away per kind (default: 24)")
     parser.add_argument("--seed", type=int, default=5)
-    parser.add_argument("--json", type=Path)
+    parser.add_argument("--json", type=Path, help="write the rows here")
+    parser.add_argument("--docs", action="store_true", help=f"write them to {DOCS_JSON} (and render its table)")
     args = parser.parse_args(argv)
+    if args.docs:
+        args.json = ROOT / DOCS_JSON
     from baselines import ExpertPolicy, make_controller
     from baselines.estimation import PoseFilterParams
     from train.evaluation.evaluate import evaluate
@@ -58,5 +65,7 @@ def main(argv: list[str] | None = None) -> None:
             print(f"{kind:9} rates {rate}: in time {100 * summary['success_rate']:5.1f} %, "
                   f"energy {summary['energy_mean']:.3f}", file=sys.stderr, flush=True)  # fmt: skip
     if args.json:
-        args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(json.dumps({"T_con": T_CON, "seed": args.seed, "rows": rows}, indent=1) + "\n")
+        write_json(args.json, {"T_con": T_CON, "seed": args.seed, "rows": rows})
+
+
+BLOCKS = (table("robust-filter-rates", Schema({"T_con": NUMBER, "seed": int, "rows": list})),)

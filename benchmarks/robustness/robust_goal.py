@@ -10,7 +10,7 @@ PTC (the paper's law: the energy bar) and `robust-pt` (the expert), and prints e
   episode with CasADi and cached);
 - under `noise`, a command-rate RMS <= 2 times its nominal one.
 
-    python -m benchmarks run robust-goal --n 500 --json docs/robust/goal.json
+    python -m benchmarks run robust-goal --n 200 --docs      # docs/robust/goal.json and its table
 
 An agent is a run directory, optionally with ``#network`` (the network alone) or ``#no-plan`` (the network with
 ``robust-pt``'s analytic finish but no planner); the default is the shipped ``train/pretrained/robust`` whole, its
@@ -22,7 +22,6 @@ Each (T_con, set) is one job; ``--workers`` jobs run at once in separate process
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 import time
@@ -30,6 +29,11 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
+from benchmarks.core.docs import NUMBER, Schema, table
+from benchmarks.core.record import write_json
+
+ROOT = Path(__file__).resolve().parents[2]
+DOCS_JSON = "docs/robust/goal.json"
 SETS = ("random", "disturbed", "fault", "delay", "noise")
 T_CONS = (10.0, 20.0, 40.0, 60.0)
 START_DISTANCE = (0.3, 3.0)
@@ -99,7 +103,10 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--sets", nargs="+", default=list(SETS), choices=SETS)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--json", type=Path, help="write the rows and verdicts here")
+    parser.add_argument("--docs", action="store_true", help=f"write them to {DOCS_JSON} (and render its table)")
     args = parser.parse_args(argv)
+    if args.docs:
+        args.json = ROOT / DOCS_JSON
     if args.n < 1 or args.workers < 1:
         parser.error(f"--n {args.n} and --workers {args.workers} are invalid: expected integers >= 1")
     agents = args.agents or [f"train/pretrained/robust{part}" for part in ("", "#no-plan", "#network")]
@@ -130,8 +137,8 @@ def main(argv: list[str] | None = None) -> None:
                     + (f" (bar {c['bar']:.3f})" if "bar" in c else "")
                 )
     if args.json:
-        args.json.parent.mkdir(parents=True, exist_ok=True)
-        from train.reporting.results import json_safe
+        write_json(args.json, report, safe=True)
 
-        args.json.write_text(json.dumps(json_safe(report), indent=1, allow_nan=False) + "\n")
-        print(f"wrote {args.json}")
+
+#: The rows and each policy's verdicts per criterion (keys "verdicts:<policy>").
+BLOCKS = (table("robust-goal", Schema({"rows": list, "seed": int, "n": int, "seconds": NUMBER})),)

@@ -53,7 +53,7 @@ import numpy as np
 import dwr_gym  # noqa: F401
 from benchmarks.core.docs import Schema, fenced
 from benchmarks.core.record import write_json
-from benchmarks.core.timing import Stepper, background_load, interleaved, paired_ratio
+from benchmarks.core.timing import Stepper, background_load, interleaved, median_seconds, paired_ratio
 from benchmarks.speed.throughput_report import render
 from dwr_gym import model
 
