@@ -15,7 +15,9 @@ def build_parser() -> argparse.ArgumentParser:
     listing.add_argument("--group", help="only this group (speed, training, learning, robustness, quality, ...)")
     run = sub.add_parser("run", help="run one benchmark; ARGS go to it (python -m benchmarks run NAME --help)")
     run.add_argument("name", help="the benchmark (python -m benchmarks list)")
-    run.add_argument("args", nargs=argparse.REMAINDER, help="its arguments; --docs: write its JSON and render its blocks")
+    run.add_argument(
+        "args", nargs=argparse.REMAINDER, help="its arguments; --docs: write its JSON and render its blocks"
+    )
     render = sub.add_parser("render", help="render every generated block of the README and docs from its JSON")
     render.add_argument("--check", action="store_true", help="change nothing; exit 1 naming each block that fails")
     return parser

@@ -65,7 +65,9 @@ SUITE: dict[str, str] = {
 def check(name: str) -> str:
     """``name`` if it is an entry of the suite, else a one-line error naming the entries."""
     if name not in SUITE:
-        raise SystemExit(f"benchmark {name!r} is unknown: expected one of {', '.join(SUITE)} (python -m benchmarks list)")
+        raise SystemExit(
+            f"benchmark {name!r} is unknown: expected one of {', '.join(SUITE)} (python -m benchmarks list)"
+        )
     return name
 
 

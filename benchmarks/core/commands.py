@@ -3,6 +3,7 @@ that is a ``dwr-gym`` command with fixed arguments, and the shell recipes."""
 
 from __future__ import annotations
 
+import argparse
 import os
 import subprocess
 import sys
@@ -49,3 +50,12 @@ def recipe_main(module_file: str) -> Callable[[list[str] | None], int]:
         return subprocess.run(["bash", str(script), *args], cwd=ROOT, env=env, check=False).returncode
 
     return main
+
+
+def parser_for(name: str, doc: str | None, allow_abbrev: bool = True) -> argparse.ArgumentParser:
+    """The argument parser of entry ``name``, as ``python -m benchmarks run NAME --help`` shows it: its docstring's
+    first line as the description."""
+    description = (doc or "").splitlines()[0]
+    return argparse.ArgumentParser(
+        prog=f"python -m benchmarks run {name}", description=description, allow_abbrev=allow_abbrev
+    )

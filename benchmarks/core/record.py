@@ -12,7 +12,7 @@ ROOT = Path(__file__).resolve().parents[2]
 
 
 def torch_machine() -> str:
-    """"<arch>, <cores> cores, torch <version>": the machine line of the training benchmarks."""
+    """ "<arch>, <cores> cores, torch <version>": the machine line of the training benchmarks."""
     import torch
 
     return f"{platform.machine()}, {os.cpu_count()} cores, torch {torch.__version__}"

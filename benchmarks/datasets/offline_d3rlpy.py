@@ -10,14 +10,15 @@ and saved as ``model.zip`` with a ``config.yaml``, so the agent is evaluated lik
 
 from __future__ import annotations
 
-import argparse
 import json
 import time
 from pathlib import Path
 
+from benchmarks.core.commands import parser_for
+
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks run offline-d3rlpy", description=__doc__.splitlines()[0])
+    parser = parser_for("offline-d3rlpy", __doc__)
     parser.add_argument("dataset_id")
     parser.add_argument("run_dir", type=Path)
     parser.add_argument(

@@ -10,7 +10,6 @@ episode, on a fifth of the episodes, to show why the write skips that.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import platform
@@ -19,15 +18,19 @@ import tempfile
 import time
 from pathlib import Path
 
+from benchmarks.core.commands import parser_for
+from benchmarks.core.docs import NUMBER, Schema, table
+
 ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "docs" / "datasets" / "speed.json"
 GOAL_SECONDS = 60.0
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks run dataset-speed", description=__doc__.splitlines()[0])
+    parser = parser_for("dataset-speed", __doc__)
     parser.add_argument("--transitions", type=int, default=1_000_000)
     parser.add_argument("--out", type=Path, default=OUT)
+    parser.add_argument("--docs", action="store_true", help="(--out is the docs' JSON by default; renders its table)")
     args = parser.parse_args(argv)
     root = Path(tempfile.mkdtemp(prefix="dwr-gym-dataset-speed-"))
     os.environ["MINARI_DATASETS_PATH"] = str(root)
@@ -85,3 +88,8 @@ def main(argv: list[str] | None = None) -> int:
     args.out.write_text(json.dumps(result, indent=1) + "\n")
     print(json.dumps(result, indent=1))
     return 0
+
+
+BLOCKS = (table("datasets-speed", Schema({"transitions": int, "episodes": int, "collect_seconds": NUMBER,
+                                          "write_seconds": NUMBER, "total_seconds": NUMBER, "goal_seconds": NUMBER,
+                                          "goal_met": bool, "command": str})),)  # fmt: skip

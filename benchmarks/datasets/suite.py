@@ -15,14 +15,16 @@ evaluated beside the rest.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import subprocess
-import sys
 import time
 from pathlib import Path
 from typing import Any
+
+from benchmarks.core.commands import checkout_env, parser_for
+from benchmarks.core.commands import dwr_gym as run_cli
+from benchmarks.core.docs import Schema, table
 
 ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "docs" / "datasets" / "suite.json"
@@ -45,9 +47,8 @@ OFFLINE_RL = "robust-pt-nominal"
 
 def dwr_gym(*args: str) -> None:
     """Run ``dwr-gym ARGS`` as a user would, failing loudly."""
-    command = [sys.executable, "-m", "train.cli", *args]
     print("$ dwr-gym " + " ".join(args), flush=True)
-    subprocess.run(command, check=True, cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)})
+    run_cli(list(args))
 
 
 def medium_agent(work: Path) -> Path:
@@ -95,9 +96,9 @@ def baselines(work: Path, d3rlpy_python: str | None, epochs: int, n: int, steps:
     if d3rlpy_python:
         run = work / f"td3bc-{OFFLINE_RL}"
         if not (run / "model.zip").is_file():
-            subprocess.run([d3rlpy_python, str(ROOT / "benchmarks" / "offline_d3rlpy.py"),
+            subprocess.run([d3rlpy_python, "-m", "benchmarks", "run", "offline-d3rlpy",
                             f"{NAMESPACE}/{OFFLINE_RL}-v0", str(run), "--steps", str(steps)], check=True, cwd=ROOT,
-                           env={**os.environ, "PYTHONPATH": str(ROOT)})  # fmt: skip
+                           env=checkout_env())  # fmt: skip
         agents.append(str(run))
     out = work / "evaluate"
     dwr_gym("evaluate", "--controllers", "optimal", "robust-pt", "ptc", "--agents", *agents, "--scenarios", "random",
@@ -106,7 +107,7 @@ def baselines(work: Path, d3rlpy_python: str | None, epochs: int, n: int, steps:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks run datasets-suite", description=__doc__.splitlines()[0])
+    parser = parser_for("datasets-suite", __doc__)
     parser.add_argument("--work", type=Path, default=ROOT / "results" / "datasets_suite",
                         help="where the medium PPO run, the cloned agents and the evaluation go")  # fmt: skip
     parser.add_argument("--d3rlpy-python", default=None, help="an interpreter with d3rlpy, for TD3+BC")
@@ -115,6 +116,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--td3bc-steps", type=int, default=3000, help="TD3+BC's gradient steps")
     parser.add_argument("--n", type=int, default=100, help="evaluation episodes per scenario set")
     parser.add_argument("--out", type=Path, default=OUT)
+    parser.add_argument("--docs", action="store_true", help="(--out is the docs' JSON by default; renders its tables)")
     args = parser.parse_args(argv)
     args.work.mkdir(parents=True, exist_ok=True)
     began = time.perf_counter()
@@ -131,3 +133,7 @@ def main(argv: list[str] | None = None) -> int:
     args.out.write_text(json.dumps(json_safe(result), indent=1, allow_nan=False) + "\n")
     print(f"wrote {args.out}")
     return 0
+
+
+SUITE_JSON = Schema({"datasets": list, "evaluation": list, "epochs": int, "n": int, "command": str})
+BLOCKS = (table("datasets-suite", SUITE_JSON), table("datasets-baselines", SUITE_JSON))

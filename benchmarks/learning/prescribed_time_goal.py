@@ -14,13 +14,13 @@ heading 0, at T_con), and checks the goal for the agents: arrival by T_con in
 
 from __future__ import annotations
 
-import argparse
 from collections import defaultdict
 from pathlib import Path
 
 import numpy as np
 
 from benchmarks.core import docs
+from benchmarks.core.commands import parser_for
 from benchmarks.core.record import write_json
 from train.evaluation.evaluate import evaluate_sets
 from train.learning.agents import load_agent
@@ -33,7 +33,7 @@ KEYS = ("success_rate", "final_heading_error_mean", "energy_mean", "energy_ratio
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks run prescribed-time-goal", description=__doc__.splitlines()[0])
+    parser = parser_for("prescribed-time-goal", __doc__)
     parser.add_argument("agents", nargs="+", help="run directories: the training seeds of one agent")
     parser.add_argument("--n", type=int, default=500)
     parser.add_argument("--out", help="also write the rows and the verdicts as JSON to this file")

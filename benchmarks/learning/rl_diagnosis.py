@@ -15,12 +15,12 @@ minimum-energy motion the task asks for.
 
 from __future__ import annotations
 
-import argparse
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from benchmarks.core.commands import parser_for
 from benchmarks.core.docs import NUMBER, Schema, table
 from benchmarks.core.record import write_json
 
@@ -49,7 +49,7 @@ def clipped_second_moment(sigma: float, samples: int = 200_000) -> float:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks run rl-diagnosis", description=__doc__.splitlines()[0])
+    parser = parser_for("rl-diagnosis", __doc__)
     parser.add_argument("--n", type=int, default=200, help="episodes of the benchmark's nominal set (default 200)")
     parser.add_argument("--docs", action="store_true", help="write docs/rl_benchmark/diagnosis.json (and its table)")
     args = parser.parse_args(argv)

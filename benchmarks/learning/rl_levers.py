@@ -10,13 +10,12 @@ runs already made in DIR/<lever>/ instead of training.
 
 from __future__ import annotations
 
-import argparse
 import csv
 import os
 import shlex
 from pathlib import Path
 
-from benchmarks.core.commands import dwr_gym
+from benchmarks.core.commands import dwr_gym, parser_for
 from benchmarks.core.docs import NUMBER, Schema, table
 from benchmarks.core.record import write_json
 
@@ -55,11 +54,13 @@ def curve(run_dir: Path, repeat: int) -> list[dict[str, float]]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks run rl-levers", description=__doc__.splitlines()[0])
+    parser = parser_for("rl-levers", __doc__)
     parser.add_argument("--seconds", type=float, default=300.0, help="wall time per run (default 300)")
     parser.add_argument("--out", default="runs/levers", help="where the runs go (default runs/levers)")
     parser.add_argument("--collect", help="read the runs in this directory instead of training")
-    parser.add_argument("--docs", action="store_true", help="write docs/rl_benchmark/levers.json (and render its table)")
+    parser.add_argument(
+        "--docs", action="store_true", help="write docs/rl_benchmark/levers.json (and render its table)"
+    )
     args = parser.parse_args(argv)
     out = Path(args.collect or args.out)
     data = {"seconds": args.seconds, "machine": f"{os.cpu_count()} cores, shared", "levers": {}}

@@ -10,7 +10,6 @@ to the goal.
 
 from __future__ import annotations
 
-import argparse
 import itertools
 import json
 from pathlib import Path
@@ -18,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from benchmarks.core.commands import parser_for
 from benchmarks.core.docs import Schema, table
 from benchmarks.core.record import write_json
 
@@ -55,7 +55,7 @@ def binned(rows: np.ndarray, column: int, bins: tuple[float, ...]) -> list[dict[
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks run rl-residual", description=__doc__.splitlines()[0])
+    parser = parser_for("rl-residual", __doc__)
     parser.add_argument("agents", nargs="+", help="run directories of residual agents")
     parser.add_argument("--n", type=int, default=200, help="episodes of the benchmark's nominal set (default 200)")
     parser.add_argument("--docs", action="store_true", help="write docs/rl_benchmark/residual.json (and its table)")

@@ -12,13 +12,13 @@ controllers:
 
 from __future__ import annotations
 
-import argparse
 import json
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from benchmarks.core.commands import parser_for
 from benchmarks.core.docs import Schema, table
 from benchmarks.core.record import write_json
 
@@ -50,7 +50,7 @@ def decomposition(result: Any, optimum_at_arrival: np.ndarray) -> dict[str, Any]
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks run rl-rushing", description=__doc__.splitlines()[0])
+    parser = parser_for("rl-rushing", __doc__)
     parser.add_argument("agents", nargs="*", help="run directories (or model .zip) of agents")
     parser.add_argument("--controllers", nargs="*", default=["ptc"], help="controllers beside them (default: ptc)")
     parser.add_argument("--n", type=int, default=50, help="episodes of the benchmark's nominal set (default 50)")

@@ -9,10 +9,10 @@ themselves, and the commands that ran them, are on docs/rl-benchmark.md.
 
 from __future__ import annotations
 
-import argparse
 import csv
 from pathlib import Path
 
+from benchmarks.core.commands import parser_for
 from benchmarks.core.docs import Schema, table
 from benchmarks.core.record import write_json
 
@@ -21,7 +21,7 @@ FILES = ("sweep.json", "sweep_ppo_jax.json", "sweep_sac.json", "sweep_tqc.json")
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks run rl-sweep", description=__doc__.splitlines()[0])
+    parser = parser_for("rl-sweep", __doc__)
     parser.add_argument("sweep", type=Path, help="the --out of dwr-gym sweep")
     parser.add_argument("--json", default="sweep.json", choices=FILES, help="the file under docs/rl_benchmark/")
     parser.add_argument("--docs", action="store_true", help="write it (and render its table)")

@@ -2,7 +2,7 @@
 
 The best seed is the one ``benchmark.json`` names (most episodes in time on the nominal set, then the lowest
 E/opt). Each shipped directory gets the run's config.yaml (its ``command`` is the ``dwr-gym train`` recipe that
-benchmarks/retrain_pretrained.py runs again; ``learned_from: reward``; ``runtime``), model.zip, the observation statistics if any, evaluations.csv and
+``python -m benchmarks run retrain-pretrained`` runs again; ``learned_from: reward``; ``runtime``), model.zip, the observation statistics if any, evaluations.csv and
 learning_curve.png.
 
     python -m benchmarks run ship-rl-agents results/rl-benchmark
@@ -10,10 +10,11 @@ learning_curve.png.
 
 from __future__ import annotations
 
-import argparse
 import json
 import shutil
 from pathlib import Path
+
+from benchmarks.core.commands import parser_for
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -55,7 +56,7 @@ def plot_curve(evaluations: Path, target: Path, title: str) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks run ship-rl-agents", description=__doc__.splitlines()[0])
+    parser = parser_for("ship-rl-agents", __doc__)
     parser.add_argument("out", help="the --out of dwr-gym benchmark")
     parser.add_argument("--also", nargs="*", default=[], help="more entries to ship, as <entry>_v1 (e.g. sac tqc)")
     args = parser.parse_args(argv)

@@ -2,7 +2,7 @@
 
     python -m benchmarks run optimal                                        # paper-fig5, paper-fig7 and random --n 1000
     python -m benchmarks run optimal --n 200                                # a quicker look
-    python -m benchmarks run optimal --out docs/benchmarks/optimal.json     # the rows of the docs' table
+    python -m benchmarks run optimal --n 200 --docs                         # the rows of the docs' table
 
 For each scenario set it times (1) solving the reference optimum of every episode on the env's grid
 (what ``evaluate``/``compare`` cache for the E/opt columns; the cache is bypassed here) and (2) a
@@ -13,8 +13,6 @@ machine and its load; the table says how many worker processes were used.
 
 from __future__ import annotations
 
-import argparse
-import json
 import os
 import platform
 import tempfile
@@ -24,18 +22,27 @@ from pathlib import Path
 import numpy as np
 
 from baselines.expert import ExpertPolicy
+from benchmarks.core.commands import parser_for
+from benchmarks.core.docs import NUMBER, Schema, table
+from benchmarks.core.record import write_json
 from dwr_gym.params import EnvParams
 from train.evaluation.optimum import optimal_energies
 from train.evaluation.rollout import rollout
 from train.evaluation.scenarios import controller_for, make_scenario
 
+ROOT = Path(__file__).resolve().parents[2]
+DOCS_JSON = "docs/benchmarks/optimal.json"
+
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks run optimal", description=__doc__.splitlines()[0])
+    parser = parser_for("optimal", __doc__)
     parser.add_argument("--n", type=int, default=1000, help="random episodes (default: 1000)")
     parser.add_argument("--workers", type=int, default=0, help="solver processes (default: every core)")
     parser.add_argument("--out", help="also write the rows as JSON to this file")
+    parser.add_argument("--docs", action="store_true", help=f"write them to {DOCS_JSON} (and render its table)")
     args = parser.parse_args(argv)
+    if args.docs:
+        args.out = str(ROOT / DOCS_JSON)
     os.environ["DWR_GYM_CACHE"] = tempfile.mkdtemp(prefix="dwr-gym-bench-")  # time the solves, not the cache
     workers = args.workers or min(os.cpu_count() or 1, 8)
     print(f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, {workers} worker processes")
@@ -68,6 +75,10 @@ def main(argv: list[str] | None = None) -> None:
                      "energy_ratio_mean": float(np.nanmean(ratio)), "episodes_without_optimum": len(failures),
                      "workers": workers, "cores": os.cpu_count()})  # fmt: skip
     if args.out:
-        Path(args.out).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.out).write_text(json.dumps(rows, indent=2) + "\n")
-        print(f"wrote {args.out}")
+        write_json(Path(args.out), rows)
+
+
+BLOCKS = (table("optimal-timing", Schema({"scenario": str, "n": int, "reference_seconds_per_episode": NUMBER,
+                                          "controller_seconds_per_episode": NUMBER, "solves_per_episode": NUMBER,
+                                          "success_rate": NUMBER, "energy_ratio_mean": NUMBER, "workers": int,
+                                          "cores": int}, rows=True)),)  # fmt: skip

@@ -14,4 +14,4 @@ for seed in 0 1 2; do
     --handover-expert pt-astolfi --eval-episodes 200
 done
 # The goal, measured at T_con in {10, 20, 40, 60} on 500 random starts each (seed 0), the seeds as mean +- sd:
-python benchmarks/prescribed_time_goal.py runs/dagger_handover_s{0,1,2}
+python -m benchmarks run prescribed-time-goal runs/dagger_handover_s{0,1,2}

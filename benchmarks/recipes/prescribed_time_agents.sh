@@ -8,4 +8,4 @@ for seed in 0 1 2; do
   dwr-gym imitate --episodes 400 --seed "$seed" --run-dir "runs/bc_optimal_s$seed" --no-progress
 done
 # The goal, measured at T_con in {10, 20, 40, 60} on 500 random starts each, the three seeds as mean +- sd:
-python benchmarks/prescribed_time_goal.py runs/bc_optimal_s{0,1,2}
+python -m benchmarks run prescribed-time-goal runs/bc_optimal_s{0,1,2}

@@ -5,7 +5,7 @@
 # train/pretrained/{ppo_v1,residual_ppo_v1,residual_ppo_astolfi_v1} (with its learning curve), and the residuals'
 # corrections are measured. The budgets are those that fitted on 2 shared cores in an hour (about 1 hour with
 # --jobs 4 there); give more with --env-steps and the entries' total_timesteps. Each run's config.yaml records the
-# `dwr-gym train` command that trains it alone (benchmarks/retrain_pretrained.py runs it again).
+# `dwr-gym train` command that trains it alone (`python -m benchmarks run retrain-pretrained` runs it again).
 set -euo pipefail
 export OMP_NUM_THREADS=1
 dwr-gym benchmark --agents ppo residual-ppo:total_timesteps=100000 residual-ppo-astolfi:total_timesteps=100000 \
@@ -23,10 +23,10 @@ dwr-gym benchmark --agents 'tqc-tuned:algo=tqc,hyperparams=train/hyperparams/tqc
   --eval-freq 200000 --disturbed-episodes 100 --out results/rl-benchmark --docs
 dwr-gym benchmark --agents 'sac-utd8:algo=sac,hyperparams=train/hyperparams/sac_tuned.yml,hyperparam_overrides={gradient_steps: 8}' \
   --seeds 5 --jobs 2 --eval-freq 250000 --disturbed-episodes 100 --out results/rl-benchmark --docs
-python benchmarks/ship_rl_agents.py results/rl-benchmark --also sac-tuned tqc-tuned
-python benchmarks/rl_residual.py train/pretrained/residual_ppo_v1 train/pretrained/residual_ppo_astolfi_v1 --n 50 --docs
-python benchmarks/rl_diagnosis.py --n 200 --docs
-python benchmarks/rl_rushing.py train/pretrained/ppo_jax_v1 results/rl-benchmark/runs/ppo-jax-12m-seed2 \
+python -m benchmarks run ship-rl-agents results/rl-benchmark --also sac-tuned tqc-tuned
+python -m benchmarks run rl-residual train/pretrained/residual_ppo_v1 train/pretrained/residual_ppo_astolfi_v1 --n 50 --docs
+python -m benchmarks run rl-diagnosis --n 200 --docs
+python -m benchmarks run rl-rushing train/pretrained/ppo_jax_v1 results/rl-benchmark/runs/ppo-jax-12m-seed2 \
   results/rl-benchmark/runs/ppo-jax-anneal-seed3 train/pretrained/residual_ppo_v1 \
   train/pretrained/residual_ppo_astolfi_v1 train/pretrained/robust --controllers ptc pt-astolfi optimal --n 50 --docs
-python -m train.reporting.doc_tables
+python -m benchmarks render

@@ -12,6 +12,6 @@ for seed in 0 1 2 3 4; do
     --env-kwargs disturbance_distribution='{}' --hyperparams learning_rate=1e-4 --total-timesteps 1500000 \
     --eval-freq 300000 --seed "$seed" --run-dir "$OUT/seed$seed" --overwrite --no-progress
 done
-python benchmarks/robust_goal.py 'train/pretrained/robust#network' "$OUT"/seed{0,1,2,3,4} --controllers --n 100 \
+python -m benchmarks run robust-goal 'train/pretrained/robust#network' "$OUT"/seed{0,1,2,3,4} --controllers --n 100 \
   --T-con 20 40 --workers 2 --json docs/rl_benchmark/robust_finetune.json
-python -m train.reporting.doc_tables
+python -m benchmarks render

@@ -10,11 +10,11 @@ the table of docs/robust.md).
 
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
 from typing import Any
 
+from benchmarks.core.commands import parser_for
 from benchmarks.core.docs import NUMBER, Schema, table
 from benchmarks.core.record import write_json
 
@@ -38,7 +38,7 @@ def kinds() -> dict[str, dict[str, Any]]:
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks run robust-filter-rates", description=__doc__.splitlines()[0], allow_abbrev=False)
+    parser = parser_for("robust-filter-rates", __doc__, allow_abbrev=False)
     parser.add_argument("--n", type=int, default=24, help="starts 0.3-3 m away per kind (default: 24)")
     parser.add_argument("--seed", type=int, default=5)
     parser.add_argument("--json", type=Path, help="write the rows here")

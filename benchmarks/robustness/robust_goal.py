@@ -21,7 +21,6 @@ Each (T_con, set) is one job; ``--workers`` jobs run at once in separate process
 
 from __future__ import annotations
 
-import argparse
 import os
 import sys
 import time
@@ -29,6 +28,7 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
+from benchmarks.core.commands import parser_for
 from benchmarks.core.docs import NUMBER, Schema, table
 from benchmarks.core.record import write_json
 
@@ -94,7 +94,7 @@ def verdicts(rows: list[dict[str, Any]], agent: str) -> list[dict[str, Any]]:
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks run robust-goal", description=__doc__.splitlines()[0], allow_abbrev=False)
+    parser = parser_for("robust-goal", __doc__, allow_abbrev=False)
     parser.add_argument("agents", nargs="*", help="run directories of agents (default: train/pretrained/robust)")
     parser.add_argument("--controllers", nargs="*", default=["ptc", "robust-pt"])
     parser.add_argument("--n", type=int, default=500, help="starts per (T_con, set) (default: 500)")

@@ -29,6 +29,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from benchmarks.core.commands import parser_for
+
 ROOT = Path(__file__).resolve().parents[2]
 DOCS_JSON = {True: "docs/throughput/compare_loaded.json", False: "docs/throughput/compare_quiet_one_thread.json"}
 """With busy background processes or not -> the record of the docs' block."""
@@ -100,8 +102,7 @@ def measure(tree: Path, num_envs: int) -> tuple[float, float, float]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks run compare-commits",
-                                     description=__doc__.splitlines()[0])  # fmt: skip
+    parser = parser_for("compare-commits", __doc__)
     parser.add_argument("old", nargs="?", help="the first commit (any git revision)")
     parser.add_argument("new", nargs="?", help="the second commit")
     parser.add_argument("--rounds", type=int, default=6, help="alternations of the two (default 6)")

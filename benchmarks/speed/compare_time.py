@@ -13,7 +13,6 @@ and after (a warm cache: none solved; a fresh clone: every episode's).
 
 from __future__ import annotations
 
-import argparse
 import json
 import resource
 import subprocess
@@ -22,7 +21,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from benchmarks.core.commands import dwr_gym
+from benchmarks.core.commands import dwr_gym, parser_for
 from benchmarks.core.docs import NUMBER, Block, Schema
 from benchmarks.core.record import load_average, torch_machine, write_json
 from benchmarks.core.timing import background_load
@@ -78,9 +77,11 @@ def render(results: dict[str, Any]) -> str:
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks run compare-time", description=__doc__.splitlines()[0])
+    parser = parser_for("compare-time", __doc__)
     parser.add_argument("--busy", type=int, default=2, help="busy background processes (default: 2)")
-    parser.add_argument("--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} (and render the block)")
+    parser.add_argument(
+        "--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} (and render the block)"
+    )
     args = parser.parse_args(argv)
     if args.busy < 0:
         parser.error(f"--busy={args.busy} is invalid: expected an integer >= 0")

@@ -27,6 +27,7 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
+from benchmarks.core.commands import parser_for
 from benchmarks.core.docs import Schema, fenced
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -88,7 +89,7 @@ def per_step(case: tuple[str, str, int, int]) -> float:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks run instructions", description=__doc__.splitlines()[0])
+    parser = parser_for("instructions", __doc__)
     parser.add_argument("--single", action="store_true", help="single envs only")
     parser.add_argument("--json", type=Path, help="also write the counts and ratios to this JSON file")
     parser.add_argument("--docs", action="store_true", help=f"write {DOCS_JSON} (and render its block)")

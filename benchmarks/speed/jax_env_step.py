@@ -18,7 +18,6 @@ case), each with the same fixed random actions (as ``throughput``), episodes end
 
 from __future__ import annotations
 
-import argparse
 import os
 import platform
 import statistics
@@ -27,6 +26,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from benchmarks.core.commands import parser_for
 from benchmarks.core.docs import Schema, table
 from benchmarks.core.record import write_json
 
@@ -132,7 +132,7 @@ def measure(cases: dict[str, tuple[Callable[[int], None], int]], repeats: int) -
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks run jax-env-step", description=__doc__.splitlines()[0])
+    parser = parser_for("jax-env-step", __doc__)
     parser.add_argument("--num-envs", type=int, default=4096, help="robots per step (default 4096)")
     parser.add_argument("--threads", type=int, default=1, help="thread budget of both sides (default 1)")
     parser.add_argument("--repeats", type=int, default=7, help="interleaved repeats (default 7)")

@@ -8,13 +8,13 @@ the line ends "flat" when the growth is under 5 MiB (a leak of even 100 bytes a 
 
 from __future__ import annotations
 
-import argparse
 import resource
 
 import gymnasium as gym
 import numpy as np
 
 import dwr_gym  # noqa: F401
+from benchmarks.core.commands import parser_for
 
 
 def rss_mib() -> float:
@@ -27,7 +27,7 @@ def rss_mib() -> float:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks run memory", description=__doc__.splitlines()[0])
+    parser = parser_for("memory", __doc__)
     parser.add_argument("--steps", type=int, default=100_000, help="steps after the warm-up (default 100000)")
     steps = parser.parse_args(argv).steps
     if steps < 20_000:

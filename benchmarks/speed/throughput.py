@@ -1,10 +1,9 @@
 """Throughput of DWRPointStabilization-v0 against Gymnasium's CartPole, on a quiet and on a busy machine.
 
-    python benchmarks/throughput.py              # quiet, then loaded by 2 busy processes (5-10 minutes on 2 cores)
-    python benchmarks/throughput.py --quick      # fewer repeats and sizes (2-4 minutes)
-    python benchmarks/throughput.py --load 0     # quiet only
-    python benchmarks/throughput.py --docs       # also write docs/throughput/throughput.json and docs/throughput.md's block
-    python benchmarks/throughput.py --render     # rewrite docs/throughput.md's block from the JSON (no measuring)
+    python -m benchmarks run throughput              # quiet, then loaded by 2 busy processes (5-10 min on 2 cores)
+    python -m benchmarks run throughput --quick      # fewer repeats and sizes (2-4 minutes)
+    python -m benchmarks run throughput --load 0     # quiet only
+    python -m benchmarks run throughput --docs       # also write docs/throughput/throughput.json and render its block
 
 Each measurement runs twice: on the machine as it is ("quiet"), and while ``--load`` background processes
 (default 2) run busy loops, as other work would on a user's machine ("loaded"). The background processes
@@ -26,10 +25,9 @@ machine's load hit both sides of a ratio):
   torch starts to pay, which is what ``dwr_gym.model.TORCH_MIN_SIZE`` is.
 
 Then the goals of issues 14 and 23, met or not, and the machine and library versions. ``--docs`` writes
-every figure into the JSON and renders the results block of docs/throughput.md from that JSON alone, and
-the blocks of the JSON files that ``compare_commits.py --json`` and ``instructions.py --json`` wrote into
-docs/throughput/. Compare two versions of the code with ``compare_commits.py`` (alternating runs) or
-``instructions.py`` (counts).
+every figure into the JSON, from which the results block of docs/throughput.md is rendered
+(:mod:`benchmarks.speed.throughput_report`). Compare two versions of the code with ``compare-commits``
+(alternating runs) or ``instructions`` (counts).
 """
 
 from __future__ import annotations
@@ -51,6 +49,7 @@ import gymnasium as gym
 import numpy as np
 
 import dwr_gym  # noqa: F401
+from benchmarks.core.commands import parser_for
 from benchmarks.core.docs import Schema, fenced
 from benchmarks.core.record import write_json
 from benchmarks.core.timing import Stepper, background_load, interleaved, median_seconds, paired_ratio
@@ -63,6 +62,7 @@ SIZES = (1, 64, 1024, 4096, 16384)
 QUICK_SIZES = (1, 1024, 4096)
 CROSSOVER_SIZES = (1024, 1536, 2048, 3072, 4096)
 KERNELS = ("sin", "cos", "tanh", "arcsin", "arctan2")
+
 
 @contextlib.contextmanager
 def numpy_only() -> Iterator[None]:
@@ -326,7 +326,7 @@ BLOCKS = (fenced("throughput", "docs/throughput/throughput.json", render,
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks run throughput", description=__doc__.splitlines()[0])
+    parser = parser_for("throughput", __doc__)
     parser.add_argument("--quick", action="store_true", help="fewer repeats and sizes")
     parser.add_argument("--load", type=int, default=2, help="busy background processes of the loaded run (0: none)")
     parser.add_argument("--load-seconds", type=float, default=1200.0,

@@ -10,7 +10,6 @@ The count must be 0.
 
 from __future__ import annotations
 
-import argparse
 import math
 import time
 
@@ -20,6 +19,7 @@ import numpy as np
 import dwr_gym  # noqa: F401  (registers the env)
 from baselines.base import ControllerInput
 from baselines.registry import CONTROLLERS, make_controller
+from benchmarks.core.commands import parser_for
 
 EDGE_DISTANCES = np.array([0.0, 1e-12, 1e-6, 0.01, 1.0, 1e3, 9.99e5])
 EDGE_ANGLES = np.array([-math.pi, math.pi, 0.0, math.pi / 2, -math.pi / 2, math.nextafter(math.pi, 0.0)])
@@ -94,7 +94,7 @@ def fuzz_controllers(rng: np.random.Generator, n_states: int) -> tuple[int, int]
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks run fuzz", description=__doc__.splitlines()[0])
+    parser = parser_for("fuzz", __doc__)
     parser.add_argument("--states", type=float, default=1e6, help="env states to try (default: 1e6)")
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args(argv)

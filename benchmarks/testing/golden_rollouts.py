@@ -10,7 +10,6 @@ observations, rewards, flags, poses, energies and every reward term. tests/test_
 
 from __future__ import annotations
 
-import argparse
 from pathlib import Path
 from typing import Any
 
@@ -19,8 +18,9 @@ import numpy as np
 
 import dwr_gym  # noqa: F401
 from baselines import ExpertPolicy, PTCController
+from benchmarks.core.commands import parser_for
 
-PATH = Path(__file__).resolve().parents[1] / "tests" / "data" / "golden_rollouts.npz"
+PATH = Path(__file__).resolve().parents[2] / "tests" / "data" / "golden_rollouts.npz"
 ENV_IDS = ("DWRPointStabilization-v0", "DWRPointStabilization-v1")
 
 
@@ -85,7 +85,7 @@ def rollouts(num_envs: int = RECORDED) -> dict[str, np.ndarray]:
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks run golden-rollouts", description=__doc__.splitlines()[0])
+    parser = parser_for("golden-rollouts", __doc__)
     parser.add_argument("--write", action="store_true", help="record the current code's rollouts")
     args = parser.parse_args(argv)
     if args.write:

@@ -2,7 +2,7 @@
 
     python -m benchmarks run mutation                       # every group, ~2-4 h of one core; writes the JSON
     python -m benchmarks run mutation --groups model core   # some groups only (the others keep their last results)
-    python -m benchmarks run mutation --docs                # regenerate docs/testing.md from the JSON only
+    python -m benchmarks run mutation --docs                # then render docs/testing.md's blocks from the JSON
 
 Each group mutates some modules (mutmut's ``only_mutate`` globs, so a module split into several files stays
 covered) and runs a fast, targeted selection of the tests on each mutant: mutmut runs, per mutant, only
@@ -12,14 +12,14 @@ Each group works in its own copy of the project under ``--work`` (default ``/tmp
 the source tree is never touched.
 
 The score counts as killed what mutmut reports as killed or timeout, as not killed what survived or what
-no selected test executes, and leaves out the mutants listed in ``benchmarks/mutation_equivalent.json``
+no selected test executes, and leaves out the mutants listed in ``benchmarks/testing/mutation_equivalent.json``
 (each with the reason it is equivalent: no test can tell it from the original). Results go to
-``docs/testing/mutation.json``; ``docs/testing.md`` is generated from that file.
+``docs/testing/mutation.json``, from which the blocks of ``docs/testing.md`` are rendered
+(``python -m benchmarks render`` renders them without running mutmut).
 """
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import random
@@ -31,10 +31,12 @@ import time
 from pathlib import Path
 from typing import Any
 
+from benchmarks.core.commands import parser_for
+from benchmarks.core.docs import Block, Schema
+
 ROOT = Path(__file__).resolve().parents[2]
 RESULTS = ROOT / "docs" / "testing" / "mutation.json"
-EQUIVALENT = ROOT / "benchmarks" / "mutation_equivalent.json"
-DOCS = ROOT / "docs" / "testing.md"
+EQUIVALENT = Path(__file__).with_name("mutation_equivalent.json")
 COPIED = ("dwr_gym", "baselines", "train", "tests", "benchmarks", "pyproject.toml", "README.md", "docs")
 #: Tests never run on mutants: subprocesses import the unmutated package; training runs take minutes per mutant.
 DESELECTED = (
@@ -236,11 +238,15 @@ def run(
         print(f"{group}: {len(mutants)} mutants in {minutes:.1f} min", flush=True)
 
 
-def write_docs() -> None:
-    """docs/testing.md from the results JSON and the list of equivalent mutants."""
-    results = json.loads(RESULTS.read_text())
-    equivalent: dict[str, str] = json.loads(EQUIVALENT.read_text()) if EQUIVALENT.is_file() else {}
-    rows, survivors, everything = [], [], []
+def equivalent_mutants() -> dict[str, str]:
+    """The mutants no test can tell from the original (their key -> why), from benchmarks/testing/."""
+    return json.loads(EQUIVALENT.read_text()) if EQUIVALENT.is_file() else {}
+
+
+def score_lines(results: dict[str, Any]) -> list[str]:
+    """The docs block of the score: the estimate over every group, then one row per group."""
+    equivalent = equivalent_mutants()
+    rows, everything = [], []
     for group, data in results["groups"].items():
         summary = score(data["mutants"], equivalent)
         everything += data["mutants"]
@@ -250,38 +256,12 @@ def write_docs() -> None:
                     f"{summary.get('killed', 0) + summary.get('timeout', 0)} | {summary.get('equivalent', 0)} | "
                     f"{summary.get('survived', 0)} | {summary.get('no tests', 0)} | {100 * summary['score']:.1f} % | "
                     f"{data['minutes']:.0f} |")  # fmt: skip
-        survivors += [m for m in data["mutants"] if m["status"] not in ("killed", "timeout", "not checked")]
     total = score(everything, equivalent)
     # each group's score stands for all of its mutants when a sample was tested: weight it by their number
     weights = {g: d.get("population", len(d["mutants"])) for g, d in results["groups"].items()}
     estimate = sum(score(d["mutants"], equivalent)["score"] * weights[g] for g, d in results["groups"].items())
     estimate /= sum(weights.values())
-    lines = [
-        "# Testing",
-        "",
-        "## Running the tests",
-        "",
-        "```bash",
-        "python -m pytest -n 2 -q           # the default run (tests marked slow are left out)",
-        "python -m pytest -q -m slow        # the Ray sweep on a local cluster: CI's second step",
-        "python -m benchmarks run planted-bugs  # the audit's bugs planted one at a time: which tests fail",
-        'python -m benchmarks run mutation      # the mutation score (pip install "dwr-gym[mutation]")',
-        "```",
-        "",
-        "A golden record (tests/test_golden.py, the pinned v0 returns) detects a change, not a bug that was",
-        "there when it was recorded. So the paper's mathematics is also tested against references that do not",
-        "share its code: PTC's eqs. (16)-(19), the disturbances and the rollout metrics against arithmetic",
-        "written out in the tests, the exact step against the closed-form arc and scipy's solve_ivp, the optimum",
-        "of each episode against a CasADi solve at its own T_con, the shipped YAML against rl-zoo3's own loader,",
-        'the goal env\'s reward against its documented formula, and "learns" against a measured rise in',
-        "evaluation return.",
-        "",
-        "## Mutation score",
-        "",
-        "Generated by `python -m benchmarks run mutation --docs` from `docs/testing/mutation.json`, which",
-        "`python -m benchmarks run mutation` writes (mutmut, one group of modules at a time, each with a targeted",
-        "selection of the tests; see the script's docstring).",
-        "",
+    return [
         f"**{100 * estimate:.1f} %** of the non-equivalent mutants of the named modules are killed, estimated as the",
         f"groups' scores weighted by their numbers of mutants ({sum(weights.values())}); of the mutants tested,",
         f"{100 * total['score']:.1f} % of the {total['non_equivalent']} non-equivalent ones are killed "
@@ -291,66 +271,36 @@ def write_docs() -> None:
         "| group | files | mutants tested | killed | equivalent | survived | no test runs it | score | minutes |",
         "|---|---|---|---|---|---|---|---|---|",
         *rows,
-        "",
-        "Where fewer mutants were tested than mutmut generated, they are a seeded random sample",
-        "(`--sample N --seed S`); the full run is the same command without `--sample`.",
-        "mutmut forks each mutant's test run from a process that has collected the tests, so code that runs at",
-        "import (module constants, a test module's fixtures built at import) keeps its unmutated result; the",
-        "model group, whose module builds its torch-backed functions at import, imports afresh per mutant",
-        "instead, and tests build what they check inside the test.",
-        "The learning group mutates DAgger, robust DAgger and the residual agents of train/learning/; the RL",
-        "training protocol of issue 32 is not mutated yet (it landed after these runs), nor are training.py's",
-        "long runs (the training tests are too slow to run per mutant); the robust group runs test_robust.py",
-        "without the shipped agent's evaluations, for the same reason.",
-        "Killed includes mutants that made a test time out. A mutant in code no selected test executes counts",
-        "as not killed. Equivalent mutants are listed with the reason no test can tell them from the original",
-        "(`benchmarks/mutation_equivalent.json`).",
-        "",
-        "## Mutants not killed",
-        "",
-        "| mutant | status | change | why |",
-        "|---|---|---|---|",
     ]
-    for mutant in survivors:
-        change = " / ".join(line.strip() for line in mutant.get("diff", [])).replace("|", "\\|")
-        why = (mutant.get("equivalent") or "").replace("|", "\\|")
-        status = "equivalent" if why else mutant["status"]
-        lines.append(f"| `{mutant['name']}` | {status} | `{change}` | {why} |")
-    lines += planted_section()
-    DOCS.write_text("\n".join(lines) + "\n")
-    print(
-        f"wrote {DOCS}: {100 * estimate:.1f} % estimated, {100 * total['score']:.1f} % of the "
-        f"{total['non_equivalent']} non-equivalent mutants tested killed"
-    )
 
 
-def planted_section() -> list[str]:
-    """The table of benchmarks/planted_bugs.py's results, if it has run."""
-    path = ROOT / "docs" / "testing" / "planted_bugs.json"
-    if not path.is_file():
-        return []
-    lines = ["", "## Planted bugs", "",
-             "Generated from `docs/testing/planted_bugs.json`, which `python -m benchmarks run planted-bugs` writes:",
-             "each bug an audit planted (issues 26 and 34) is planted again in a copy of the tree and the default suite",
-             "(or the tests named) run there. A golden or pinned record only detects a change, so each bug must fail",
-             "another test too.", "",
-             "| bug | file | tests run | tests failed | of them not golden/pinned | for example |",
-             "|---|---|---|---|---|---|"]  # fmt: skip
-    for result in json.loads(path.read_text()).values():
-        example = result["failed_not_pinned"][0] if result["failed_not_pinned"] else "none"
-        tests = result.get("tests", "the default suite")
-        run = tests if isinstance(tests, str) else ", ".join(f"`{t}`" for t in tests)
-        lines.append(f"| {result['description']} | `{result['file']}` | {run} | {len(result['failed'])} | "
-                     f"{len(result['failed_not_pinned'])} | `{example}` |")  # fmt: skip
+def survivor_lines(results: dict[str, Any]) -> list[str]:
+    """The docs block of every mutant not killed: its status, its change, why it is equivalent if it is."""
+    equivalent = equivalent_mutants()
+    lines = ["| mutant | status | change | why |", "|---|---|---|---|"]
+    for data in results["groups"].values():
+        score(data["mutants"], equivalent)  # marks each mutant's "equivalent"
+        for mutant in data["mutants"]:
+            if mutant["status"] in ("killed", "timeout", "not checked"):
+                continue
+            change = " / ".join(line.strip() for line in mutant.get("diff", [])).replace("|", "\\|")
+            why = (mutant.get("equivalent") or "").replace("|", "\\|")
+            status = "equivalent" if why else mutant["status"]
+            lines.append(f"| `{mutant['name']}` | {status} | `{change}` | {why} |")
     return lines
 
 
+def markdown(lines: Any) -> Any:
+    """A block of Markdown lines (a newline, the lines, a newline) from a function of the JSON."""
+    return lambda data: "\n" + "\n".join(lines(data)) + "\n"
+
+
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks run mutation", description=__doc__.split("\n\n")[0])
+    parser = parser_for("mutation", __doc__)
     parser.add_argument("--groups", nargs="+", choices=list(GROUPS), default=list(GROUPS))
     parser.add_argument("--work", type=Path, default=Path("/tmp/dwr-gym-mutation"))
     parser.add_argument("--max-children", type=int, default=1, help="mutants tested at once (default 1 core)")
-    parser.add_argument("--docs", action="store_true", help="only regenerate docs/testing.md from the JSON")
+    parser.add_argument("--docs", action="store_true", help="(the JSON is always written; renders docs/testing.md's blocks)")
     parser.add_argument(
         "--collect-only",
         action="store_true",
@@ -365,6 +315,8 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
     if shutil.which("mutmut", path=str(Path(sys.executable).parent)) is None:
         raise SystemExit('mutmut is not installed: pip install "dwr-gym[mutation]"')
-    if not args.docs:
-        run(args.groups, args.work, args.max_children, args.recheck, args.collect_only, args.sample, args.seed)
-    write_docs()
+    run(args.groups, args.work, args.max_children, args.recheck, args.collect_only, args.sample, args.seed)
+
+
+BLOCKS = (Block("mutation-score", "docs/testing/mutation.json", markdown(score_lines), Schema({"groups": dict})),
+          Block("mutants-not-killed", "docs/testing/mutation.json", markdown(survivor_lines), Schema({"groups": dict})))  # fmt: skip

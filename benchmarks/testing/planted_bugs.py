@@ -7,13 +7,11 @@
 A golden or pinned record (tests/test_golden.py, the pinned v0 returns and trajectories) detects a change,
 not a bug that was there when it was recorded; so each bug must also fail another test. The source tree
 is never touched: each bug is planted in ``git archive HEAD`` unpacked under ``--work``. Results go to
-``docs/testing/planted_bugs.json``, from which ``benchmarks/mutation.py --docs`` writes the table of
-docs/testing.md.
+``docs/testing/planted_bugs.json``, from which the table of docs/testing.md is rendered.
 """
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import re
@@ -21,6 +19,10 @@ import shutil
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
+
+from benchmarks.core.commands import parser_for
+from benchmarks.core.docs import Block, Schema
 
 ROOT = Path(__file__).resolve().parents[2]
 RESULTS = ROOT / "docs" / "testing" / "planted_bugs.json"
@@ -114,10 +116,11 @@ def run_suite(root: Path, tests: list[str] | None = None) -> tuple[list[str], st
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks run planted-bugs", description=__doc__.split("\n\n")[0])
+    parser = parser_for("planted-bugs", __doc__)
     parser.add_argument("--bugs", nargs="+", choices=list(BUGS), default=list(BUGS))
     parser.add_argument("--work", type=Path, default=Path("/tmp/dwr-gym-planted"))
     parser.add_argument("--tests", nargs="+", help="run only these tests (files or node ids) instead of the suite")
+    parser.add_argument("--docs", action="store_true", help="(the JSON is always written; renders its table)")
     args = parser.parse_args(argv)
     results = json.loads(RESULTS.read_text()) if RESULTS.is_file() else {}
     for bug in args.bugs:
@@ -128,3 +131,20 @@ def main(argv: list[str] | None = None) -> None:
         print(f"{bug}: {len(failed)} failed, {len(independent)} of them not a golden/pinned record ({last})")
         RESULTS.parent.mkdir(parents=True, exist_ok=True)
         RESULTS.write_text(json.dumps(results, indent=1) + "\n")
+
+
+def table_lines(results: dict[str, Any]) -> list[str]:
+    """The docs block: each bug, the tests run, how many failed and how many of those are not a pinned record."""
+    lines = ["| bug | file | tests run | tests failed | of them not golden/pinned | for example |",
+             "|---|---|---|---|---|---|"]  # fmt: skip
+    for result in results.values():
+        example = result["failed_not_pinned"][0] if result["failed_not_pinned"] else "none"
+        tests = result.get("tests", "the default suite")
+        run = tests if isinstance(tests, str) else ", ".join(f"`{t}`" for t in tests)
+        lines.append(f"| {result['description']} | `{result['file']}` | {run} | {len(result['failed'])} | "
+                     f"{len(result['failed_not_pinned'])} | `{example}` |")  # fmt: skip
+    return lines
+
+
+BLOCKS = (Block("planted-bugs", "docs/testing/planted_bugs.json", lambda data: "\n" + "\n".join(table_lines(data)) + "\n",
+                Schema()),)  # fmt: skip

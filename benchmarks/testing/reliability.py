@@ -1,7 +1,7 @@
 """The reliability check of issue 11: fuzz count, bad-input table, interrupt/resume. Everything must be green.
 
     OMP_NUM_THREADS=1 python -m benchmarks run reliability              # about 2 minutes on 2 cores
-    python -m benchmarks run reliability --states 1e6                   # the full fuzz (benchmarks/fuzz.py)
+    python -m benchmarks run reliability --states 1e6                   # the full fuzz (the fuzz entry)
 
 1. Fuzz: NaN/inf count over random and edge states of the env, the vector env and every controller (must be 0).
 2. Bad input: every row is a bad input a user can give; each must end in one line naming it, exit code 2
@@ -13,7 +13,6 @@
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import csv
 import io
@@ -30,7 +29,8 @@ from typing import Any
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
+from benchmarks.core.commands import parser_for
+
 GREEN, RED, RESET = ("\033[32m", "\033[31m", "\033[0m") if sys.stdout.isatty() else ("", "", "")
 results: list[bool] = []
 
@@ -207,10 +207,10 @@ def check_interrupt_and_resume() -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks run reliability", description=__doc__.splitlines()[0])
+    parser = parser_for("reliability", __doc__)
     parser.add_argument("--states", type=float, default=1e5, help="fuzzed env states (default: 1e5)")
     args = parser.parse_args(argv)
-    from fuzz import fuzz_controllers, fuzz_env, fuzz_single_env
+    from benchmarks.testing.fuzz import fuzz_controllers, fuzz_env, fuzz_single_env
 
     print("1. fuzz")
     rng = np.random.default_rng(0)

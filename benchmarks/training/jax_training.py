@@ -21,7 +21,6 @@ the time it takes counts. Process CPU time is recorded beside wall time, since t
 
 from __future__ import annotations
 
-import argparse
 import itertools
 import math
 import os
@@ -31,6 +30,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from benchmarks.core.commands import parser_for
 from benchmarks.core.docs import Schema, fenced
 from benchmarks.core.record import write_json
 
@@ -281,7 +281,7 @@ BLOCKS = (fenced("jax-training-speed", "docs/jax/training_speed_1thread.json", r
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks run jax-training", description=__doc__.splitlines()[0])
+    parser = parser_for("jax-training", __doc__)
     parser.add_argument("what", nargs="?", choices=("speed", "learn"), help="the measurement to run")
     parser.add_argument("--threads", type=int, default=1, help="XLA and torch threads (default: 1)")
     parser.add_argument("--repeats", type=int, default=3, help="speed: alternating rounds (default: 3)")

@@ -15,7 +15,6 @@ docs/training/old_vs_new.json (every number plotted) and docs/training/old_vs_ne
 
 from __future__ import annotations
 
-import argparse
 import csv
 import os
 import platform
@@ -28,6 +27,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from benchmarks.core.commands import parser_for
 from benchmarks.core.docs import NUMBER, Schema, fenced
 from benchmarks.core.record import load_average, read_json, write_json
 
@@ -193,7 +193,7 @@ def plot(results: dict[str, Any], path: Path) -> None:
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks run training-old-vs-new", description=__doc__.splitlines()[0])
+    parser = parser_for("training-old-vs-new", __doc__)
     parser.add_argument("--cap", type=float, default=60.0, help="wall-clock seconds per run (default: 60)")
     parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
     parser.add_argument("--out", default="runs/old_vs_new", help="where the runs go (default: runs/old_vs_new)")

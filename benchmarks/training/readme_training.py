@@ -10,7 +10,6 @@ training's evaluation set). The README quotes both times, the load average and t
 
 from __future__ import annotations
 
-import argparse
 import json
 import resource
 import subprocess
@@ -19,7 +18,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from benchmarks.core.commands import checkout_env, dwr_gym
+from benchmarks.core.commands import checkout_env, dwr_gym, parser_for
 from benchmarks.core.docs import NUMBER, Block, Schema
 from benchmarks.core.record import load_average, torch_machine, write_json
 
@@ -88,7 +87,7 @@ def render(results: dict[str, Any]) -> str:
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks run readme-training", description=__doc__.splitlines()[0])
+    parser = parser_for("readme-training", __doc__)
     parser.add_argument("--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} and render its block")
     args = parser.parse_args(argv)
     results = measure()

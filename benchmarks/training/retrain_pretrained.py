@@ -21,7 +21,6 @@ config, as in the results tables, beside the shipped agent. ``--jobs`` runs that
 
 from __future__ import annotations
 
-import argparse
 import importlib.util
 import math
 import os
@@ -37,6 +36,7 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
+from benchmarks.core.commands import parser_for
 from benchmarks.core.docs import NUMBER, Schema, fenced
 from benchmarks.core.record import load_average, write_json
 
@@ -217,7 +217,7 @@ def render(results: dict[str, Any]) -> list[str]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks run retrain-pretrained", description=__doc__.splitlines()[0])
+    parser = parser_for("retrain-pretrained", __doc__)
     parser.add_argument("--agents", nargs="+", help="names under train/pretrained/ (default: every one)")
     parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
     parser.add_argument("--budget", type=float, default=1.0, help="fraction of each recipe's budget (default: 1)")

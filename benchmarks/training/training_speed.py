@@ -17,13 +17,13 @@ import os
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")  # before torch is imported: one thread, as the goal says
 
-import argparse
 import platform
 import tempfile
 import time
 from pathlib import Path
 from typing import Any
 
+from benchmarks.core.commands import parser_for
 from benchmarks.core.docs import NUMBER, Schema, fenced
 from benchmarks.core.record import load_average, write_json
 from benchmarks.core.timing import median_ratio, medians
@@ -61,7 +61,7 @@ def train_fps(steps: int, old: bool) -> float:
         explicit = {"total_timesteps", *extra}
         resolve_hyperparams(config, explicit)
         began = time.perf_counter()
-        run_dir = train(config, command=["benchmarks/training_speed.py"])
+        run_dir = train(config, command=["python", "-m", "benchmarks", "run", "training-speed"])
         elapsed = time.perf_counter() - began
         return int(read_state(run_dir)["timesteps"]) / elapsed
 
@@ -117,7 +117,7 @@ def render(results: dict[str, Any]) -> list[str]:
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks run training-speed", description=__doc__.splitlines()[0])
+    parser = parser_for("training-speed", __doc__)
     parser.add_argument("--repeats", type=int, default=3, help="alternating rounds (default: 3)")
     parser.add_argument("--cartpole-steps", type=int, default=16_384, help="SB3 PPO on CartPole (default: 16384)")
     parser.add_argument("--steps", type=int, default=524_288,

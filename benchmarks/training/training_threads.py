@@ -13,7 +13,6 @@ collapse. The busy processes are started before the first run and stopped after 
 
 from __future__ import annotations
 
-import argparse
 import os
 import subprocess
 import sys
@@ -22,6 +21,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from benchmarks.core.commands import parser_for
 from benchmarks.core.docs import NUMBER, Schema, fenced
 from benchmarks.core.record import load_average, torch_machine, write_json
 from benchmarks.core.timing import background_load, median_ratio, medians
@@ -131,7 +131,7 @@ def render(results: dict[str, Any]) -> list[str]:
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks run training-threads", description=__doc__.splitlines()[0])
+    parser = parser_for("training-threads", __doc__)
     parser.add_argument("--repeats", type=int, default=3, help="alternating rounds (default: 3)")
     parser.add_argument("--busy", type=int, default=2, help="busy background processes (default: 2)")
     parser.add_argument("--no-reference", action="store_true", help="skip the --threads <cores> runs (slow)")

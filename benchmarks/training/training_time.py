@@ -13,7 +13,6 @@ its load; the shares are steadier.
 
 from __future__ import annotations
 
-import argparse
 import os
 import platform
 import time
@@ -27,6 +26,7 @@ from stable_baselines3.common.vec_env import VecEnvWrapper
 
 from baselines.expert import ExpertPolicy
 from baselines.registry import make_controller
+from benchmarks.core.commands import parser_for
 from dwr_gym.sb3 import make_sb3_vec_env
 from train.learning.residual import ResidualVecEnv
 
@@ -79,7 +79,7 @@ def profile(residual: bool, steps: int, num_envs: int) -> dict[str, float]:
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks run training-time", description=__doc__.splitlines()[0])
+    parser = parser_for("training-time", __doc__)
     parser.add_argument("--steps", type=int, default=65_536)
     parser.add_argument("--num-envs", type=int, default=16)
     args = parser.parse_args(argv)
