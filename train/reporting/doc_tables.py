@@ -162,7 +162,7 @@ def verdict(by_T_con: dict[str, bool]) -> str:
 
 
 def robust_goal_table(data: dict[str, Any]) -> str:
-    """Issue 22's goal (benchmarks/robust_goal.py): each policy on each (T_con, set), then each one's verdicts."""
+    """Issue 22's goal (``python -m benchmarks run robust-goal``): each policy on each (T_con, set), then each one's verdicts."""
     rows = data["rows"]
     policies = list(dict.fromkeys(r["policy"] for r in rows))
     by = {(r["T_con"], r["set"], r["policy"]): r for r in rows}
@@ -184,13 +184,13 @@ def robust_goal_table(data: dict[str, Any]) -> str:
                          f"{len(checks)} | {missed or 'none'} |")  # fmt: skip
     caption = (
         f"Each cell: in time / mean \\|psi_end\\| [rad] / mean energy / command-rate RMS; {data['n']} starts "
-        f"0.3-3 m per (T_con, set), seed {data['seed']}; `python benchmarks/robust_goal.py` ({data['seconds']} s)."
+        f"0.3-3 m per (T_con, set), seed {data['seed']}; `python -m benchmarks run robust-goal` ({data['seconds']} s)."
     )
     return "\n".join(lines) + f"\n\n*{caption}*\n"
 
 
 def filter_rates_table(data: dict[str, Any]) -> str:
-    """robust-pt's in-time rate and energy with each rate of its filter (benchmarks/robust_filter_rates.py)."""
+    """robust-pt's in-time rate and energy with each rate of its filter (``python -m benchmarks run robust-filter-rates``)."""
     kinds = list(dict.fromkeys(r["kind"] for r in data["rows"]))
     rates = list(dict.fromkeys(tuple(r["disturbance_rate"]) for r in data["rows"]))
     by = {(r["kind"], tuple(r["disturbance_rate"])): r for r in data["rows"]}
@@ -218,7 +218,7 @@ def optimal_timing_table(rows: list[dict[str, Any]]) -> str:
 
 
 def jax_env_step_table(data: dict[str, Any]) -> str:
-    """benchmarks/jax_env_step.py: the JAX env's step against the numpy vector env's."""
+    """``python -m benchmarks run jax-env-step``: the JAX env's step against the numpy vector env's."""
     lines = ["| step | dtype | us per step | env-steps per second | x the numpy env's | CPU us per step | "
              "x the numpy env's, CPU time |", "|---|---|---|---|---|---|---|"]  # fmt: skip
     for r in data["rows"]:
