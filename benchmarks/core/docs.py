@@ -163,3 +163,17 @@ def block_problems(match: Any, known: dict[str, tuple[str, Block]], root: Path) 
     if match.group("body") != block.render(data):
         return [f"differs from what {block.json} renders (a hand edit?): run python -m benchmarks render"]
     return []
+
+
+def rendered(name: str, root: Path = ROOT) -> str:
+    """The body of block ``name`` as its producer's JSON renders it."""
+    return producers()[name][1].body(root)
+
+
+def written(name: str, root: Path = ROOT) -> str:
+    """The body of block ``name`` as the README or a docs page holds it (the first page that does)."""
+    for path in doc_tables.markdown_files(root):
+        for match in doc_tables.MARKER.finditer(path.read_text()):
+            if match.group("name") == name:
+                return match.group("body")
+    raise KeyError(f"block {name!r} is in no page: expected one of {', '.join(producers())}")

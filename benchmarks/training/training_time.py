@@ -20,15 +20,7 @@ from collections import defaultdict
 from collections.abc import Callable
 from typing import Any
 
-import torch
-from stable_baselines3 import PPO
-from stable_baselines3.common.vec_env import VecEnvWrapper
-
-from baselines.expert import ExpertPolicy
-from baselines.registry import make_controller
 from benchmarks.core.commands import parser_for
-from dwr_gym.sb3 import make_sb3_vec_env
-from train.learning.residual import ResidualVecEnv
 
 TIMES: dict[str, float] = defaultdict(float)
 
@@ -46,18 +38,25 @@ def timed(name: str, fn: Callable[..., Any]) -> Callable[..., Any]:
     return wrapper
 
 
-class TimedEnv(VecEnvWrapper):
-    """Times the native env's step (below the residual wrapper and the monitor)."""
-
-    def reset(self) -> Any:
-        return self.venv.reset()
-
-    def step_wait(self) -> Any:
-        return timed("env step", self.venv.step_wait)()
-
-
 def profile(residual: bool, steps: int, num_envs: int) -> dict[str, float]:
     """Train PPO (residual on PTC if asked) for ``steps`` env steps; return the seconds spent in each part."""
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.vec_env import VecEnvWrapper
+
+    from baselines.expert import ExpertPolicy
+    from baselines.registry import make_controller
+    from dwr_gym.sb3 import make_sb3_vec_env
+    from train.learning.residual import ResidualVecEnv
+
+    class TimedEnv(VecEnvWrapper):
+        """Times the native env's step (below the residual wrapper and the monitor)."""
+
+        def reset(self) -> Any:
+            return self.venv.reset()
+
+        def step_wait(self) -> Any:
+            return timed("env step", self.venv.step_wait)()
+
     TIMES.clear()
     venv: Any = TimedEnv(make_sb3_vec_env(num_envs, seed=0))
     if residual:
@@ -83,6 +82,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--steps", type=int, default=65_536)
     parser.add_argument("--num-envs", type=int, default=16)
     args = parser.parse_args(argv)
+    import torch
+
     torch.set_num_threads(max(1, (os.cpu_count() or 1)))
     print(f"{platform.machine()}, {os.cpu_count()} cores, torch {torch.__version__}, {torch.get_num_threads()} threads")
     for residual in (False, True):
