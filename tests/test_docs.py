@@ -88,16 +88,17 @@ def page_with(tmp_path: Path, block: str) -> Path:
         ("reproduce", lambda body: body.replace("holds", "fails", 1), "differs from what docs/reproduce/claims.json"),
         ("compare", lambda body: body, "but 'reproduce' produces it"),
         (None, lambda body: body, "names no producer"),
+        ("legacy", lambda body: body, "names no producer"),
     ],
-    ids=["hand edit", "wrong producer", "no producer"],
+    ids=["hand edit", "wrong producer", "no producer", "a marker of before the convention"],
 )
 def test_a_block_edited_by_hand_or_without_its_producer_fails(tmp_path: Path, producer, edit, found: str) -> None:
     body = "\n" + render("claims")
-    opening = docs.marker("claims", producer) if producer else "<!-- generated: claims -->"
-    root = page_with(tmp_path, f"{opening}{edit(body)}<!-- /generated -->")
-    assert docs.problems(root) == [] if producer == "reproduce" and edit(body) == body else any(
-        found in problem for problem in docs.problems(root)
-    ), docs.problems(root)
+    opening = {None: "<!-- generated: claims -->", "legacy": "<!-- table: claims -->"}.get(producer) or docs.marker(
+        "claims", producer
+    )
+    problems = docs.problems(page_with(tmp_path, f"{opening}{edit(body)}<!-- /generated -->"))
+    assert len(problems) == 1 and found in problems[0], problems
 
 
 def test_a_json_off_its_schema_fails(tmp_path: Path) -> None:

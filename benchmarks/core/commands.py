@@ -59,3 +59,12 @@ def parser_for(name: str, doc: str | None, allow_abbrev: bool = True) -> argpars
     return argparse.ArgumentParser(
         prog=f"python -m benchmarks run {name}", description=description, allow_abbrev=allow_abbrev
     )
+
+
+def add_json_output(parser: argparse.ArgumentParser, docs_json: str, flag: str = "--json") -> None:
+    """``FLAG PATH``: write the results as JSON at PATH; ``--docs``: at the docs' ``docs_json`` (relative to the
+    repository), from which ``python -m benchmarks run`` then renders the entry's blocks."""
+    dest = flag.removeprefix("--").replace("-", "_")
+    parser.add_argument(flag, dest=dest, type=Path, help="also write the results as JSON to this file")
+    parser.add_argument("--docs", dest=dest, action="store_const", const=ROOT / docs_json,
+                        help=f"write them to {docs_json} (and render its blocks)")  # fmt: skip

@@ -20,12 +20,11 @@ from pathlib import Path
 import numpy as np
 
 from benchmarks.core import docs
-from benchmarks.core.commands import parser_for
+from benchmarks.core.commands import add_json_output, parser_for
 from benchmarks.core.record import write_json
 from train.evaluation.evaluate import evaluate_sets
 from train.learning.agents import load_agent
 
-ROOT = Path(__file__).resolve().parents[2]
 DOCS_JSON = "docs/prescribed_time/goal.json"
 T_CONS = [10.0, 20.0, 40.0, 60.0]
 ENV_KWARGS = {"start_distance": (0.3, 3.0)}
@@ -36,11 +35,8 @@ def main(argv: list[str] | None = None) -> None:
     parser = parser_for("prescribed-time-goal", __doc__)
     parser.add_argument("agents", nargs="+", help="run directories: the training seeds of one agent")
     parser.add_argument("--n", type=int, default=500)
-    parser.add_argument("--out", help="also write the rows and the verdicts as JSON to this file")
-    parser.add_argument("--docs", action="store_true", help=f"write them to {DOCS_JSON} (and render its table)")
+    add_json_output(parser, DOCS_JSON, "--out")
     args = parser.parse_args(argv)
-    if args.docs:
-        args.out = str(ROOT / DOCS_JSON)
     policies = {f"seed{i}": load_agent(path)[1] for i, path in enumerate(args.agents)}
     policies.update({name: name for name in ("ptc", "pt-astolfi", "astolfi")})
     rows = evaluate_sets(policies, ["random"], args.n, 0, ENV_KWARGS, progress=True, optimum="pose", T_cons=T_CONS)

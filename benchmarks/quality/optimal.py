@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from baselines.expert import ExpertPolicy
-from benchmarks.core.commands import parser_for
+from benchmarks.core.commands import add_json_output, parser_for
 from benchmarks.core.docs import NUMBER, Schema, table
 from benchmarks.core.record import write_json
 from dwr_gym.params import EnvParams
@@ -30,7 +30,6 @@ from train.evaluation.optimum import optimal_energies
 from train.evaluation.rollout import rollout
 from train.evaluation.scenarios import controller_for, make_scenario
 
-ROOT = Path(__file__).resolve().parents[2]
 DOCS_JSON = "docs/benchmarks/optimal.json"
 
 
@@ -38,11 +37,8 @@ def main(argv: list[str] | None = None) -> None:
     parser = parser_for("optimal", __doc__)
     parser.add_argument("--n", type=int, default=1000, help="random episodes (default: 1000)")
     parser.add_argument("--workers", type=int, default=0, help="solver processes (default: every core)")
-    parser.add_argument("--out", help="also write the rows as JSON to this file")
-    parser.add_argument("--docs", action="store_true", help=f"write them to {DOCS_JSON} (and render its table)")
+    add_json_output(parser, DOCS_JSON, "--out")
     args = parser.parse_args(argv)
-    if args.docs:
-        args.out = str(ROOT / DOCS_JSON)
     os.environ["DWR_GYM_CACHE"] = tempfile.mkdtemp(prefix="dwr-gym-bench-")  # time the solves, not the cache
     workers = args.workers or min(os.cpu_count() or 1, 8)
     print(f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, {workers} worker processes")

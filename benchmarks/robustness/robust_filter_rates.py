@@ -11,14 +11,12 @@ the table of docs/robust.md).
 from __future__ import annotations
 
 import sys
-from pathlib import Path
 from typing import Any
 
-from benchmarks.core.commands import parser_for
+from benchmarks.core.commands import add_json_output, parser_for
 from benchmarks.core.docs import NUMBER, Schema, table
 from benchmarks.core.record import write_json
 
-ROOT = Path(__file__).resolve().parents[2]
 DOCS_JSON = "docs/robust/filter_rates.json"
 RATES = ((0.02, 0.1), (0.05, 0.25), (0.1, 0.5))
 T_CON = 20.0
@@ -41,11 +39,8 @@ def main(argv: list[str] | None = None) -> None:
     parser = parser_for("robust-filter-rates", __doc__, allow_abbrev=False)
     parser.add_argument("--n", type=int, default=24, help="starts 0.3-3 m away per kind (default: 24)")
     parser.add_argument("--seed", type=int, default=5)
-    parser.add_argument("--json", type=Path, help="write the rows here")
-    parser.add_argument("--docs", action="store_true", help=f"write them to {DOCS_JSON} (and render its table)")
+    add_json_output(parser, DOCS_JSON)
     args = parser.parse_args(argv)
-    if args.docs:
-        args.json = ROOT / DOCS_JSON
     from baselines import ExpertPolicy, make_controller
     from baselines.estimation import PoseFilterParams
     from train.evaluation.evaluate import evaluate

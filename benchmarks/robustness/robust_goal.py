@@ -25,14 +25,12 @@ import os
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
-from pathlib import Path
 from typing import Any
 
-from benchmarks.core.commands import parser_for
+from benchmarks.core.commands import add_json_output, parser_for
 from benchmarks.core.docs import NUMBER, Schema, table
 from benchmarks.core.record import write_json
 
-ROOT = Path(__file__).resolve().parents[2]
 DOCS_JSON = "docs/robust/goal.json"
 SETS = ("random", "disturbed", "fault", "delay", "noise")
 T_CONS = (10.0, 20.0, 40.0, 60.0)
@@ -102,11 +100,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--T-con", type=float, nargs="+", default=list(T_CONS))
     parser.add_argument("--sets", nargs="+", default=list(SETS), choices=SETS)
     parser.add_argument("--workers", type=int, default=2)
-    parser.add_argument("--json", type=Path, help="write the rows and verdicts here")
-    parser.add_argument("--docs", action="store_true", help=f"write them to {DOCS_JSON} (and render its table)")
+    add_json_output(parser, DOCS_JSON)
     args = parser.parse_args(argv)
-    if args.docs:
-        args.json = ROOT / DOCS_JSON
     if args.n < 1 or args.workers < 1:
         parser.error(f"--n {args.n} and --workers {args.workers} are invalid: expected integers >= 1")
     agents = args.agents or [f"train/pretrained/robust{part}" for part in ("", "#no-plan", "#network")]

@@ -120,14 +120,16 @@ def render(results: dict[str, Any]) -> list[str]:
         lines.append(f"{algo:<6}{steps:>10,}{fps[f'{algo} defaults']:>11,.0f}{fps[f'{algo} OMP_NUM_THREADS=1']:>19,.0f}"
                      f"{results['ratio_defaults_to_omp1'][algo]:>7.2f}x"
                      f"{collapse_text:>14}")  # fmt: skip
-    verdict = "met" if results["met"] else "NOT met"
+    return [*lines, "", *footer(results)]
+
+
+def footer(results: dict[str, Any]) -> list[str]:
+    """The block's last lines: what the columns are, and the goal with its verdict."""
     worst = min(results["ratio_defaults_to_omp1"].values())
-    lines += ["", "steps/s; ratio: defaults / OMP_NUM_THREADS=1, median of the per-round ratios; "
-              f"--threads {cores}: torch's own default (before issue 35), one run, stopped after "
-              f"{results['reference_limit_seconds']:.0f} s ('<': a bound)",
-              f"issue 35 goal, defaults >= {results['goal']}x OMP_NUM_THREADS=1 under the same load for PPO and SAC: "
-              f"{worst:.2f}x at worst, {verdict}"]  # fmt: skip
-    return lines
+    return [f"steps/s; ratio: defaults / OMP_NUM_THREADS=1, median of the per-round ratios; --threads {results['cores']}: "
+            f"torch's own default (before issue 35), one run, stopped after {results['reference_limit_seconds']:.0f} s "
+            "('<': a bound)", f"issue 35 goal, defaults >= {results['goal']}x OMP_NUM_THREADS=1 under the same load for "
+            f"PPO and SAC: {worst:.2f}x at worst, {'met' if results['met'] else 'NOT met'}"]  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> None:

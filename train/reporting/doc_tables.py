@@ -32,12 +32,14 @@ from train.reporting import dataset_tables
 ROOT = Path(__file__).resolve().parents[2]
 #: A generated block: its name, its producer and the command that writes its JSON, then its body.
 MARKER = re.compile(
-    r"(<!-- generated: (?P<name>[\w-]+) by (?P<producer>[\w-]+) \((?P<command>[^)]*)\) -->)(?P<body>.*?)"
+    r"^(<!-- generated: (?P<name>[\w-]+) by (?P<producer>[\w-]+) \((?P<command>[^)]*)\) -->)(?P<body>.*?)"
     r"(<!-- /generated -->)",
-    re.DOTALL,
+    re.DOTALL | re.MULTILINE,
 )
-#: Anything that opens a generated block, well formed or not (a block without a producer is found by this alone).
-OPENING = re.compile(r"<!-- generated\b[^>]*-->")
+#: Anything that opens a generated block at the start of a line, well formed or not, the markers of before the
+#: convention included (``<!-- table: NAME -->``, ``<!-- NAME:begin -->``): a block without a producer is found by
+#: this alone; the convention quoted inside a line of prose is not a block.
+OPENING = re.compile(r"^<!-- (?:generated\b[^>]*|table: [\w-]+|[\w-]+:begin) -->", re.MULTILINE)
 
 #: How the tables name the policies: the controllers of baselines and the agents shipped in train/pretrained.
 POLICY_NAMES = {
