@@ -68,3 +68,12 @@ def test_every_block_is_declared_once_and_every_declared_json_exists_or_is_not_s
     for name, (_, block) in docs.producers().items():
         assert (ROOT / block.json).is_file() or name not in shown, name
     assert shown <= set(docs.producers())
+
+
+@pytest.mark.parametrize("name", list(registry.SUITE))
+def test_each_entry_says_how_to_run_it(name: str, capsys: pytest.CaptureFixture[str]) -> None:
+    try:
+        code = registry.load(name).main(["--help"])
+    except SystemExit as exit_:
+        code = exit_.code
+    assert code in (0, None) and capsys.readouterr().out.strip(), name

@@ -46,6 +46,11 @@ def recipe_main(module_file: str) -> Callable[[list[str] | None], int]:
 
     def main(argv: list[str] | None = None) -> int:
         args = [a for a in argv or [] if a != "--docs"]
+        if {"-h", "--help"} & set(args):  # the script's header says what it runs and how long it takes
+            header = [line[2:] for line in script.read_text().splitlines()[1:] if line.startswith("# ")]
+            print(f"python -m benchmarks run {script.stem.replace('_', '-')}: runs {script.relative_to(ROOT)}\n")
+            print("\n".join(header))
+            return 0
         env = checkout_env(PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}")
         return subprocess.run(["bash", str(script), *args], cwd=ROOT, env=env, check=False).returncode
 

@@ -18,7 +18,6 @@ waiting for threads; this measures time.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import statistics
@@ -28,8 +27,6 @@ import tempfile
 import time
 from pathlib import Path
 from typing import Any
-
-from benchmarks.core.commands import parser_for
 
 ROOT = Path(__file__).resolve().parents[2]
 DOCS_JSON = {True: "docs/throughput/compare_loaded.json", False: "docs/throughput/compare_quiet_one_thread.json"}
@@ -102,6 +99,8 @@ def measure(tree: Path, num_envs: int) -> tuple[float, float, float]:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from benchmarks.core.commands import parser_for  # (here: the child, run by path elsewhere, imports no suite)
+
     parser = parser_for("compare-commits", __doc__)
     parser.add_argument("old", nargs="?", help="the first commit (any git revision)")
     parser.add_argument("new", nargs="?", help="the second commit")
@@ -111,11 +110,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--json", type=Path, help="also write the rounds and medians to this JSON file")
     parser.add_argument("--docs", action="store_true", help=f"write the JSON of the docs' block ({DOCS_JSON[True]} "
                         f"with --load, else {DOCS_JSON[False]})")  # fmt: skip
-    parser.add_argument("--child", type=int, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
-    if args.child:
-        child(args.child, repeats=15, steps=50)
-        return 0
     if args.docs:
         args.json = ROOT / DOCS_JSON[args.load > 0]
     if not (args.old and args.new):
@@ -181,5 +176,5 @@ def _blocks() -> tuple[Any, ...]:
 
 BLOCKS = _blocks() if __name__ != "__main__" else ()  # (run by path, as the child, the suite is not importable)
 
-if __name__ == "__main__":  # the child of measure(), run by path in another commit's checkout
-    sys.exit(main())
+if __name__ == "__main__":  # the child of measure(), run by path in another commit's checkout: no suite there
+    child(int(sys.argv[sys.argv.index("--child") + 1]), repeats=15, steps=50)
