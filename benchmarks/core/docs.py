@@ -11,6 +11,7 @@ it produces in ``BLOCKS``, each a :class:`Block`. ::
 
 from __future__ import annotations
 
+import functools
 import json
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
@@ -116,8 +117,11 @@ def producers() -> dict[str, tuple[str, Block]]:
 def render(only: Iterable[str] | None = None, root: Path = ROOT) -> list[Path]:
     """Every generated block (or those of the producers ``only``) anew from its JSON; the pages rewritten."""
     chosen = set(only) if only is not None else None
-    bodies = {name: (lambda block=block: block.body(root)) for name, (producer, block) in producers().items()
-              if (chosen is None or producer in chosen) and (root / block.json).is_file()}  # fmt: skip
+    bodies: dict[str, Callable[[], str]] = {
+        name: functools.partial(block.body, root)
+        for name, (producer, block) in producers().items()
+        if (chosen is None or producer in chosen) and (root / block.json).is_file()
+    }
     written = []
     for path in doc_tables.markdown_files(root):
         text = path.read_text()

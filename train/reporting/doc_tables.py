@@ -19,11 +19,12 @@ blocks the benchmarks render themselves and says which entry produces each. ::
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import math
 import re
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -326,10 +327,15 @@ def render(name: str, root: Path = ROOT) -> str:
 
 def table_bodies(root: Path = ROOT) -> dict[str, Callable[[], str]]:
     """Block name -> what makes its body (a newline, then the table) for every table of :data:`TABLES`."""
-    return {name: (lambda name=name: "\n" + render(name, root)) for name in TABLES}
+    return {name: functools.partial(table_body, name, root) for name in TABLES}
 
 
-def regenerate(text: str, bodies: dict[str, Callable[[], str]] | None = None) -> str:
+def table_body(name: str, root: Path = ROOT) -> str:
+    """The body of table ``name``'s block: a newline, then the table."""
+    return "\n" + render(name, root)
+
+
+def regenerate(text: str, bodies: Mapping[str, Callable[[], str]] | None = None) -> str:
     """``text`` with every generated block that ``bodies`` makes (default: the tables) made anew."""
     bodies = table_bodies() if bodies is None else bodies
 
@@ -340,7 +346,7 @@ def regenerate(text: str, bodies: dict[str, Callable[[], str]] | None = None) ->
     return MARKER.sub(body, text)
 
 
-def stale(root: Path = ROOT, bodies: dict[str, Callable[[], str]] | None = None) -> list[str]:
+def stale(root: Path = ROOT, bodies: Mapping[str, Callable[[], str]] | None = None) -> list[str]:
     """The generated blocks (as 'file: name') that ``bodies`` (default: the tables) make differently."""
     bodies = table_bodies(root) if bodies is None else bodies
     found = []
