@@ -39,3 +39,11 @@ def read_json(path: Path) -> Any:
     if not path.is_file():
         raise SystemExit(f"{path} does not exist: run its benchmark with --docs first (python -m benchmarks list)")
     return json.loads(path.read_text())
+
+
+def report(lines: list[str], data: Any, path: Path | None) -> int:
+    """Print a benchmark's report ``lines``; write ``data`` as JSON at ``path`` unless it is None (no ``--docs``)."""
+    print("\n".join(lines))
+    if path is not None:
+        write_json(path, data)
+    return 0

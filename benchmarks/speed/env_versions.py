@@ -18,7 +18,7 @@ from typing import Any
 
 from benchmarks.core.commands import parser_for
 from benchmarks.core.docs import NUMBER, Schema, fenced
-from benchmarks.core.record import load_average, torch_machine, write_json
+from benchmarks.core.record import load_average, report, torch_machine
 from benchmarks.core.timing import Stepper, interleaved, paired_ratio
 
 JSON_PATH = Path(__file__).resolve().parents[2] / "docs" / "throughput" / "env_versions.json"
@@ -66,10 +66,7 @@ def main(argv: list[str] | None = None) -> int:
         if getattr(args, name) < 1:
             parser.error(f"--{name.replace('_', '-')}={getattr(args, name)} is invalid: expected a positive integer")
     data = measure(args.num_envs, args.repeats, args.steps)
-    print("\n".join(render(data)))
-    if args.docs:
-        write_json(JSON_PATH, data)
-    return 0
+    return report(render(data), data, JSON_PATH if args.docs else None)
 
 
 BLOCKS = (fenced("env-versions", "docs/throughput/env_versions.json", render,

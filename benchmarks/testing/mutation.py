@@ -301,14 +301,10 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--work", type=Path, default=Path("/tmp/dwr-gym-mutation"))
     parser.add_argument("--max-children", type=int, default=1, help="mutants tested at once (default 1 core)")
     parser.add_argument("--docs", action="store_true", help="(the JSON is always written; renders docs/testing.md's blocks)")
-    parser.add_argument(
-        "--collect-only",
-        action="store_true",
-        help="only read the results of an earlier (or interrupted) run from its work copy",
-    )
-    parser.add_argument(
-        "--sample", type=int, default=0, help="test a seeded random sample of this many mutants per group (0: all)"
-    )
+    parser.add_argument("--collect-only", action="store_true",
+                        help="only read the results of an earlier (or interrupted) run from its work copy")  # fmt: skip
+    parser.add_argument("--sample", type=int, default=0,
+                        help="test a seeded random sample of this many mutants per group (0: all)")  # fmt: skip
     parser.add_argument("--seed", type=int, default=0, help="seed of --sample")
     parser.add_argument("--recheck", action="store_true",
                         help="test only the mutants not killed last time, against the current tests")  # fmt: skip
