@@ -113,7 +113,7 @@ def train_config(entry: Entry, seed: int, run_dir: Path, budget: dict[str, Any])
 
 def train_command(entry: Entry, config: TrainConfig) -> list[str]:
     """The ``dwr-gym train`` command that trains this run alone (config.yaml's recipe, which
-    benchmarks/retrain_pretrained.py runs again)."""
+    ``python -m benchmarks run retrain-pretrained`` runs again)."""
     command = ["dwr-gym", "train", "--seed", str(config.seed), "--total-timesteps", str(config.total_timesteps),
                "--eval-freq", str(config.eval_freq), "--checkpoint-freq", str(config.checkpoint_freq),
                "--eval-episodes", str(config.eval_episodes), "--eval-seed", str(config.eval_seed)]  # fmt: skip
