@@ -11,7 +11,7 @@ import re
 from pathlib import Path
 from typing import Any
 
-from dwr_gym.validation import as_float, as_int
+from dwr_gym.validation import as_bool, as_float, as_int
 from train.learning.config import MAX_TIMESTEPS, MAX_TRAIN_ENVS, ConfigError, TrainConfig
 
 ENV_SECTION = re.compile(r"^(dwr_gym:)?DWRPointStabilization-v\d+$")
@@ -225,7 +225,7 @@ _ALIASES = {"lr": "learning_rate", "learning-rate": "learning_rate", "batch": "b
 def check_algo_kwargs(algo: str, params: dict[str, Any]) -> dict[str, Any]:
     """The hyperparameters coerced to their types; unknown or ill-typed ones raise ConfigError before any work."""
     accepted = set(inspect.signature(algorithm_class(algo).__init__).parameters) - {"self", "env", "device", "seed"}
-    accepted |= {"action_noise_sigma"} | ({"log_std_final"} if algo == "ppo" else set())
+    accepted |= {"action_noise_sigma"} | ({"log_std_final", "log_std_fixed"} if algo == "ppo" else set())
     unknown = sorted(set(params) - accepted)
     if unknown:
         import difflib
@@ -254,6 +254,11 @@ def check_algo_kwargs(algo: str, params: dict[str, Any]) -> dict[str, Any]:
     except ValueError as error:
         hint = " or 'lin_<number>'" if "learning_rate" in str(error) else ""
         raise ConfigError(f"{error}{hint}") from None
+    if "log_std_fixed" in checked:
+        try:
+            checked["log_std_fixed"] = as_bool("log_std_fixed", checked["log_std_fixed"])
+        except ValueError as error:
+            raise ConfigError(str(error)) from None
     if "policy_kwargs" in checked:
         checked["policy_kwargs"] = _check_policy_kwargs(checked["policy_kwargs"] or {})
     if "policy" in checked and checked["policy"] != "MlpPolicy":
@@ -307,6 +312,7 @@ def build_algo_kwargs(params: dict[str, Any]) -> dict[str, Any]:
         policy_kwargs["activation_fn"] = getattr(torch.nn, policy_kwargs["activation_fn"].split(".")[-1])
     kwargs["policy_kwargs"] = policy_kwargs
     kwargs.pop("log_std_final", None)  # PPO's annealed noise: a callback of train.learning.training, not SB3's
+    kwargs.pop("log_std_fixed", None)
     sigma = kwargs.pop("action_noise_sigma", None)
     if sigma:
         from stable_baselines3.common.noise import NormalActionNoise

@@ -259,9 +259,10 @@ class JaxPPO:
         (params, opt_state, rng), _ = jax.lax.scan(
             epoch, (runner.params, runner.opt_state, runner.rng), None, s.n_epochs
         )
-        if s.log_std_final is not None:  # the annealed exploration noise: log_std capped by the schedule
+        if s.log_std_final is not None or s.log_std_fixed:  # the exploration noise capped by (or set to) its schedule
             cap = s.log_std_cap(jnp.clip(1.0 - progress_remaining, 0.0, 1.0))
             inner = params["params"]
-            params = {**params, "params": {**inner, "log_std": jnp.minimum(inner["log_std"], cap)}}
+            log_std = jnp.full_like(inner["log_std"], cap) if s.log_std_fixed else jnp.minimum(inner["log_std"], cap)
+            params = {**params, "params": {**inner, "log_std": log_std}}
         runner = runner.replace(params=params, opt_state=opt_state, rng=rng, updates=runner.updates + 1)
         return runner, totals
