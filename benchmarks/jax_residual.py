@@ -1,0 +1,262 @@
+"""Residual RL on an analytic law at the jitted trainer's speed (issue 40): `dwr-gym train --backend jax --residual`.
+
+    nice -n 5 python benchmarks/jax_residual.py speed --docs              # docs/jax/residual_speed.json
+    nice -n 5 python benchmarks/jax_residual.py learn --time-limit 300 --docs  # docs/jax/residual_learn.json
+    python benchmarks/jax_residual.py --render                            # docs/jax-training.md's blocks from the JSON
+
+``speed``: env steps per second, updates included, of the jitted PPO alone and of the jitted residual PPO on ``ptc``
+and on ``pt-astolfi`` (the law evaluated inside the compiled loop at every step), with the same settings (those of
+train/hyperparams/residual_ppo.yml for the env: 256 robots, rollouts of 64 steps, 4 epochs over minibatches of
+1024) in one process on one thread, in alternating rounds so that the ratios hold on a busy machine. Compilation is
+timed apart.
+
+``learn``: for each expert, `dwr-gym train --backend jax --residual --expert NAME --time-limit S` (seed 0, the
+defaults of residual_ppo.yml), then the agent and its expert alone evaluated as `dwr-gym evaluate --agents RUN_DIR
+--controllers NAME --scenarios random --n N --seed 3232` (the benchmark's evaluation seed): in time, E/opt (energy
+over the minimum-energy plan's, mean over the episodes in time) and final heading, against issue 40's goal for a
+residual on PTC.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import statistics
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+if __name__ == "__main__":  # one thread for XLA (no Eigen pool) and torch, before either is imported
+    os.environ.setdefault("OMP_NUM_THREADS", "1")
+    os.environ["XLA_FLAGS"] = (os.environ.get("XLA_FLAGS", "")
+                               + " --xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1").strip()  # fmt: skip
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+OUT = ROOT / "docs" / "jax"
+DOCS = ROOT / "docs" / "jax-training.md"
+EXPERTS = ("ptc", "pt-astolfi")
+GOALS = {"in_time": 0.995, "energy_ratio": 1.6, "final_heading": 0.15}
+"""Issue 40's goal for a residual on PTC (IQM over >= 5 seeds there; one seed here)."""
+EVAL_SEED = 3232
+
+
+def make_config(env_id: str, residual: bool, expert: str = "ptc", **options: Any) -> Any:
+    """The resolved TrainConfig of `dwr-gym train --backend jax [--residual --expert EXPERT]` on ``env_id``."""
+    from train.learning.config import TrainConfig
+    from train.learning.hyperparams import resolve_hyperparams
+
+    config = TrainConfig(backend="jax", env_id=env_id, residual=residual, expert=expert, progress=False, **options)
+    config.validate()
+    return resolve_hyperparams(config, set())
+
+
+def timed(fn: Any, *args: Any) -> tuple[Any, float, float]:
+    """``fn(*args)`` run to completion, its wall seconds and this process's CPU seconds (on one thread, the CPU time
+    is the work done: what a busy shared machine leaves out of the wall time)."""
+    import jax
+
+    began, cpu = time.perf_counter(), time.process_time()
+    out = jax.block_until_ready(fn(*args))
+    return out, time.perf_counter() - began, time.process_time() - cpu
+
+
+def machine() -> str:
+    import jax
+
+    return (f"{platform.machine()}, {os.cpu_count()} cores, jax {jax.__version__} ({jax.default_backend()}), one "
+            f"thread (XLA_FLAGS={os.environ.get('XLA_FLAGS', '')!r})")  # fmt: skip
+
+
+def speed(env_id: str, repeats: int, updates: int) -> dict[str, Any]:
+    """Alternating rounds of the jitted PPO alone and residual on each of :data:`EXPERTS`, with one PPO setting."""
+    from train.learning.jax_policy import PPOSettings
+    from train.learning.jax_ppo import JaxPPO
+    from train.learning.jax_training import make_jax_env
+
+    reference = make_config(env_id, residual=True)  # the residual's settings, for every variant
+    settings = PPOSettings.from_algo_kwargs(reference.algo_kwargs, int(reference.num_envs or 0))
+    variants = {"ppo": make_config(env_id, residual=False)}
+    variants.update({f"residual-{name}": make_config(env_id, residual=True, expert=name) for name in EXPERTS})
+    runs, compile_s = {}, {}
+    for name, config in variants.items():
+        ppo = JaxPPO(settings, *make_jax_env(config))
+        (runner, _), compile_s[name], _ = timed(lambda p=ppo: p.run(p.init(0), 1, 1e9))
+        runs[name] = [ppo, runner]
+    per_round = updates * settings.steps_per_update
+    rounds = []
+    for index in range(repeats):
+        entry: dict[str, dict[str, float]] = {"wall": {}, "cpu": {}}
+        for name, run in runs.items():
+            (run[1], _), wall, cpu = timed(run[0].run, run[1], updates, 1e9)
+            entry["wall"][name], entry["cpu"][name] = per_round / wall, per_round / cpu
+        rounds.append(entry)
+        print(f"round {index + 1}/{repeats}, steps per CPU second: "
+              + ", ".join(f"{k} {v:,.0f}" for k, v in entry["cpu"].items()), flush=True)  # fmt: skip
+    median = {clock: {key: statistics.median(r[clock][key] for r in rounds) for key in runs} for clock in ("wall", "cpu")}
+    ratios = {clock: {key: statistics.median(r[clock][key] / r[clock]["ppo"] for r in rounds) for key in runs
+                      if key != "ppo"} for clock in ("wall", "cpu")}  # fmt: skip
+    return {"env_id": env_id, "machine": machine(), "load_average_1min_at_end": round(os.getloadavg()[0], 2),
+            "settings": settings.as_dict(), "steps_per_round": per_round, "rounds": rounds,
+            "compile_seconds": {k: round(v, 1) for k, v in compile_s.items()}, "median_steps_per_second": median,
+            "ratio_to_ppo": ratios}  # fmt: skip
+
+
+def evaluate_run(run_dir: Path, expert: str, env_id: str, n: int) -> dict[str, Any]:
+    """What `dwr-gym evaluate --agents RUN_DIR --controllers EXPERT --scenarios random --n N --seed 3232` reports."""
+    from train.env_ids import env_keywords
+    from train.evaluation.evaluate import evaluate_sets
+    from train.learning.agents import load_agent
+
+    label, policy = load_agent(run_dir)
+    rows = evaluate_sets({label: policy, expert: expert}, ["random"], n, EVAL_SEED, env_keywords(env_id, {}),
+                         optimum="pose")  # fmt: skip
+    out = {}
+    for row in rows:
+        out["agent" if row["policy"] == label else "expert"] = {
+            "in_time": row["success_rate"], "energy_ratio": row["energy_ratio_mean"],
+            "final_heading": row["final_heading_error_mean"], "energy": row["energy_mean"]}  # fmt: skip
+    return out
+
+
+def learn(env_id: str, time_limit: float, n: int, out: Path, experts: tuple[str, ...]) -> dict[str, Any]:
+    """Train a residual on each expert for ``time_limit`` seconds and evaluate it beside its expert."""
+    import csv
+
+    from train.learning.jax_training import train_jax
+    from train.learning.runs import read_state
+
+    results = []
+    for expert in experts:
+        run_dir = out / f"residual-ppo-jax-{expert}-{env_id}"
+        config = make_config(env_id, residual=True, expert=expert, time_limit=time_limit, total_timesteps=10**9,
+                             eval_freq=500_000, checkpoint_freq=500_000, run_dir=str(run_dir), overwrite=True)  # fmt: skip
+        began = time.perf_counter()
+        train_jax(config, command=["benchmarks/jax_residual.py", "learn"])
+        wall = time.perf_counter() - began
+        state = read_state(run_dir)
+        with (run_dir / "evaluations.csv").open() as handle:
+            curve = [{"env_steps": int(r["timesteps"]), "wall_time": float(r["wall_time"]),
+                      "in_time": float(r["success_rate"]), "energy": float(r["energy_mean"])}
+                     for r in csv.DictReader(handle)]  # fmt: skip
+        evaluated = evaluate_run(run_dir, expert, env_id, n)
+        results.append({"expert": expert, "env_id": env_id, "env_steps": state["timesteps"],
+                        "train_seconds": round(wall, 1), "steps_per_second": round(state["timesteps"] / wall),
+                        "gamma": config.algo_kwargs.get("gamma"), **evaluated, "curve": curve})  # fmt: skip
+        print(json.dumps({k: v for k, v in results[-1].items() if k != "curve"}), flush=True)
+    return {"machine": machine(), "time_limit_s": time_limit, "episodes": n, "eval_seed": EVAL_SEED,
+            "goals": GOALS, "runs": results}  # fmt: skip
+
+
+def _number(value: Any, digits: int = 2) -> str:
+    return "n/a" if value is None or value != value else f"{value:.{digits}f}"
+
+
+def render_speed(data: dict[str, Any]) -> list[str]:
+    fps, ratios = data["median_steps_per_second"], data["ratio_to_ppo"]
+    lines = [data["machine"], f"load average {data['load_average_1min_at_end']} (1 min, at the end); {data['env_id']}; "
+             f"{len(data['rounds'])} alternating rounds of {data['steps_per_round']:,} steps; medians; per CPU "
+             "second (the work, on one thread) and per wall second (what a busy machine left)", "",
+             f"{'--backend jax':<34}{'steps/CPU s':>12}{'/ PPO':>8}{'steps/wall s':>13}{'/ PPO':>8}"
+             f"{'compilation':>13}"]  # fmt: skip
+    for key in fps["cpu"]:
+        name = "PPO alone" if key == "ppo" else f"--residual --expert {key.removeprefix('residual-')}"
+        cpu, wall = (1.0, 1.0) if key == "ppo" else (ratios["cpu"][key], ratios["wall"][key])
+        lines.append(f"{name:<34}{fps['cpu'][key]:>12,.0f}{cpu:>7.2f}x{fps['wall'][key]:>13,.0f}{wall:>7.2f}x"
+                     f"{data['compile_seconds'][key]:>11.0f} s")  # fmt: skip
+    return lines
+
+
+def render_learn(data: dict[str, Any]) -> list[str]:
+    g = data["goals"]
+    lines = [data["machine"], f"seed 0, {data['time_limit_s']:.0f} s of training each (compilation and evaluations "
+             f"included); {data['episodes']} random starts (seed {data['eval_seed']}) per row", "",
+             f"{'policy':<34}{'env steps':>12}{'steps/s':>9}{'in time':>9}{'E/opt':>7}{'heading':>9}"]  # fmt: skip
+    for run in data["runs"]:
+        for who in ("agent", "expert"):
+            m = run[who]
+            if who == "agent":
+                name = f"residual on {run['expert']} (gamma {run['gamma']})"
+                steps, rate = f"{run['env_steps']:,}", f"{run['steps_per_second']:,}"
+            else:
+                name, steps, rate = f"{run['expert']} alone", "", ""
+            lines.append(f"{name:<34}{steps:>12}{rate:>9}{m['in_time']:>9.1%}{_number(m['energy_ratio']):>7}"
+                         f"{_number(m['final_heading'], 3):>9}")  # fmt: skip
+    lines += ["", f"issue 40's goal for the residual on ptc: in time >= {g['in_time']:.1%}, E/opt <= "
+              f"{g['energy_ratio']}, final heading <= {g['final_heading']} rad"]  # fmt: skip
+    for run in data["runs"]:
+        if run["expert"] == "ptc":
+            m = run["agent"]
+            met = [m["in_time"] >= g["in_time"], m["energy_ratio"] is not None and m["energy_ratio"] <= g["energy_ratio"],
+                   m["final_heading"] <= g["final_heading"]]  # fmt: skip
+            lines.append(f"{run['env_id']}: " + ", ".join(f"{k} {'met' if ok else 'NOT met'}"
+                                                           for k, ok in zip(g, met, strict=True)))  # fmt: skip
+    return lines
+
+
+BLOCKS = {"jax-residual-speed": ("residual_speed.json", render_speed),
+          "jax-residual-learn": ("residual_learn.json", render_learn),
+          "jax-residual-learn-v2": ("residual_learn_v2.json", render_learn)}  # fmt: skip
+
+
+def rendered_block(name: str, data: dict[str, Any]) -> str:
+    """The docs block ``name`` rendered from its JSON ``data``."""
+    return "\n```\n" + "\n".join(BLOCKS[name][1](data)) + "\n```\n"
+
+
+def docs_block(name: str) -> str:
+    """The text between the markers of block ``name`` in the docs page."""
+    from train.reporting.doc_tables import block
+
+    return block(DOCS.read_text(), name)
+
+
+def write_docs() -> None:
+    from train.reporting.doc_tables import with_block
+
+    text = DOCS.read_text()
+    for name, (file, _) in BLOCKS.items():
+        if (OUT / file).is_file() and f"<!-- {name}:begin -->" in text:
+            text = with_block(text, name, rendered_block(name, json.loads((OUT / file).read_text())))
+    DOCS.write_text(text)
+    print(f"wrote {DOCS}")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("what", nargs="?", choices=("speed", "learn"))
+    parser.add_argument("--env", default="DWRPointStabilization-v1")
+    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--updates", type=int, default=4, help="PPO updates per round (speed)")
+    parser.add_argument("--time-limit", type=float, default=300.0, help="seconds of training per expert (learn)")
+    parser.add_argument("--episodes", type=int, default=200, help="evaluation episodes (learn)")
+    parser.add_argument("--experts", nargs="+", default=list(EXPERTS))
+    parser.add_argument("--out", type=Path, default=ROOT / "results" / "jax-residual")
+    parser.add_argument("--docs", action="store_true", help="write the JSON to docs/jax/ and the docs' blocks")
+    parser.add_argument("--render", action="store_true", help="only regenerate the docs' blocks from the JSON")
+    args = parser.parse_args()
+    if args.render or args.what is None:
+        write_docs()
+        return
+    from train.learning.jax_training import use_compilation_cache
+
+    use_compilation_cache()
+    if args.what == "speed":
+        result = speed(args.env, args.repeats, args.updates)
+        name = "residual_speed.json"
+    else:
+        result = learn(args.env, args.time_limit, args.episodes, args.out, tuple(args.experts))
+        name = "residual_learn.json" if args.env.endswith("v1") else f"residual_learn_{args.env.split('-')[-1]}.json"
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / name).write_text(json.dumps(result, indent=1))
+    if args.docs:
+        OUT.mkdir(parents=True, exist_ok=True)
+        (OUT / name).write_text(json.dumps(result, indent=1))
+        write_docs()
+
+
+if __name__ == "__main__":
+    main()
