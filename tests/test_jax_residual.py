@@ -175,3 +175,27 @@ def test_cli_trains_a_jax_residual_that_evaluate_loads_as_expert_plus_residual(t
     residual, _ = policy.model.predict(obs, deterministic=True)
     np.testing.assert_allclose(action, np.clip(expert_action + 0.5 * residual, -1, 1), atol=1e-6)
     assert np.max(np.abs(residual)) < 0.1  # 128 steps from a residual started near zero: still near the expert
+
+
+def test_benchmark_entries_train_the_jax_residual_on_each_law_and_v2_with_gamma_1(tmp_path: Path) -> None:
+    from train.learning.benchmark import parse_entry, train_config
+
+    for name, expert in (("residual-ppo-jax", "ptc"), ("residual-ppo-jax-astolfi", "pt-astolfi")):
+        config = train_config(parse_entry(name), 0, tmp_path / name, {"env_steps": 1000})
+        assert (config.backend, config.residual, config.expert) == ("jax", True, expert)
+        assert config.algo_kwargs["gamma"] == 0.999 and config.total_timesteps == 1000
+    v2 = train_config(parse_entry("residual-ppo-jax:env_id=DWRPointStabilization-v2"), 0, tmp_path / "v2", {})
+    assert v2.backend == "jax" and v2.residual and v2.algo_kwargs["gamma"] == 1.0
+
+
+def test_each_docs_block_is_what_the_benchmark_renders_from_its_json() -> None:
+    import importlib.util
+    import json
+
+    spec = importlib.util.spec_from_file_location("jax_residual_benchmark", ROOT / "benchmarks" / "jax_residual.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    written = [(name, module.OUT / file) for name, (file, _) in module.BLOCKS.items() if (module.OUT / file).is_file()]
+    for name, path in written:
+        assert module.docs_block(name) == module.rendered_block(name, json.loads(path.read_text())), name

@@ -11,12 +11,14 @@ from typing import Any
 
 TASK_ENV_ID = "DWRPointStabilization-v1"
 PAPER_ENV_ID = "DWRPointStabilization-v0"
-ENV_IDS: tuple[str, ...] = (TASK_ENV_ID, PAPER_ENV_ID)
+HELD_ENV_ID = "DWRPointStabilization-v2"
+"""The task held to T_con (issue 40): learners train it with gamma = 1 (train/hyperparams/ sections)."""
+ENV_IDS: tuple[str, ...] = (TASK_ENV_ID, PAPER_ENV_ID, HELD_ENV_ID)
 #: What a run whose config.yaml records no env id was trained on: every run before ids were recorded used v0.
 UNRECORDED_ENV_ID = PAPER_ENV_ID
 ENV_HELP = (
-    f"env id: {TASK_ENV_ID} (the task: T_con drawn per episode, energy-optimal reward) or {PAPER_ENV_ID} "
-    "(the paper's original reward at T_con = 20 s)"
+    f"env id: {TASK_ENV_ID} (the task: T_con drawn per episode, energy-optimal reward), {PAPER_ENV_ID} "
+    f"(the paper's original reward at T_con = 20 s) or {HELD_ENV_ID} (the task held to T_con, for gamma = 1)"
 )
 
 
@@ -24,7 +26,8 @@ def check_env_id(env_id: Any, flag: str = "--env") -> str:
     """``env_id`` without a ``dwr_gym:`` prefix, or a ValueError of one line naming the ids allowed."""
     text = str(env_id).removeprefix("dwr_gym:")
     if text not in ENV_IDS:
-        raise ValueError(f"{flag} {env_id!r} is invalid: expected {TASK_ENV_ID} (the task) or {PAPER_ENV_ID}")
+        raise ValueError(f"{flag} {env_id!r} is invalid: expected {TASK_ENV_ID} (the task), {PAPER_ENV_ID} or "
+                         f"{HELD_ENV_ID}")  # fmt: skip
     return text
 
 
