@@ -106,7 +106,8 @@ def speed(env_id: str, repeats: int, updates: int) -> dict[str, Any]:
 
 
 def evaluate_run(run_dir: Path, expert: str, env_id: str, n: int) -> dict[str, Any]:
-    """What `dwr-gym evaluate --agents RUN_DIR --controllers EXPERT --scenarios random --n N --seed 3232` reports."""
+    """What `dwr-gym evaluate --agents RUN_DIR --controllers EXPERT --scenarios random --n N --seed 3232` reports:
+    {"agent": metrics, "alone": the expert's metrics}."""
     from train.env_ids import env_keywords
     from train.evaluation.evaluate import evaluate_sets
     from train.learning.agents import load_agent
@@ -116,7 +117,7 @@ def evaluate_run(run_dir: Path, expert: str, env_id: str, n: int) -> dict[str, A
                          optimum="pose")  # fmt: skip
     out = {}
     for row in rows:
-        out["agent" if row["policy"] == label else "expert"] = {
+        out["agent" if row["policy"] == label else "alone"] = {
             "in_time": row["success_rate"], "energy_ratio": row["energy_ratio_mean"],
             "final_heading": row["final_heading_error_mean"], "energy": row["energy_mean"]}  # fmt: skip
     return out
@@ -174,16 +175,16 @@ def render_learn(data: dict[str, Any]) -> list[str]:
     g = data["goals"]
     lines = [data["machine"], f"seed 0, {data['time_limit_s']:.0f} s of training each (compilation and evaluations "
              f"included); {data['episodes']} random starts (seed {data['eval_seed']}) per row", "",
-             f"{'policy':<34}{'env steps':>12}{'steps/s':>9}{'in time':>9}{'E/opt':>7}{'heading':>9}"]  # fmt: skip
+             f"{'policy':<40}{'env steps':>12}{'steps/s':>9}{'in time':>9}{'E/opt':>7}{'heading':>9}"]  # fmt: skip
     for run in data["runs"]:
-        for who in ("agent", "expert"):
+        for who in ("agent", "alone"):
             m = run[who]
             if who == "agent":
                 name = f"residual on {run['expert']} (gamma {run['gamma']})"
                 steps, rate = f"{run['env_steps']:,}", f"{run['steps_per_second']:,}"
             else:
                 name, steps, rate = f"{run['expert']} alone", "", ""
-            lines.append(f"{name:<34}{steps:>12}{rate:>9}{m['in_time']:>9.1%}{_number(m['energy_ratio']):>7}"
+            lines.append(f"{name:<40}{steps:>12}{rate:>9}{m['in_time']:>9.1%}{_number(m['energy_ratio']):>7}"
                          f"{_number(m['final_heading'], 3):>9}")  # fmt: skip
     lines += ["", f"issue 40's goal for the residual on ptc: in time >= {g['in_time']:.1%}, E/opt <= "
               f"{g['energy_ratio']}, final heading <= {g['final_heading']} rad"]  # fmt: skip
