@@ -123,7 +123,8 @@ def evaluate_run(run_dir: Path, expert: str, env_id: str, n: int) -> dict[str, A
     return out
 
 
-def learn(env_id: str, time_limit: float, n: int, out: Path, experts: tuple[str, ...]) -> dict[str, Any]:
+def learn(env_id: str, time_limit: float, n: int, out: Path, experts: tuple[str, ...], critic_warmup: int = 0,
+          overrides: dict[str, Any] | None = None) -> dict[str, Any]:
     """Train a residual on each expert for ``time_limit`` seconds and evaluate it beside its expert."""
     import csv
 
@@ -134,7 +135,8 @@ def learn(env_id: str, time_limit: float, n: int, out: Path, experts: tuple[str,
     for expert in experts:
         run_dir = out / f"residual-ppo-jax-{expert}-{env_id}"
         config = make_config(env_id, residual=True, expert=expert, time_limit=time_limit, total_timesteps=10**9,
-                             eval_freq=500_000, checkpoint_freq=500_000, run_dir=str(run_dir), overwrite=True)  # fmt: skip
+                             eval_freq=500_000, checkpoint_freq=500_000, run_dir=str(run_dir), overwrite=True,
+                             critic_warmup=critic_warmup, hyperparam_overrides=dict(overrides or {}))  # fmt: skip
         began = time.perf_counter()
         train_jax(config, command=["benchmarks/jax_residual.py", "learn"])
         wall = time.perf_counter() - began
@@ -149,7 +151,7 @@ def learn(env_id: str, time_limit: float, n: int, out: Path, experts: tuple[str,
                         "gamma": config.algo_kwargs.get("gamma"), **evaluated, "curve": curve})  # fmt: skip
         print(json.dumps({k: v for k, v in results[-1].items() if k != "curve"}), flush=True)
     return {"machine": machine(), "time_limit_s": time_limit, "episodes": n, "eval_seed": EVAL_SEED,
-            "goals": GOALS, "runs": results}  # fmt: skip
+            "critic_warmup": critic_warmup, "overrides": dict(overrides or {}), "goals": GOALS, "runs": results}  # fmt: skip
 
 
 def _number(value: Any, digits: int = 2) -> str:
@@ -174,7 +176,8 @@ def render_speed(data: dict[str, Any]) -> list[str]:
 def render_learn(data: dict[str, Any]) -> list[str]:
     g = data["goals"]
     lines = [data["machine"], f"seed 0, {data['time_limit_s']:.0f} s of training each (compilation and evaluations "
-             f"included); {data['episodes']} random starts (seed {data['eval_seed']}) per row", "",
+             f"included); {data['episodes']} random starts (seed {data['eval_seed']}) per row; critic warm-up "
+             f"{data.get('critic_warmup', 0):,} steps; overrides {data.get('overrides') or 'none'}", "",
              f"{'policy':<40}{'env steps':>12}{'steps/s':>9}{'in time':>9}{'E/opt':>7}{'heading':>9}"]  # fmt: skip
     for run in data["runs"]:
         for who in ("agent", "alone"):
@@ -235,6 +238,8 @@ def main() -> None:
     parser.add_argument("--time-limit", type=float, default=300.0, help="seconds of training per expert (learn)")
     parser.add_argument("--episodes", type=int, default=200, help="evaluation episodes (learn)")
     parser.add_argument("--experts", nargs="+", default=list(EXPERTS))
+    parser.add_argument("--critic-warmup", type=int, default=0, help="learn: env steps of critic warm-up")
+    parser.add_argument("--hyperparams", nargs="*", default=[], metavar="KEY=VALUE", help="learn: overrides")
     parser.add_argument("--out", type=Path, default=ROOT / "results" / "jax-residual")
     parser.add_argument("--docs", action="store_true", help="write the JSON to docs/jax/ and the docs' blocks")
     parser.add_argument("--render", action="store_true", help="only regenerate the docs' blocks from the JSON")
@@ -249,7 +254,10 @@ def main() -> None:
         result = speed(args.env, args.repeats, args.updates)
         name = "residual_speed.json"
     else:
-        result = learn(args.env, args.time_limit, args.episodes, args.out, tuple(args.experts))
+        from train.learning.hyperparams import parse_overrides
+
+        result = learn(args.env, args.time_limit, args.episodes, args.out, tuple(args.experts), args.critic_warmup,
+                       parse_overrides(args.hyperparams))  # fmt: skip
         name = "residual_learn.json" if args.env.endswith("v1") else f"residual_learn_{args.env.split('-')[-1]}.json"
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / name).write_text(json.dumps(result, indent=1))

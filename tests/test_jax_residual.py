@@ -199,3 +199,55 @@ def test_each_docs_block_is_what_the_benchmark_renders_from_its_json() -> None:
     written = [(name, module.OUT / file) for name, (file, _) in module.BLOCKS.items() if (module.OUT / file).is_file()]
     for name, path in written:
         assert module.docs_block(name) == module.rendered_block(name, json.loads(path.read_text())), name
+
+
+class _TinyEnv:
+    """A gymnax-style env of a few lines (obs of 10 numbers, reward -|action|^2): compiles in seconds."""
+
+    def reset_env(self, key: Any, params: Any) -> tuple[Any, Any]:
+        obs = jax.random.normal(key, (10,))
+        return obs, obs
+
+    reset = reset_env
+
+    def step_env(self, key: Any, state: Any, action: Any, params: Any) -> tuple[Any, ...]:
+        obs = 0.9 * state + 0.1 * jax.random.normal(key, (10,))
+        return obs, obs, -jnp.sum(action**2), jnp.asarray(False), {"truncated": jnp.asarray(False)}
+
+    def observation_space(self, params: Any) -> Any:
+        from dwr_gym.jax_env.gymnax import Box
+
+        return Box(-10.0, 10.0, (10,), jnp.float32)
+
+    def action_space(self, params: Any) -> Any:
+        from dwr_gym.jax_env.gymnax import Box
+
+        return Box(-1.0, 1.0, (2,), jnp.float32)
+
+
+@pytest.mark.slow  # compiles a PPO update: over a minute on a busy 2-core machine
+def test_critic_warmup_keeps_the_actor_as_it_is_while_the_critic_learns() -> None:
+    from train.learning.jax_policy import PPOSettings
+    from train.learning.jax_ppo import JaxPPO
+
+    def changed(before: Any, after: Any) -> dict[str, bool]:
+        return {name: not all(np.array_equal(a, b) for a, b in zip(jax.tree.leaves(before.params["params"][name]),
+                                                                    jax.tree.leaves(after.params["params"][name]),
+                                                                    strict=True))
+                for name in before.params["params"]}  # fmt: skip
+
+    settings = PPOSettings(n_envs=4, n_steps=8, batch_size=16, n_epochs=2, critic_warmup=32)  # one update of 32 steps
+    ppo = JaxPPO(settings, _TinyEnv(), None)
+    start = ppo.init(0)
+    warm, _ = ppo.run(start, 1, 1e6)
+    frozen = changed(start, warm)
+    assert frozen["value"] and frozen["value_0"]
+    assert not any(frozen[name] for name in ("policy_0", "policy_1", "action", "log_std"))
+    assert all(changed(warm, ppo.run(warm, 1, 1e6)[0]).values())  # after the warm-up, the actor learns
+
+
+def test_critic_warmup_is_an_option_of_residual_agents_too() -> None:
+    config = TrainConfig(backend="jax", residual=True, critic_warmup=1000)
+    config.validate()
+    with pytest.raises(ConfigError, match=r"^--critic-warmup 1000 is invalid: it needs --algo ppo and --init-from or"):
+        TrainConfig(critic_warmup=1000).validate()

@@ -11,6 +11,7 @@ same updates, so the same weights, as the uninterrupted run; tests/test_jax_trai
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import pickle
 import sys
@@ -217,6 +218,7 @@ def _train_jax(
 
     fill_budget(config)
     settings = PPOSettings.from_algo_kwargs(config.algo_kwargs, int(config.num_envs or 0))
+    settings = dataclasses.replace(settings, critic_warmup=config.critic_warmup)
     env, env_params = make_jax_env(config)
     use_compilation_cache()
     from train.learning.jax_export import SB3Exporter
