@@ -249,5 +249,5 @@ def test_critic_warmup_keeps_the_actor_as_it_is_while_the_critic_learns() -> Non
 def test_critic_warmup_is_an_option_of_residual_agents_too() -> None:
     config = TrainConfig(backend="jax", residual=True, critic_warmup=1000)
     config.validate()
-    with pytest.raises(ConfigError, match=r"^--critic-warmup 1000 is invalid: it needs --algo ppo and --init-from or"):
+    with pytest.raises(ConfigError, match=r"^--critic-warmup 1000 is invalid: it needs --init-from or --residual, and"):
         TrainConfig(critic_warmup=1000).validate()

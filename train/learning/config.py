@@ -131,8 +131,8 @@ class TrainConfig:
         if self.init_from is not None and self.backend != "sb3":
             raise ConfigError("--init-from is implemented by --backend sb3 only")
         if self.critic_warmup and ((self.init_from is None and not self.residual) or self.algo != "ppo"):
-            raise ConfigError(f"--critic-warmup {self.critic_warmup} is invalid: it needs --algo ppo and --init-from "
-                              "or --residual")  # fmt: skip
+            raise ConfigError(f"--critic-warmup {self.critic_warmup} is invalid: it needs --init-from or --residual, "
+                              "and --algo ppo")  # fmt: skip
         if self.resume is not None and not Path(self.resume).exists():
             raise ConfigError(f"--resume {self.resume!r} is invalid: no such run directory or checkpoint file")
         self.device = check_device(self.device)
