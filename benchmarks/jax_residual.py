@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import platform
 import statistics
@@ -154,6 +155,49 @@ def learn(env_id: str, time_limit: float, n: int, out: Path, experts: tuple[str,
             "critic_warmup": critic_warmup, "overrides": dict(overrides or {}), "goals": GOALS, "runs": results}  # fmt: skip
 
 
+def reward_terms(env_id: str, episodes: int, experts: tuple[str, ...]) -> dict[str, Any]:
+    """Each expert's return on ``env_id`` split into its named terms (``info["reward_terms"]``), mean over
+    ``episodes`` episodes (reset seeds 0 ..), with the final distance, |e_psi| (eq. (6)) and |psi|: what the reward
+    pays each law for, to set beside what the residual on it learned."""
+    import gymnasium as gym
+    import numpy as np
+
+    import dwr_gym  # noqa: F401
+    from baselines.expert import ExpertPolicy
+    from baselines.registry import make_controller
+
+    out: dict[str, Any] = {"env_id": env_id, "episodes": episodes, "laws": {}}
+    for name in experts:
+        env = gym.make(env_id)
+        expert = ExpertPolicy.from_env(env, make_controller(name))
+        sums: dict[str, float] = {}
+        finals = []
+        for seed in range(episodes):
+            obs, _ = env.reset(seed=seed)
+            done, ret = False, 0.0
+            while not done:
+                obs, reward, terminated, truncated, info = env.step(expert(obs))
+                done, ret = terminated or truncated, ret + float(reward)
+                for key, value in info["reward_terms"].items():
+                    sums[key] = sums.get(key, 0.0) + float(value)
+            finals.append((ret, obs[0], abs(obs[5]), abs(math.atan2(obs[4], obs[3]))))
+        mean = np.mean(np.asarray(finals, dtype=np.float64), axis=0)
+        out["laws"][name] = {"return": mean[0], "terms": {k: v / episodes for k, v in sums.items() if v != 0.0},
+                             "final_distance": mean[1], "final_orientation_error": mean[2], "final_heading": mean[3]}  # fmt: skip
+    return out
+
+
+def render_terms(data: dict[str, Any]) -> list[str]:
+    names = sorted({k for law in data["laws"].values() for k in law["terms"]})
+    lines = [f"{data['env_id']}, each law alone, mean over {data['episodes']} episodes (reset seeds 0..)", "",
+             f"{'law':<12}{'return':>8}" + "".join(f"{k:>10}" for k in names)
+             + f"{'final d':>9}{'|e_psi|':>9}{'|psi|':>7}"]  # fmt: skip
+    for name, law in data["laws"].items():
+        lines.append(f"{name:<12}{law['return']:>8.2f}" + "".join(f"{law['terms'].get(k, 0.0):>10.2f}" for k in names)
+                     + f"{law['final_distance']:>9.4f}{law['final_orientation_error']:>9.2f}{law['final_heading']:>7.2f}")  # fmt: skip
+    return lines
+
+
 def _number(value: Any, digits: int = 2) -> str:
     return "n/a" if value is None or value != value else f"{value:.{digits}f}"
 
@@ -203,7 +247,10 @@ def render_learn(data: dict[str, Any]) -> list[str]:
 
 BLOCKS = {"jax-residual-speed": ("residual_speed.json", render_speed),
           "jax-residual-learn": ("residual_learn.json", render_learn),
-          "jax-residual-learn-v2": ("residual_learn_v2.json", render_learn)}  # fmt: skip
+          "jax-residual-learn-v2": ("residual_learn_v2.json", render_learn),
+          "jax-residual-learn-v2-warmup": ("residual_learn_v2_warmup.json", render_learn),
+          "jax-residual-learn-v2-low-noise": ("residual_learn_v2_low_noise.json", render_learn),
+          "jax-residual-terms-v2": ("residual_terms_v2.json", render_terms)}  # fmt: skip
 
 
 def rendered_block(name: str, data: dict[str, Any]) -> str:
@@ -231,13 +278,14 @@ def write_docs() -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("what", nargs="?", choices=("speed", "learn"))
+    parser.add_argument("what", nargs="?", choices=("speed", "learn", "terms"))
     parser.add_argument("--env", default="DWRPointStabilization-v1")
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--updates", type=int, default=4, help="PPO updates per round (speed)")
     parser.add_argument("--time-limit", type=float, default=300.0, help="seconds of training per expert (learn)")
     parser.add_argument("--episodes", type=int, default=200, help="evaluation episodes (learn)")
     parser.add_argument("--experts", nargs="+", default=list(EXPERTS))
+    parser.add_argument("--name", help="the JSON's file name (default: by the measurement and the env)")
     parser.add_argument("--critic-warmup", type=int, default=0, help="learn: env steps of critic warm-up")
     parser.add_argument("--hyperparams", nargs="*", default=[], metavar="KEY=VALUE", help="learn: overrides")
     parser.add_argument("--out", type=Path, default=ROOT / "results" / "jax-residual")
@@ -253,12 +301,16 @@ def main() -> None:
     if args.what == "speed":
         result = speed(args.env, args.repeats, args.updates)
         name = "residual_speed.json"
+    elif args.what == "terms":
+        result = reward_terms(args.env, args.episodes, tuple(args.experts))
+        name = f"residual_terms_{args.env.split('-')[-1]}.json"
     else:
         from train.learning.hyperparams import parse_overrides
 
         result = learn(args.env, args.time_limit, args.episodes, args.out, tuple(args.experts), args.critic_warmup,
                        parse_overrides(args.hyperparams))  # fmt: skip
         name = "residual_learn.json" if args.env.endswith("v1") else f"residual_learn_{args.env.split('-')[-1]}.json"
+    name = args.name or name
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / name).write_text(json.dumps(result, indent=1))
     if args.docs:
