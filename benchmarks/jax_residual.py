@@ -124,6 +124,13 @@ def evaluate_run(run_dir: Path, expert: str, env_id: str, n: int) -> dict[str, A
     return out
 
 
+def curve_row(row: dict[str, str]) -> dict[str, float]:
+    """A row of a run's evaluations.csv (its training evaluations on 100 starts) as the JSON keeps it."""
+    return {"env_steps": int(row["timesteps"]), "wall_time": float(row["wall_time"]),
+            "in_time": float(row["success_rate"]), "energy": float(row["energy_mean"]),
+            "final_heading": float(row["final_heading_error_mean"]), "return": float(row["return_mean"])}  # fmt: skip
+
+
 def learn(env_id: str, time_limit: float, n: int, out: Path, experts: tuple[str, ...], critic_warmup: int = 0,
           overrides: dict[str, Any] | None = None) -> dict[str, Any]:
     """Train a residual on each expert for ``time_limit`` seconds and evaluate it beside its expert."""
@@ -143,9 +150,7 @@ def learn(env_id: str, time_limit: float, n: int, out: Path, experts: tuple[str,
         wall = time.perf_counter() - began
         state = read_state(run_dir)
         with (run_dir / "evaluations.csv").open() as handle:
-            curve = [{"env_steps": int(r["timesteps"]), "wall_time": float(r["wall_time"]),
-                      "in_time": float(r["success_rate"]), "energy": float(r["energy_mean"])}
-                     for r in csv.DictReader(handle)]  # fmt: skip
+            curve = [curve_row(r) for r in csv.DictReader(handle)]
         evaluated = evaluate_run(run_dir, expert, env_id, n)
         results.append({"expert": expert, "env_id": env_id, "env_steps": state["timesteps"],
                         "train_seconds": round(wall, 1), "steps_per_second": round(state["timesteps"] / wall),
@@ -233,6 +238,15 @@ def render_learn(data: dict[str, Any]) -> list[str]:
                 name, steps, rate = f"{run['expert']} alone", "", ""
             lines.append(f"{name:<40}{steps:>12}{rate:>9}{m['in_time']:>9.1%}{_number(m['energy_ratio']):>7}"
                          f"{_number(m['final_heading'], 3):>9}")  # fmt: skip
+    lines += ["", "training evaluations (100 starts of the run's own set): the return at the start, at its highest, "
+              "at the end; energy and heading at each"]
+    for run in data["runs"]:
+        curve = run["curve"]
+        if "return" in curve[0]:
+            best = max(curve, key=lambda r: r["return"])
+            lines.append(f"  {run['expert']}: " + "; ".join(
+                f"{label} {r['return']:.2f} at {r['env_steps']:,} (energy {r['energy']:.2f}, heading "
+                f"{r['final_heading']:.3f})" for label, r in (("start", curve[0]), ("highest", best), ("end", curve[-1]))))  # fmt: skip
     lines += ["", f"issue 40's goal for the residual on ptc: in time >= {g['in_time']:.1%}, E/opt <= "
               f"{g['energy_ratio']}, final heading <= {g['final_heading']} rad"]  # fmt: skip
     for run in data["runs"]:
