@@ -184,8 +184,10 @@ def test_benchmark_entries_train_the_jax_residual_on_each_law_and_v2_with_gamma_
         config = train_config(parse_entry(name), 0, tmp_path / name, {"env_steps": 1000})
         assert (config.backend, config.residual, config.expert) == ("jax", True, expert)
         assert config.algo_kwargs["gamma"] == 0.999 and config.total_timesteps == 1000
-    v2 = train_config(parse_entry("residual-ppo-jax:env_id=DWRPointStabilization-v2"), 0, tmp_path / "v2", {})
-    assert v2.backend == "jax" and v2.residual and v2.algo_kwargs["gamma"] == 1.0
+    for name, expert in (("residual-ppo-jax-v2", "ptc"), ("residual-ppo-jax-astolfi-v2", "pt-astolfi")):
+        v2 = train_config(parse_entry(name), 0, tmp_path / name, {})
+        assert (v2.backend, v2.residual, v2.expert, v2.env_id) == ("jax", True, expert, "DWRPointStabilization-v2")
+        assert v2.algo_kwargs["gamma"] == 1.0
 
 
 def test_each_docs_block_is_what_the_benchmark_renders_from_its_json() -> None:
