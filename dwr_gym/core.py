@@ -32,6 +32,7 @@ from dwr_gym.state import (
     reset_robots,
     sample_start,
     sample_T_con,
+    shaping_potential,
 )
 
 if TYPE_CHECKING:
@@ -147,7 +148,7 @@ def transition(
         is_success = is_success & (xp.abs(coords.psi) <= params.heading_tolerance)
     out_of_arena = coords.distance > params.arena_radius
     in_time = state.step_count <= state.prescribed_steps  # integer comparison: exact in any dtype
-    lyapunov = model.lyapunov(coords.distance, coords.orientation_error)
+    lyapunov = shaping_potential(coords, params)  # eq. (21)'s L (v0, v1) or the distance (v2)
     hold = params.hold_to_T_con  # v2: the episode runs to T_con whatever the robot does before
     terminated = ((state.step_count >= state.prescribed_steps) if hold else is_success) | out_of_arena
     # Exact shaping in an episodic task gives terminal states the potential 0 (v1); v0 keeps Phi(s') there.

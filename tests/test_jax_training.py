@@ -229,13 +229,9 @@ def test_ctrl_c_keeps_the_last_model_and_says_how_to_resume(tmp_path: Path) -> N
 
 
 def test_each_docs_block_is_what_the_benchmark_renders_from_its_json() -> None:
-    import importlib.util
-    import json
+    from benchmarks.core import docs
+    from benchmarks.training import jax_training
 
-    spec = importlib.util.spec_from_file_location("jax_training_benchmark", ROOT / "benchmarks" / "jax_training.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    written = [(name, module.OUT / file) for name, (file, _) in module.BLOCKS.items() if (module.OUT / file).is_file()]
-    for name, path in written:
-        assert module.docs_block(name) == module.rendered_block(name, json.loads(path.read_text())), name
+    for block in jax_training.BLOCKS:
+        if (ROOT / block.json).is_file():
+            assert docs.written(block.name) == docs.rendered(block.name), block.name

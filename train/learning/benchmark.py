@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from train.env_ids import TASK_ENV_ID
 from train.evaluation.benchmark import DISTURBED_EPISODES, EVAL_EPISODES, EVAL_SEED, OPTIMUM_EPISODES, evaluate_policy
 from train.learning.config import ConfigError, TrainConfig
 
@@ -119,7 +120,7 @@ def train_config(entry: Entry, seed: int, run_dir: Path, budget: dict[str, Any])
 
 def train_command(entry: Entry, config: TrainConfig) -> list[str]:
     """The ``dwr-gym train`` command that trains this run alone (config.yaml's recipe, which
-    benchmarks/retrain_pretrained.py runs again)."""
+    ``python -m benchmarks run retrain-pretrained`` runs again)."""
     command = ["dwr-gym", "train", "--seed", str(config.seed), "--total-timesteps", str(config.total_timesteps),
                "--eval-freq", str(config.eval_freq), "--checkpoint-freq", str(config.checkpoint_freq),
                "--eval-episodes", str(config.eval_episodes), "--eval-seed", str(config.eval_seed)]  # fmt: skip
@@ -185,12 +186,14 @@ def run_one(entry: Entry, seed: int, out: Path, budget: dict[str, Any], progress
         _, policy = load_agent(run_dir)
         repeat, config_dict = config.action_repeat, config.to_dict()
     train_seconds = time.time() - start
-    sets = evaluate_policy(policy, n=int(budget.get("eval_episodes", EVAL_EPISODES)),
+    env_id = config_dict.get("env_id", TASK_ENV_ID)  # each agent on its own env id: v1's or v2's episode end
+    sets = evaluate_policy(policy, env_id, n=int(budget.get("eval_episodes", EVAL_EPISODES)),
                            n_disturbed=int(budget.get("disturbed_episodes", DISTURBED_EPISODES)),
                            n_optimum=budget.get("optimum_episodes", OPTIMUM_EPISODES) or None, progress=progress)  # fmt: skip
     state_path = run_dir / "run_state.json"
     steps = json.loads(state_path.read_text()).get("timesteps", 0) * repeat if state_path.is_file() else None
     result = {"entry": entry.name, "seed": seed, "learned_from": entry.learned_from, "action_repeat": repeat,
+              "env_id": env_id,
               "env_steps": steps,
               "seconds": round(train_seconds, 1), "sets": sets, "curve": read_curve(run_dir, repeat),
               "config": config_dict}  # fmt: skip
