@@ -1,8 +1,9 @@
 """Residual RL on an analytic law at the jitted trainer's speed (issue 40): `dwr-gym train --backend jax --residual`.
 
-    nice -n 5 python benchmarks/jax_residual.py speed --docs              # docs/jax/residual_speed.json
-    nice -n 5 python benchmarks/jax_residual.py learn --time-limit 300 --docs  # docs/jax/residual_learn.json
-    python benchmarks/jax_residual.py --render                            # docs/jax-training.md's blocks from the JSON
+    nice -n 5 python -m benchmarks run jax-residual speed --docs                  # docs/jax/residual_speed.json
+    nice -n 5 python -m benchmarks run jax-residual learn --time-limit 300 --docs # docs/jax/residual_learn.json
+    nice -n 5 python -m benchmarks run jax-residual learn --env DWRPointStabilization-v2 --time-limit 300 --docs
+    python -m benchmarks run jax-residual terms --env DWRPointStabilization-v2 --episodes 50 --docs
 
 ``speed``: env steps per second, updates included, of the jitted PPO alone and of the jitted residual PPO on ``ptc``
 and on ``pt-astolfi`` (the law evaluated inside the compiled loop at every step), with the same settings (those of
@@ -19,26 +20,21 @@ residual on PTC.
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import os
 import platform
 import statistics
-import sys
 import time
 from pathlib import Path
 from typing import Any
 
-if __name__ == "__main__":  # one thread for XLA (no Eigen pool) and torch, before either is imported
-    os.environ.setdefault("OMP_NUM_THREADS", "1")
-    os.environ["XLA_FLAGS"] = (os.environ.get("XLA_FLAGS", "")
-                               + " --xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1").strip()  # fmt: skip
+from benchmarks.core.commands import parser_for
+from benchmarks.core.docs import Schema, fenced
+from benchmarks.core.record import write_json
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "docs" / "jax"
-DOCS = ROOT / "docs" / "jax-training.md"
 EXPERTS = ("ptc", "pt-astolfi")
 GOALS = {"in_time": 0.995, "energy_ratio": 1.6, "final_heading": 0.15}
 """Issue 40's goal for a residual on PTC (IQM over >= 5 seeds there; one seed here)."""
@@ -259,78 +255,62 @@ def render_learn(data: dict[str, Any]) -> list[str]:
     return lines
 
 
-BLOCKS = {"jax-residual-speed": ("residual_speed.json", render_speed),
-          "jax-residual-learn": ("residual_learn.json", render_learn),
-          "jax-residual-learn-v2": ("residual_learn_v2.json", render_learn),
-          "jax-residual-learn-v2-warmup": ("residual_learn_v2_warmup.json", render_learn),
-          "jax-residual-learn-v2-low-noise": ("residual_learn_v2_low_noise.json", render_learn),
-          "jax-residual-terms-v2": ("residual_terms_v2.json", render_terms)}  # fmt: skip
+SPEED = Schema({"env_id": str, "machine": str, "load_average_1min_at_end": (int, float), "steps_per_round": int,
+                "rounds": list, "compile_seconds": dict, "median_steps_per_second": dict, "ratio_to_ppo": dict})
+LEARN = Schema({"machine": str, "time_limit_s": (int, float), "episodes": int, "eval_seed": int, "goals": dict,
+                "runs": list})
+TERMS = Schema({"env_id": str, "episodes": int, "laws": dict})
+#: The blocks of docs/jax-training.md.
+BLOCKS = (fenced("jax-residual-speed", "docs/jax/residual_speed.json", render_speed, SPEED),
+          fenced("jax-residual-learn", "docs/jax/residual_learn.json", render_learn, LEARN),
+          fenced("jax-residual-learn-v2", "docs/jax/residual_learn_v2.json", render_learn, LEARN),
+          fenced("jax-residual-learn-v2-low-noise", "docs/jax/residual_learn_v2_low_noise.json", render_learn, LEARN),
+          fenced("jax-residual-terms-v2", "docs/jax/residual_terms_v2.json", render_terms, TERMS))  # fmt: skip
 
 
-def rendered_block(name: str, data: dict[str, Any]) -> str:
-    """The docs block ``name`` rendered from its JSON ``data``."""
-    return "\n```\n" + "\n".join(BLOCKS[name][1](data)) + "\n```\n"
-
-
-def docs_block(name: str) -> str:
-    """The text between the markers of block ``name`` in the docs page."""
-    from train.reporting.doc_tables import block
-
-    return block(DOCS.read_text(), name)
-
-
-def write_docs() -> None:
-    from train.reporting.doc_tables import with_block
-
-    text = DOCS.read_text()
-    for name, (file, _) in BLOCKS.items():
-        if (OUT / file).is_file() and f"<!-- {name}:begin -->" in text:
-            text = with_block(text, name, rendered_block(name, json.loads((OUT / file).read_text())))
-    DOCS.write_text(text)
-    print(f"wrote {DOCS}")
-
-
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("what", nargs="?", choices=("speed", "learn", "terms"))
-    parser.add_argument("--env", default="DWRPointStabilization-v1")
-    parser.add_argument("--repeats", type=int, default=5)
-    parser.add_argument("--updates", type=int, default=4, help="PPO updates per round (speed)")
-    parser.add_argument("--time-limit", type=float, default=300.0, help="seconds of training per expert (learn)")
-    parser.add_argument("--episodes", type=int, default=200, help="evaluation episodes (learn)")
-    parser.add_argument("--experts", nargs="+", default=list(EXPERTS))
-    parser.add_argument("--name", help="the JSON's file name (default: by the measurement and the env)")
+def main(argv: list[str] | None = None) -> None:
+    parser = parser_for("jax-residual", __doc__)
+    parser.add_argument("what", nargs="?", choices=("speed", "learn", "terms"), help="the measurement to run")
+    parser.add_argument("--env", default="DWRPointStabilization-v1", help="env id (default: v1)")
+    parser.add_argument("--repeats", type=int, default=7, help="speed: alternating rounds (default: 7)")
+    parser.add_argument("--updates", type=int, default=4, help="speed: PPO updates per round (default: 4)")
+    parser.add_argument("--time-limit", type=float, default=300.0, help="learn: seconds of training per expert")
+    parser.add_argument("--episodes", type=int, default=200, help="learn, terms: evaluation episodes (default: 200)")
+    parser.add_argument("--experts", nargs="+", default=list(EXPERTS), help="the laws under the residual")
     parser.add_argument("--critic-warmup", type=int, default=0, help="learn: env steps of critic warm-up")
     parser.add_argument("--hyperparams", nargs="*", default=[], metavar="KEY=VALUE", help="learn: overrides")
-    parser.add_argument("--out", type=Path, default=ROOT / "results" / "jax-residual")
-    parser.add_argument("--docs", action="store_true", help="write the JSON to docs/jax/ and the docs' blocks")
-    parser.add_argument("--render", action="store_true", help="only regenerate the docs' blocks from the JSON")
-    args = parser.parse_args()
-    if args.render or args.what is None:
-        write_docs()
-        return
-    from train.learning.jax_training import use_compilation_cache
-
-    use_compilation_cache()
+    parser.add_argument("--name", help="the JSON's file name (default: by the measurement and the env)")
+    parser.add_argument("--out", type=Path, default=ROOT / "results" / "jax-residual", help="run directories, JSON")
+    parser.add_argument("--docs", action="store_true", help="also write the JSON to docs/jax/ (its blocks rendered)")
+    args = parser.parse_args(argv)
+    if args.what is None:
+        parser.error("expected speed, learn or terms")
+    # one thread for XLA (no Eigen pool) and torch, before either is imported
+    os.environ.setdefault("OMP_NUM_THREADS", "1")
+    os.environ["XLA_FLAGS"] = (os.environ.get("XLA_FLAGS", "")
+                               + " --xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1").strip()  # fmt: skip
+    suffix = "" if args.env.endswith("v1") else "_" + args.env.split("-")[-1]
     if args.what == "speed":
-        result = speed(args.env, args.repeats, args.updates)
-        name = "residual_speed.json"
+        from train.learning.jax_training import use_compilation_cache
+
+        use_compilation_cache()
+        data, name, lines = speed(args.env, args.repeats, args.updates), "residual_speed.json", render_speed
     elif args.what == "terms":
-        result = reward_terms(args.env, args.episodes, tuple(args.experts))
-        name = f"residual_terms_{args.env.split('-')[-1]}.json"
+        data, name = reward_terms(args.env, args.episodes, tuple(args.experts)), f"residual_terms{suffix}.json"
+        lines = render_terms
     else:
         from train.learning.hyperparams import parse_overrides
+        from train.learning.jax_training import use_compilation_cache
 
-        result = learn(args.env, args.time_limit, args.episodes, args.out, tuple(args.experts), args.critic_warmup,
-                       parse_overrides(args.hyperparams))  # fmt: skip
-        name = "residual_learn.json" if args.env.endswith("v1") else f"residual_learn_{args.env.split('-')[-1]}.json"
+        use_compilation_cache()
+        data = learn(args.env, args.time_limit, args.episodes, args.out, tuple(args.experts), args.critic_warmup,
+                     parse_overrides(args.hyperparams))  # fmt: skip
+        name, lines = f"residual_learn{suffix}.json", render_learn
     name = args.name or name
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / name).write_text(json.dumps(result, indent=1))
+    print("\n".join(lines(data)))
+    write_json(args.out / name, data)
     if args.docs:
-        OUT.mkdir(parents=True, exist_ok=True)
-        (OUT / name).write_text(json.dumps(result, indent=1))
-        write_docs()
+        write_json(OUT / name, data)
 
 
 if __name__ == "__main__":
