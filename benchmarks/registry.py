@@ -27,6 +27,7 @@ SUITE: dict[str, str] = {
     "readme-training": "benchmarks.training.readme_training",
     "retrain-pretrained": "benchmarks.training.retrain_pretrained",
     "jax-training": "benchmarks.training.jax_training",
+    "jax-residual": "benchmarks.training.jax_residual",
     # learning: what the learned agents reach, and why
     "rl-levers": "benchmarks.learning.rl_levers",
     "rl-sweep": "benchmarks.learning.rl_sweep",

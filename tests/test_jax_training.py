@@ -154,16 +154,6 @@ def test_backend_jax_refuses_other_algorithms(tmp_path: Path) -> None:
     assert "--algo 'sac' is invalid with --backend jax" in err
 
 
-def test_backend_jax_refuses_residual_agents_in_one_line() -> None:
-    from train.learning.jax_training import check_jax_config
-
-    with pytest.raises(
-        ConfigError, match=r"^--residual is invalid with --backend jax: residual agents train with"
-    ) as error:
-        check_jax_config(resolved(backend="jax", residual=True))
-    assert "\n" not in str(error.value)
-
-
 def test_a_missing_jax_extra_is_one_line_naming_it(monkeypatch: pytest.MonkeyPatch) -> None:
     from train.learning.jax_training import make_jax_env
 

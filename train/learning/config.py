@@ -101,7 +101,8 @@ class TrainConfig:
         metavar="RUN_DIR|ZIP",
     )
     critic_warmup: int = option(
-        0, "with --init-from: env steps at the start during which only the value function learns (PPO)", metavar="N"
+        0, "with --init-from or --residual: env steps at the start during which only the value function learns (PPO)",
+        metavar="N",
     )
     overwrite: bool = option(False, "delete the outputs of an earlier run in --run-dir and start afresh")
     progress: bool = option(True, "show a progress bar")
@@ -129,8 +130,9 @@ class TrainConfig:
             raise ConfigError(f"--init-from {self.init_from!r} is invalid: no such run directory or model file")
         if self.init_from is not None and self.backend != "sb3":
             raise ConfigError("--init-from is implemented by --backend sb3 only")
-        if self.critic_warmup and (self.init_from is None or self.algo != "ppo"):
-            raise ConfigError(f"--critic-warmup {self.critic_warmup} is invalid: it needs --init-from and --algo ppo")
+        if self.critic_warmup and ((self.init_from is None and not self.residual) or self.algo != "ppo"):
+            raise ConfigError(f"--critic-warmup {self.critic_warmup} is invalid: it needs --init-from or --residual, "
+                              "and --algo ppo")  # fmt: skip
         if self.resume is not None and not Path(self.resume).exists():
             raise ConfigError(f"--resume {self.resume!r} is invalid: no such run directory or checkpoint file")
         self.device = check_device(self.device)

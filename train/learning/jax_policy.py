@@ -73,6 +73,9 @@ class PPOSettings:
     normalize_observations: bool = False
     """Scale observations by a running mean and standard deviation (as VecNormalize, without its clipping);
     exported by folding the statistics into the first layers."""
+    critic_warmup: int = 0
+    """``--critic-warmup``: env steps at the start during which only the critic learns (the actor's gradients are
+    zero, so Adam leaves it as it is): a residual agent's advantages then come from a fitted value function."""
 
     @property
     def steps_per_update(self) -> int:

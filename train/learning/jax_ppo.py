@@ -120,6 +120,16 @@ def gae(rewards: Any, values: Any, terminated: Any, truncated: Any, final_values
     return advantages, advantages + values
 
 
+def actor_masked_grad(grad: Any, frozen: Any, params: Any, batch: Any) -> Any:
+    """``grad(params, batch)`` with the actor's gradients (the policy layers, the mean head, log_std) zero where
+    ``frozen``."""
+    grads = grad(params, batch)
+    actor = {name for name in grads["params"] if name.startswith("policy_") or name in ("action", "log_std")}
+    masked = {name: jax.tree.map(lambda g: jnp.where(frozen, 0.0, g), leaf) if name in actor else leaf
+              for name, leaf in grads["params"].items()}  # fmt: skip
+    return {**grads, "params": masked}
+
+
 class JaxPPO:
     """The jitted PPO of one configuration on one functional env: :meth:`init` a :class:`Runner`, :meth:`run` it
     for some updates; :meth:`run_seeds` and :meth:`init_seeds` do the same for several seeds under ``vmap``."""
@@ -241,6 +251,8 @@ class JaxPPO:
         progress_remaining = 1.0 - done_after / jnp.asarray(total_timesteps, jnp.float32)
         rate = s.learning_rate * (jnp.maximum(progress_remaining, 0.0) if s.linear_schedule else 1.0)
         grad = jax.grad(self.loss)
+        if s.critic_warmup:  # the actor frozen (its gradients zero) until critic_warmup env steps are done
+            grad = functools.partial(actor_masked_grad, grad, runner.updates * s.steps_per_update < s.critic_warmup)
 
         def minibatch_step(carry: tuple[Any, Any], batch: tuple[Any, ...]) -> tuple[tuple[Any, Any], None]:
             params, opt_state = carry

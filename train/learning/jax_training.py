@@ -11,6 +11,7 @@ same updates, so the same weights, as the uninterrupted run; tests/test_jax_trai
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import pickle
 import sys
@@ -40,8 +41,10 @@ def check_jax_config(config: TrainConfig) -> None:
     if config.algo != "ppo":
         raise ConfigError(f"--algo {config.algo!r} is invalid with --backend jax: the jitted trainer is PPO only; "
                           "use --algo ppo, or --backend sb3 for the others")  # fmt: skip
-    if config.residual:
-        raise ConfigError("--residual is invalid with --backend jax: residual agents train with --backend sb3")
+    if config.residual:  # the expert must run inside the compiled loop
+        from train.learning.jax_residual import check_residual_expert
+
+        check_residual_expert(config)
     # Options of the SB3 path's env wrappers (train.learning.wrappers), where this TrainConfig has them.
     if getattr(config, "normalize_obs", False):
         raise ConfigError("--normalize-obs is invalid with --backend jax: give --hyperparams "
@@ -86,9 +89,14 @@ def make_jax_env(config: TrainConfig) -> tuple[Any, Any]:
         missing = getattr(error, "name", None) or "jax"
         raise ConfigError(f"--backend jax needs jax, flax and optax ({missing} is missing): {JAX_EXTRA}") from None
     try:
-        return make_gymnax_env(config.env_id, **config.env_keywords())
+        env, env_params = make_gymnax_env(config.env_id, **config.env_keywords())
     except (TypeError, ValueError, NotImplementedError) as error:
         raise ConfigError(f"--backend jax cannot run this env: {error}") from None
+    if config.residual:  # the env's action is the residual on the expert (train.learning.jax_residual)
+        from train.learning.jax_residual import residual_env
+
+        env = residual_env(config, env)
+    return env, env_params
 
 
 def export_runner(exporter: Any, ppo: Any, runner: Any, timesteps: int) -> Any:
@@ -149,13 +157,14 @@ class JaxRun:
 
         from train.evaluation.rollout import rollout
         from train.learning.runs import EVAL_FIELDS, evaluation_cells, task_score
+        from train.learning.training_env import as_policy
 
         if not self.csv_path.exists():
             with self.csv_path.open("w", newline="") as handle:
                 csv.writer(handle).writerow(EVAL_FIELDS)
         model = export_runner(self.exporter, self.ppo, runner, steps)
-        s = self.scenario
-        summary = rollout(model, self.params, s.starts, s.goals, T_con=s.T_cons, env_kwargs=s.env_kwargs).summary()
+        policy, s = as_policy(model, self.config), self.scenario  # expert + residual for a residual agent
+        summary = rollout(policy, self.params, s.starts, s.goals, T_con=s.T_cons, env_kwargs=s.env_kwargs).summary()
         row = {"timesteps": steps, "wall_time": self.wall_time(), **{k: summary[k] for k in EVAL_FIELDS[2:]}}
         with self.csv_path.open("a", newline="") as handle:
             csv.writer(handle).writerow(evaluation_cells(row))
@@ -209,11 +218,12 @@ def _train_jax(
 
     fill_budget(config)
     settings = PPOSettings.from_algo_kwargs(config.algo_kwargs, int(config.num_envs or 0))
+    settings = dataclasses.replace(settings, critic_warmup=config.critic_warmup)
     env, env_params = make_jax_env(config)
     use_compilation_cache()
     from train.learning.jax_export import SB3Exporter
     from train.learning.jax_ppo import JaxPPO
-    from train.learning.training_env import make_training_env
+    from train.learning.training_env import make_training_env, runtime_of
 
     run_dir, lock = prepare_run_dir(config)
     try:
@@ -227,11 +237,16 @@ def _train_jax(
         venv.close()
         state = read_state(run_dir) if config.resume is not None else {}
         runner = ppo.init(config.seed)
+        if config.residual:  # the residual starts near zero, as the SB3 path's (zero_init_last_layer)
+            from train.learning.jax_residual import start_near_expert
+
+            runner = start_near_expert(runner)
         steps = 0
         if config.resume is not None:
             runner, steps = load_runner(run_dir / RESUME_FILE, runner)
             truncate_log(run_dir / EVAL_FILE, steps)
-        save_config(config, run_dir, {"command": command or sys.argv, "learned_from": "reward", "runtime": []})
+        save_config(config, run_dir, {"command": command or sys.argv, "learned_from": "reward",
+                                      "runtime": runtime_of(config)})  # fmt: skip
         run = JaxRun(config, run_dir, ppo, exporter, state, on_evaluation)
         bar = None
         if config.progress:
