@@ -119,7 +119,7 @@ def trial_config(base: dict[str, Any], hp: dict[str, Any], seed: int, run_dir: P
     config.algo_kwargs.update(hp)
     if inner:  # searched keys of policy_kwargs (e.g. log_std_init), merged into the resolved ones
         config.algo_kwargs["policy_kwargs"] = {**(config.algo_kwargs.get("policy_kwargs") or {}), **inner}
-    check_algo_kwargs(config.algo, config.algo_kwargs)
+    check_algo_kwargs(config.algo, config.algo_kwargs, config.backend)
     config.validate()
     return config
 
