@@ -41,7 +41,7 @@ def test_each_algorithm_trains_saves_an_sbx_model_and_loads_as_an_agent(algo: st
                  "--run-dir", str(run)]) == 0  # fmt: skip
     assert yaml.safe_load((run / "config.yaml").read_text())["config"]["backend"] == "sbx"
     assert (run / "best_model.zip").is_file() and (run / "evaluations.csv").read_text().count("\n") == 3
-    label, policy = load_agent(run)
+    _label, policy = load_agent(run)
     assert isinstance(policy, getattr(sbx, {"sac": "SAC", "tqc": "TQC", "crossq": "CrossQ"}[algo]))
     actions = policy.predict(np.zeros((3, 10), dtype=np.float32), deterministic=True)[0]
     assert actions.shape == (3, 2) and np.all(np.abs(actions) <= 1.0)
