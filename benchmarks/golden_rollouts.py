@@ -1,9 +1,9 @@
 """Record (or check) the seeded float64 rollouts that pin the env's results while it is made faster.
 
-    python benchmarks/golden_rollouts.py --write   # record tests/data/golden_rollouts.npz (done once, before a change)
+    python benchmarks/golden_rollouts.py --write   # record the ids tests/data/golden_rollouts.npz lacks (a new version)
     python benchmarks/golden_rollouts.py           # largest difference of the current code from the record
 
-The record holds, for DWRPointStabilization-v0 and -v1: 300 steps of the native vector env (16 robots,
+The record holds, for DWRPointStabilization-v0, -v1 and -v2: 300 steps of the native vector env (16 robots,
 random actions, autoreset) and of the PTC law in it, and one single-env episode under random actions;
 observations, rewards, flags, poses, energies and every reward term. tests/test_golden.py compares them to 1e-12.
 """
@@ -21,7 +21,7 @@ import dwr_gym  # noqa: F401
 from baselines import ExpertPolicy, PTCController
 
 PATH = Path(__file__).resolve().parents[1] / "tests" / "data" / "golden_rollouts.npz"
-ENV_IDS = ("DWRPointStabilization-v0", "DWRPointStabilization-v1")
+ENV_IDS = ("DWRPointStabilization-v0", "DWRPointStabilization-v1", "DWRPointStabilization-v2")
 
 
 RECORDED = 16
@@ -88,10 +88,11 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--write", action="store_true", help="record the current code's rollouts")
     args = parser.parse_args()
-    if args.write:
-        arrays = rollouts()
+    if args.write:  # an id recorded once stays as recorded: its record pins that version's behaviour
+        kept = dict(np.load(PATH)) if PATH.exists() else {}
+        arrays = {**rollouts(), **kept}
         np.savez_compressed(PATH, **arrays)
-        print(f"wrote {PATH} ({len(arrays)} arrays)")
+        print(f"wrote {PATH} ({len(arrays) - len(kept)} arrays added to the {len(kept)} kept)")
         return
     golden = np.load(PATH)
     for num_envs in (RECORDED, 1024):

@@ -1,6 +1,6 @@
 """dwr-gym: prescribed-time point stabilization of a differential wheeled robot as a Gymnasium benchmark.
 
-Importing this package registers ``DWRPointStabilization-v0`` and ``DWRPointStabilization-v1``
+Importing this package registers ``DWRPointStabilization-v0``, ``-v1`` and ``-v2``
 (idempotently), so both ``gymnasium.make("DWRPointStabilization-v1")`` after ``import dwr_gym`` and
 ``gymnasium.make("dwr_gym:DWRPointStabilization-v1")`` in a fresh interpreter work. v1 is the same env
 with the defaults of :data:`V1_DEFAULTS`: T_con drawn per episode and a reward whose optimum is the task
@@ -24,10 +24,12 @@ except PackageNotFoundError:  # running from a source tree that is not installed
 
 ENV_ID = "DWRPointStabilization-v0"
 ENV_ID_V1 = "DWRPointStabilization-v1"
+ENV_ID_V2 = "DWRPointStabilization-v2"
 GOAL_ENV_ID = "DWRPointStabilizationGoal-v0"
 #: The same tasks on JAX (dwr_gym.jax_env, the ``jax`` extra; docs/jax.md): jax is imported when one is made.
 JAX_ENV_ID = "DWRPointStabilizationJax-v0"
 JAX_ENV_ID_V1 = "DWRPointStabilizationJax-v1"
+JAX_ENV_ID_V2 = "DWRPointStabilizationJax-v2"
 #: The keywords that make v1 of the same env class: any T_con in [10, 60] s, starts 0.3-3 m away, and a
 #: reward that pays for arriving by T_con with the heading, charges the energy, and pays nothing for
 #: arriving earlier than needed (no prescribed-time term, shaping that telescopes exactly).
@@ -40,11 +42,22 @@ V1_DEFAULTS: dict[str, object] = {
     "shaping_discount": 1.0,
     "zero_terminal_potential": True,
 }
+#: v2, the task held to T_con: v1's robot, starts and T_con range, but the episode runs until T_con whatever the
+#: robot does before (terminated there: the time is observed), every executed command is charged until then, and
+#: what the task pays for is paid at T_con: the arrival bonus if the robot is at the goal, the heading, and
+#: 10 per metre of the miss. Nothing depends on *when* the robot arrived, so neither exploration noise nor the
+#: discount pays for rushing; train it with gamma = 1 (the env's docstring derives why the optimum is the optimum).
+V2_DEFAULTS: dict[str, object] = {
+    **V1_DEFAULTS,
+    "zero_terminal_potential": False,
+    "hold_to_T_con": True,
+    "terminal_distance_weight": 10.0,
+}
 
 
 def register_envs() -> None:
-    """Register DWRPointStabilization-v0 and -v1 (numpy and JAX) with Gymnasium unless they are registered already."""
-    for env_id, defaults in ((ENV_ID, {}), (ENV_ID_V1, V1_DEFAULTS)):
+    """Register DWRPointStabilization-v0, -v1 and -v2 (numpy and JAX) with Gymnasium unless they are registered already."""
+    for env_id, defaults in ((ENV_ID, {}), (ENV_ID_V1, V1_DEFAULTS), (ENV_ID_V2, V2_DEFAULTS)):
         if env_id not in gymnasium.registry:
             gymnasium.register(
                 id=env_id,
@@ -55,7 +68,7 @@ def register_envs() -> None:
                 max_episode_steps=None,
                 kwargs=dict(defaults),
             )
-    for env_id, defaults in ((JAX_ENV_ID, {}), (JAX_ENV_ID_V1, V1_DEFAULTS)):
+    for env_id, defaults in ((JAX_ENV_ID, {}), (JAX_ENV_ID_V1, V1_DEFAULTS), (JAX_ENV_ID_V2, V2_DEFAULTS)):
         if env_id not in gymnasium.registry:
             gymnasium.register(
                 id=env_id,
@@ -79,10 +92,13 @@ if "rl_zoo3.exp_manager" in sys.modules:  # imported by `python -m rl_zoo3.train
 __all__ = [
     "ENV_ID",
     "ENV_ID_V1",
+    "ENV_ID_V2",
     "GOAL_ENV_ID",
     "JAX_ENV_ID",
     "JAX_ENV_ID_V1",
+    "JAX_ENV_ID_V2",
     "V1_DEFAULTS",
+    "V2_DEFAULTS",
     "DWRPointStabilizationEnv",
     "EnvParams",
     "__version__",

@@ -148,7 +148,8 @@ def transition(
     out_of_arena = coords.distance > params.arena_radius
     in_time = state.step_count <= state.prescribed_steps  # integer comparison: exact in any dtype
     lyapunov = model.lyapunov(coords.distance, coords.orientation_error)
-    terminated = is_success | out_of_arena
+    hold = params.hold_to_T_con  # v2: the episode runs to T_con whatever the robot does before
+    terminated = ((state.step_count >= state.prescribed_steps) if hold else is_success) | out_of_arena
     # Exact shaping in an episodic task gives terminal states the potential 0 (v1); v0 keeps Phi(s') there.
     next_potential = xp.where(terminated, 0.0, lyapunov) if params.zero_terminal_potential else lyapunov
 
@@ -175,7 +176,9 @@ def transition(
         reward = reward + energy_term
     else:
         energy_term = 0.0 if scalar else np.zeros(d.shape, d.dtype)
-    late = xp.where(is_success | in_time, 0.0, -params.late_penalty * dt)
+    # v2's late term is the miss, paid where its episode ends (it is never late: it ends at T_con)
+    late = xp.where(terminated, -params.terminal_distance_weight * d, 0.0) if hold else xp.where(
+        is_success | in_time, 0.0, -params.late_penalty * dt)  # fmt: skip
     reward = reward + late
     # arrival, heading and arena are 0 but where an episode ends; they are added last, in REWARD_TERMS' order
     # (late, the term between them there, is 0 where arrival and heading are not).
@@ -212,7 +215,7 @@ def terminal_terms(
         return _paid_at_the_end(is_success, in_time, out_of_arena, psi, params, model.SCALAR_MATH) if ended else (
             0.0, 0.0, 0.0)  # fmt: skip
     if type(psi) is not np.ndarray:  # jax's arrays
-        return _paid_at_the_end(is_success, in_time, out_of_arena, psi, params, model.namespace(psi))
+        return _paid_at_the_end(is_success, in_time, out_of_arena, psi, params, model.namespace(psi), ended)
     arrival, heading, arena = np.zeros((3, psi.shape[0]), psi.dtype)  # one allocation: 3x faster than three
     if ended.size:
         arrival[ended], heading[ended], arena[ended] = _paid_at_the_end(
@@ -222,9 +225,17 @@ def terminal_terms(
 
 
 def _paid_at_the_end(
-    is_success: Any, in_time: Any, out_of_arena: Any, psi: Any, params: EnvParams, xp: Any
+    is_success: Any, in_time: Any, out_of_arena: Any, psi: Any, params: EnvParams, xp: Any, ended: Any = True
 ) -> tuple[Any, Any, Any]:
-    """(arrival, heading, arena) of :func:`terminal_terms` where episodes end."""
+    """(arrival, heading, arena) of :func:`terminal_terms` where episodes end (``ended``: a mask where the terms are
+    computed everywhere). Held to T_con (v2), arriving does not end an episode, so the mask is applied, and the
+    heading is paid at every end, at the goal or not."""
+    if params.hold_to_T_con:
+        return (
+            xp.where(ended & is_success & in_time, params.arrival_bonus, 0.0),
+            xp.where(ended, params.heading_weight * (xp.cos(psi) - 1.0), 0.0),
+            xp.where(out_of_arena, -params.arena_penalty, 0.0),
+        )
     return (
         xp.where(is_success & in_time, params.arrival_bonus, 0.0),
         xp.where(is_success, params.heading_weight * (xp.cos(psi) - 1.0), 0.0),

@@ -174,6 +174,29 @@ class DWRPointStabilizationEnv(HorizonSpec, OneRobotRendering, gym.Env[NDArray[n
     cheaper earns more. The task's optimum is defined on this undiscounted return; an agent that
     discounts (gamma < 1) values an early bonus more, so train with gamma close to 1 (0.999 or more).
 
+    **Held to T_con (v2,** ``hold_to_T_con=True``, ``zero_terminal_potential=False``,
+    ``terminal_distance_weight=10``**).** Arriving does not end the episode: the robot acts, and pays
+    the energy of every executed command, until T_con, where the task is scored: arrival = +arrival_bonus
+    if d(T_con) <= goal_tolerance, heading = heading_weight * (cos(psi(T_con) - psi_d) - 1) at the goal or
+    not, late = -terminal_distance_weight * d(T_con) (the miss), and Phi is not zeroed, so with
+    gamma = 1 the return of every episode that stays in the arena is
+
+        G = L(s_0) - L(s_T) - energy_weight * E(0, T_con) + arrival_bonus [d_T <= tol]
+            + heading_weight (cos psi_T - 1) - terminal_distance_weight * d_T.
+
+    L(s_0) is fixed by the start; no term depends on *when* the robot reached the goal, and action noise
+    costs the same energy whether the robot has arrived or not. Why the optimum is the optimum: every
+    term but the energy is at its maximum (L(s_T) = 0, the bonus, cos = 1, no miss) exactly when the robot
+    ends at the goal pose at T_con, so among such policies G is highest for the least energy E*, the
+    optimal-control problem's own (minimum energy to the goal pose by T_con); a policy that ends elsewhere
+    gives up at least the bonus or a term of the miss, the heading and L(s_T), which outweighs the energy it
+    can save, up to the goal tolerance: a policy may stop anywhere within ``goal_tolerance`` of the goal, and
+    save the energy of at most that last centimetre. Leaving the arena ends the episode with its penalty on
+    top of what staying at its edge would pay. With gamma < 1 set ``shaping_discount`` to gamma: the
+    progress then sums to L(s_0) - gamma^T L(s_T), and the terminal terms are discounted by gamma^T, the same
+    for every policy of the episode (T is fixed); only the energy is then weighed by when it is spent, which
+    favours spending it late, never rushing. Train v2 with gamma = 1 (the shipped hyperparameters do).
+
     ## Starting State
     Without options the goal is (0, 0, 0) and the start is drawn from ``self.np_random``: distance
     uniform in ``start_distance`` (0.3-3 m in v1, 0.3-1.5 m in v0), bearing uniform in [-pi, pi), heading relative to the goal uniform
@@ -183,7 +206,9 @@ class DWRPointStabilizationEnv(HorizonSpec, OneRobotRendering, gym.Env[NDArray[n
     ``options={"T_con": 35.0}`` sets it for one episode, within [dt, the observation space's bound].
 
     ## Episode End
-    Terminated on arrival (d <= ``goal_tolerance``, and |psi - psi_d| <= ``heading_tolerance`` when
+    v2: terminated at T_con (the step floor(T_con / dt); the time is in the observation, so this is the
+    task's end, not a time limit) or on leaving the arena; never truncated, and
+    ``env.spec.max_episode_steps`` is the steps of the largest T_con (1,200). v0, v1: terminated on arrival (d <= ``goal_tolerance``, and |psi - psi_d| <= ``heading_tolerance`` when
     that is set) or on leaving the arena (d > ``arena_radius``). Truncated at the horizon
     ``horizon_factor * T_con`` (30 s in v0; in v1 1.5 times the episode's T_con), past T_con so that late
     arrivals are observable.
@@ -215,6 +240,11 @@ class DWRPointStabilizationEnv(HorizonSpec, OneRobotRendering, gym.Env[NDArray[n
     ['arena', 'arrival', 'effort', 'energy', 'heading', 'late', 'progress', 'time']
 
     ## Version History
+    * v2: the defaults of ``dwr_gym.V2_DEFAULTS``: v1's robot, T_con range and starts, held to T_con
+      (``hold_to_T_con``: energy paid until T_con, arrival, heading and the miss paid there, the potential
+      not zeroed), so that its return pays nothing for arriving early (see Rewards). ``info["is_success"]``
+      is whether the robot is at the goal now; in time means at the goal at T_con. The keywords
+      ``hold_to_T_con`` and ``terminal_distance_weight`` exist in every id (off in v0 and v1).
     * v1: the defaults of ``dwr_gym.V1_DEFAULTS``: T_con drawn per episode from ``T_con_range`` = (10, 60) s
       (observed, in info["T_con"]), starts 0.3 to 3 m away, and the reward above (energy instead of
       effort and the prescribed-time term, exact shaping with Phi = 0 at terminal states). A new ``energy``

@@ -79,6 +79,11 @@ class EnvParams:
     """Standard deviation of Gaussian noise on the measured pose (x, y, psi); 0 disables it."""
     actuation_noise: float = 0.0
     """Standard deviation of Gaussian noise added to the normalised action; 0 disables it."""
+    hold_to_T_con: bool = False
+    """Hold every episode to T_con (v2): arriving does not end it; it terminates at T_con (the time is observed),
+    where arrival, heading and the miss are paid, or on leaving the arena. False ends it on arrival (v0, v1)."""
+    terminal_distance_weight: float = 0.0  # [1/m]
+    """With ``hold_to_T_con``: the miss, -terminal_distance_weight * d, paid where the episode ends (the "late" term)."""
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -112,6 +117,9 @@ class EnvParams:
             set_(self, name, as_float(name, getattr(self, name), 0.0, 1e6))
         set_(self, "shaping_discount", as_float("shaping_discount", self.shaping_discount, 0.0, 1.0))
         set_(self, "zero_terminal_potential", as_bool("zero_terminal_potential", self.zero_terminal_potential))
+        set_(self, "hold_to_T_con", as_bool("hold_to_T_con", self.hold_to_T_con))
+        weight = as_float("terminal_distance_weight", self.terminal_distance_weight, 0.0, 1e6)
+        set_(self, "terminal_distance_weight", weight)
         set_(self, "time_gain_cap", as_float("time_gain_cap", self.time_gain_cap, 1.0, 1e6))
         set_(self, "observation_noise", as_float("observation_noise", self.observation_noise, 0.0, 10.0))
         set_(self, "actuation_noise", as_float("actuation_noise", self.actuation_noise, 0.0, 10.0))
@@ -141,6 +149,9 @@ class EnvParams:
                 f"start_distance={self.start_distance} within arena_radius={self.arena_radius:g} m",
             )
 
+        if self.terminal_distance_weight != 0.0 and not self.hold_to_T_con:
+            self._conflict("terminal_distance_weight", "0 unless hold_to_T_con=True (the miss is paid at T_con)")
+
     def _conflict(self, name: str, expected: str) -> None:
         raise ValueError(f"{name}={getattr(self, name)!r} is invalid: expected {expected}")
 
@@ -162,8 +173,8 @@ class EnvParams:
 
     @property
     def horizon(self) -> float:
-        """Time at which the longest episode is truncated [s]."""
-        return self.horizon_factor * self.T_con_max
+        """Time at which the longest episode ends at the latest [s]: T_con with ``hold_to_T_con``, else its truncation."""
+        return self.T_con_max if self.hold_to_T_con else self.horizon_factor * self.T_con_max
 
     @cached_property
     def prescribed_steps(self) -> int:
@@ -180,7 +191,10 @@ class EnvParams:
         return math.floor(T_con / self.dt + 1e-9)
 
     def max_episode_steps_of(self, T_con: float) -> int:
-        """Control periods until the truncation of an episode of prescribed time ``T_con``."""
+        """Control periods until the end of an episode of prescribed time ``T_con`` (its truncation, or T_con itself
+        with ``hold_to_T_con``)."""
+        if self.hold_to_T_con:
+            return self.prescribed_steps_of(T_con)
         return math.ceil(self.horizon_factor * T_con / self.dt - 1e-9)
 
     def as_dict(self) -> dict[str, Any]:

@@ -188,7 +188,8 @@ def episode_length(T_con: Any, zero: Any, params: EnvParams, xp: Any) -> tuple[A
     work = zero.dtype if traced else np.float64
     T_con = xp.asarray(T_con, dtype=work) + xp.zeros(np.shape(zero), work)
     prescribed = xp.floor(T_con / params.dt + 1e-9).astype(int)  # as EnvParams.prescribed_steps_of
-    steps = xp.ceil(params.horizon_factor * T_con / params.dt - 1e-9).astype(int)  # as max_episode_steps_of
+    steps = prescribed if params.hold_to_T_con else (  # as max_episode_steps_of
+        xp.ceil(params.horizon_factor * T_con / params.dt - 1e-9).astype(int))  # fmt: skip
     return T_con if traced else T_con.astype(np.asarray(zero).dtype), prescribed, steps
 
 

@@ -98,6 +98,11 @@ def close(name: str, jax_value: object, numpy_value: object, atol: float, where:
     a, b = np.asarray(jax_value, np.float64), np.asarray(numpy_value, np.float64)
     if where is not None:
         a, b = a[where], b[where]
+    if "observation" in name and a.ndim == 2:  # the azimuth (features 1, 2) is undefined at the goal: a robot held
+        # there (v2) has a distance of 0 in one dtype's rounding and of 1e-9 in the other's, and (1, 0) or any angle
+        undefined = (a[:, 0] < 1e-6) | (b[:, 0] < 1e-6)
+        a, b = a.copy(), b.copy()
+        a[undefined, 1:3] = b[undefined, 1:3]
     np.testing.assert_allclose(a, b, rtol=0, atol=atol * max(1.0, float(np.max(np.abs(b), initial=0.0))), err_msg=name)
 
 
@@ -126,17 +131,22 @@ def run_both(env_id: str, dtype: str, seed: int) -> dict[str, int]:
         np.testing.assert_array_equal(np.asarray(info["truncated"]), truncated)
         np.testing.assert_array_equal(np.asarray(done), ended)
         np.testing.assert_array_equal(np.asarray(info["is_success"]), final["is_success"])
-        close("reward", reward, native_reward, atol)
-        for term, values in final["reward_terms"].items():
-            if not term.startswith("_"):
-                close(f"reward term {term}", info["reward_terms"][term], values, atol)
+        # the orientation error's azimuth has a condition number of 1/d: rounding differences grow near the goal,
+        # where v2 holds robots; there the values that depend on it are compared to 1000 times the tolerance
+        away = np.asarray(final["distance"]) > 1e-3
+        for near, scale in ((away, 1.0), (~away, 1000.0)):
+            close("reward", reward, native_reward, atol * scale, near)
+            for term, values in final["reward_terms"].items():
+                if not term.startswith("_"):
+                    close(f"reward term {term}", info["reward_terms"][term], values, atol * scale, near)
         for key_name in ("distance", "orientation_error", "heading_error", "energy", "T_con", "time", "pose"):
-            close(f"info {key_name}", info[key_name], final[key_name], atol)
+            close(f"info {key_name}", info[key_name], final[key_name], atol, away if key_name == "orientation_error" else None)
         close("final observation", info["final_observation"], infos["final_obs"] if ended.any() else obs, obs_atol)
         going = ~ended
         close("observation", jax_obs, obs, obs_atol, going)
         for name in STATE_FIELDS:
-            close(f"state {name}", getattr(state, name), getattr(native.unwrapped._state, name), atol, going)
+            for near, scale in ((going & away, 1.0), (going & ~away, 1000.0)):
+                close(f"state {name}", getattr(state, name), getattr(native.unwrapped._state, name), atol * scale, near)
         for name in COUNTS:
             np.testing.assert_array_equal(np.asarray(getattr(state, name))[going],
                                           getattr(native.unwrapped._state, name)[going], err_msg=name)  # fmt: skip
@@ -165,6 +175,8 @@ def run_both(env_id: str, dtype: str, seed: int) -> dict[str, int]:
 
 def check(env_id: str, dtype: str, seed: int) -> None:
     counts = run_both(env_id, dtype, seed)
+    if env_id == dwr_gym.ENV_ID_V2:  # held to T_con: nothing is late and nothing truncates
+        assert counts.pop("late arrivals") == counts.pop("truncations") == 0, counts
     assert all(counts.values()), counts  # every kind of episode end happened, and was compared
 
 
@@ -179,6 +191,15 @@ def test_float32_steps_equal_the_numpy_env_to_1e_5(seed: int, env_id: str) -> No
 def test_float64_steps_equal_the_numpy_env_to_1e_12(seed: int, env_id: str) -> None:
     with jax.enable_x64(True):
         check(env_id, "float64", seed)
+
+
+@settings(max_examples=2, **SETTINGS)
+@given(seed=st.integers(0, 2**31 - 1), dtype=st.sampled_from(["float32", "float64"]))
+def test_v2_steps_equal_the_numpy_env(seed: int, dtype: str) -> None:
+    """v2 (held to T_con) to the same tolerances as v0 and v1, but for what the azimuth decides within 1 mm of
+    the goal, where v2 holds robots (1000 times the tolerance there)."""
+    with jax.enable_x64(dtype == "float64"):
+        check(dwr_gym.ENV_ID_V2, dtype, seed)
 
 
 @pytest.mark.slow

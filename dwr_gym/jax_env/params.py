@@ -75,6 +75,7 @@ class FunctionalParams:
     heading_weight: float
     late_penalty: float  # [1/s]
     arena_penalty: float
+    terminal_distance_weight: float  # [1/m]
     # static: they choose the compiled code, and the spaces' bounds
     env_params: EnvParams = struct.field(pytree_node=False)
     """The validated numpy parameters these were built from (the spaces' bounds come from them)."""
@@ -83,6 +84,7 @@ class FunctionalParams:
     integrator: str = struct.field(pytree_node=False, default="exact")
     substeps: int = struct.field(pytree_node=False, default=1)
     zero_terminal_potential: bool = struct.field(pytree_node=False, default=False)
+    hold_to_T_con: bool = struct.field(pytree_node=False, default=False)
     observation_noise: float = struct.field(pytree_node=False, default=0.0)  # [m, rad]
     actuation_noise: float = struct.field(pytree_node=False, default=0.0)
 
@@ -120,7 +122,7 @@ def env_kwargs_of(env_id: str, env_kwargs: dict[str, Any]) -> dict[str, Any]:
 def functional_params(
     env_id: str = "DWRPointStabilization-v1", dtype: str = "float32", **env_kwargs: Any
 ) -> FunctionalParams:
-    """The parameters of ``env_id`` (v0 or v1, or their JAX ids) with ``env_kwargs`` (EnvParams' keywords), validated."""
+    """The parameters of ``env_id`` (v0, v1 or v2, or their JAX ids) with ``env_kwargs`` (EnvParams' keywords), validated."""
     kwargs = env_kwargs_of(env_id, env_kwargs)
     check_no_perturbation(kwargs)
     return FunctionalParams.from_env_params(EnvParams.from_kwargs(**kwargs), dtype)

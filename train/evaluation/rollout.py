@@ -192,10 +192,11 @@ def rollout(
         final_heading = np.where(live, np.abs(result.coords.psi), final_heading)
         final_energy = np.where(live, state.energy, final_energy)
         ended = live & (result.terminated | result.truncated)
-        arrived_now = ended & result.is_success
         time = state.step_count * params.dt
-        arrival_time = np.where(arrived_now, time, arrival_time)
-        success |= arrived_now & (state.step_count <= state.prescribed_steps)  # as the env counts "in time"
+        # the first time at the goal: where the episode ends in v0 and v1, at or before T_con in v2 (held to it)
+        arrival_time = np.where(live & result.is_success & np.isnan(arrival_time), time, arrival_time)
+        # as the env counts "in time": arrived by T_con (v0, v1), at the goal at T_con (v2)
+        success |= ended & result.is_success & (state.step_count <= state.prescribed_steps)
         left_arena |= ended & result.terminated & ~result.is_success
         if record:
             x, y, psi = state.world_pose()
