@@ -1,6 +1,7 @@
 """Env steps per second of sbx-rl (JAX) against stable-baselines3 (torch) for SAC, TQC and CrossQ, in one run.
 
     nice -n 5 python benchmarks/sbx_speed.py --docs      # writes docs/rl_benchmark/sbx_speed.json
+    python -m train.reporting.doc_tables                  # its table in docs/rl-libraries.md
 
 Each algorithm trains with the settings of ``dwr-gym train`` (train/hyperparams/<algo>.yml on
 DWRPointStabilization-v1: 64 robots, one gradient step of 256 samples per step of the 64) on the native vector env,
@@ -83,16 +84,6 @@ def _versions() -> dict[str, str]:
     return {name: version(name) for name in ("stable-baselines3", "sb3-contrib", "sbx-rl", "torch", "jax")}
 
 
-def table(data: dict[str, Any]) -> str:
-    """The Markdown table of the docs (train.reporting.doc_tables' ``sbx-speed``)."""
-    lines = ["| algorithm | SB3 (torch) env steps/s | sbx (JAX) env steps/s | sbx / SB3 (median of rounds) |",
-             "|---|---:|---:|---:|"]  # fmt: skip
-    for algo, row in data["summary"].items():
-        lines.append(f"| {algo.upper() if algo != 'crossq' else 'CrossQ'} | {row['sb3_steps_per_s']:.0f} | "
-                     f"{row['sbx_steps_per_s']:.0f} | {row['ratio_sbx_over_sb3']:.2f}x |")  # fmt: skip
-    return "\n".join(lines) + "\n"
-
-
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3, help="rounds, each timing every library (default: 3)")
@@ -102,7 +93,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)}")
     args = parser.parse_args(argv)
     data = run(args.repeats, args.steps, args.env, tuple(args.algorithms))
-    print(table(data))
+    from train.reporting.doc_tables import sbx_speed_table
+
+    print(sbx_speed_table(data))
     if args.docs:
         JSON_PATH.write_text(json.dumps(data, indent=1) + "\n")
         print(f"wrote {JSON_PATH}")
