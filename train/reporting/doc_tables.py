@@ -268,6 +268,7 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "sbx-speed": ("docs/rl_benchmark/sbx_speed.json", sbx_speed_table),
     "sbx-v1": ("docs/rl_benchmark/sbx_v1.json", lambda data: rl_table(data, "random")),
     "sbx-v2": ("docs/rl_benchmark/sbx_v2.json", lambda data: rl_table(data, "random")),
+    "sbx-v2-long": ("docs/rl_benchmark/sbx_v2_long.json", lambda data: rl_table(data, "random")),
 }
 
 
