@@ -8,7 +8,8 @@ DWRPointStabilization-v1: 64 robots, one gradient step of 256 samples per step o
 through ``train.learning.training_env.make_training_env``, once with each library. The compile (sbx) and the replay
 buffer's warm-up (``learning_starts``) run first and are not timed; then ``--steps`` env steps of training are timed.
 The libraries alternate within each of ``--repeats`` rounds, so the ratio sbx / sb3 of each round is measured
-seconds apart on the same load; the JSON keeps every round, the medians and the load average. Both run on one
+seconds apart on the same load; the JSON keeps every round, the medians and the load average (written after each
+round). Both run on one
 thread (torch's ``set_num_threads(1)``, XLA without its Eigen thread pool), as ``dwr-gym train`` does by default.
 """
 
@@ -56,24 +57,34 @@ def steps_per_second(algo: str, backend: str, steps: int, env_id: str) -> float:
     return rate
 
 
-def run(repeats: int, steps: int, env_id: str, algorithms: tuple[str, ...]) -> dict[str, Any]:
-    """Alternate the libraries ``repeats`` times per algorithm; every round, the medians and their ratio."""
+def run(repeats: int, steps: int, env_id: str, algorithms: tuple[str, ...], path: Path | None = None) -> dict[str, Any]:
+    """Alternate the libraries ``repeats`` times per algorithm; every round, the medians and their ratio (written to
+    ``path`` after each round, so that a run cut short keeps the rounds it finished)."""
     import torch
 
     torch.set_num_threads(1)
     rounds: list[dict[str, float]] = []
+    data: dict[str, Any] = {}
     for index in range(repeats):
         entry = {f"{algo}-{backend}": steps_per_second(algo, backend, steps, env_id)
                  for algo in algorithms for backend in BACKENDS}  # fmt: skip
         rounds.append(entry)
         print(f"round {index + 1}/{repeats}: " + ", ".join(f"{k} {v:.0f}" for k, v in entry.items()), flush=True)
+        data = summarize(rounds, steps, env_id, algorithms)
+        if path is not None:
+            path.write_text(json.dumps(data, indent=1) + "\n")
+    return data
+
+
+def summarize(rounds: list[dict[str, float]], steps: int, env_id: str, algorithms: tuple[str, ...]) -> dict[str, Any]:
+    """The JSON of the docs: every round, and per algorithm the medians over rounds and the ratio sbx / sb3."""
     summary = {}
     for algo in algorithms:
         ratios = [r[f"{algo}-sbx"] / r[f"{algo}-sb3"] for r in rounds]
         summary[algo] = {"sb3_steps_per_s": statistics.median(r[f"{algo}-sb3"] for r in rounds),
                          "sbx_steps_per_s": statistics.median(r[f"{algo}-sbx"] for r in rounds),
                          "ratio_sbx_over_sb3": statistics.median(ratios), "ratios": ratios}  # fmt: skip
-    return {"env_id": env_id, "steps_timed": steps, "repeats": repeats, "rounds": rounds, "summary": summary,
+    return {"env_id": env_id, "steps_timed": steps, "repeats": len(rounds), "rounds": rounds, "summary": summary,
             "machine": f"{platform.machine()}, {os.cpu_count()} cores", "load_average": os.getloadavg()[0],
             "versions": _versions()}  # fmt: skip
 
@@ -92,12 +103,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--algorithms", nargs="+", default=list(ALGORITHMS), choices=ALGORITHMS)
     parser.add_argument("--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)}")
     args = parser.parse_args(argv)
-    data = run(args.repeats, args.steps, args.env, tuple(args.algorithms))
+    data = run(args.repeats, args.steps, args.env, tuple(args.algorithms), JSON_PATH if args.docs else None)
     from train.reporting.doc_tables import sbx_speed_table
 
     print(sbx_speed_table(data))
     if args.docs:
-        JSON_PATH.write_text(json.dumps(data, indent=1) + "\n")
         print(f"wrote {JSON_PATH}")
     return 0
 
