@@ -39,6 +39,10 @@ ENTRIES: dict[str, dict[str, Any]] = {
                             "env_id": "DWRPointStabilization-v2"},
     "residual-ppo-jax-astolfi-v2": {"algo": "ppo", "backend": "jax", "residual": True, "expert": "pt-astolfi",
                                     "env_id": "DWRPointStabilization-v2"},
+    # sbx-rl, the JAX stable-baselines (issue 40): the same algorithms and settings, compiled by XLA
+    "sac-sbx": {"algo": "sac", "backend": "sbx"},
+    "tqc-sbx": {"algo": "tqc", "backend": "sbx"},
+    "crossq-sbx": {"algo": "crossq", "backend": "sbx"},
 }
 RESULTS_DIR, RUNS_DIR = "results", "runs"
 
@@ -217,11 +221,25 @@ def read_curve(run_dir: Path, repeat: int = 1) -> list[dict[str, float]]:
 
 
 def run_benchmark(
-    entries: list[Entry], seeds: list[int], out: Path, budget: dict[str, Any], jobs: int = 1, progress: bool = False
-) -> list[dict[str, Any]]:
-    """Every (entry, seed), in ``jobs`` processes; the results in the order of entries then seeds."""
+    entries: list[Entry], seeds: list[int], out: Path, budget: dict[str, Any], jobs: int = 1, progress: bool = False,
+    ray: bool = False, address: str | None = None, resources: dict[str, float] | None = None,
+) -> list[dict[str, Any]]:  # fmt: skip
+    """Every (entry, seed), in ``jobs`` processes, or as Ray tasks of ``resources`` with ``ray`` or an ``address``
+    (:mod:`train.learning.ray_grid`: a local Ray, or the cluster at ``address``); the results in the order of
+    entries then seeds."""
     out.mkdir(parents=True, exist_ok=True)
     work = [(entry, seed) for entry in entries for seed in seeds]
+    if ray or address is not None:
+        from train.learning.ray_grid import run_on_ray
+
+        out = out.resolve()  # the workers' working directory is not the driver's
+        results = run_on_ray(run_one, [(entry, seed, out, budget) for entry, seed in work], address, resources)
+        for result in results:  # where a worker on another machine wrote its result to a disk the driver lacks
+            path = out / RESULTS_DIR / f"{result['entry']}-seed{result['seed']}.json"
+            if not path.is_file():
+                path.parent.mkdir(parents=True, exist_ok=True)
+                path.write_text(json.dumps(result, indent=1, default=str))
+        return results
     if jobs <= 1 or any(entry.make is not None for entry in entries):
         return [run_one(entry, seed, out, budget, progress) for entry, seed in work]
     import multiprocessing

@@ -160,7 +160,7 @@ def resolve_hyperparams(config: TrainConfig, explicit: set[str]) -> TrainConfig:
         except ValueError as error:
             raise ConfigError(str(error)) from None
         params.update(zoo_to_sb3(layer, config.hyperparams if source == "YAML" else "--hyperparams"))
-    config.algo_kwargs = check_algo_kwargs(config.algo, params)
+    config.algo_kwargs = check_algo_kwargs(config.algo, params, config.backend)
     return fill_budget(config)
 
 
@@ -204,8 +204,13 @@ def _check_policy_kwargs(value: Any) -> dict[str, Any]:
     return kwargs
 
 
-def algorithm_class(algo: str) -> Any:
-    """The stable-baselines3 class of ``algo``."""
+def algorithm_class(algo: str, backend: str = "sb3") -> Any:
+    """The class of ``algo`` whose model files a run of ``backend`` writes: sbx-rl's for ``sbx``, else
+    stable-baselines3's (the jitted PPO of ``jax`` saves an SB3 PPO)."""
+    if backend == "sbx":
+        from train.learning.sbx_backend import sbx_class
+
+        return sbx_class(algo)
     import stable_baselines3
 
     if algo in ("tqc", "crossq"):
@@ -222,9 +227,10 @@ _ALIASES = {"lr": "learning_rate", "learning-rate": "learning_rate", "batch": "b
 """Names users type for a hyperparameter that stable-baselines3 calls otherwise."""
 
 
-def check_algo_kwargs(algo: str, params: dict[str, Any]) -> dict[str, Any]:
+def check_algo_kwargs(algo: str, params: dict[str, Any], backend: str = "sb3") -> dict[str, Any]:
     """The hyperparameters coerced to their types; unknown or ill-typed ones raise ConfigError before any work."""
-    accepted = set(inspect.signature(algorithm_class(algo).__init__).parameters) - {"self", "env", "device", "seed"}
+    cls = algorithm_class(algo, backend)
+    accepted = set(inspect.signature(cls.__init__).parameters) - {"self", "env", "device", "seed"}
     accepted |= {"action_noise_sigma"} | ({"log_std_final", "log_std_fixed"} if algo == "ppo" else set())
     unknown = sorted(set(params) - accepted)
     if unknown:
@@ -236,7 +242,8 @@ def check_algo_kwargs(algo: str, params: dict[str, Any]) -> dict[str, Any]:
         hints = ", ".join(
             f"{near[key][0]} for {key}" if len(unknown) > 1 else near[key][0] for key in unknown if near[key]
         )
-        raise ConfigError(f"hyperparameter(s) {unknown} are not accepted by {algo.upper()}"
+        library = " of sbx" if backend == "sbx" else ""
+        raise ConfigError(f"hyperparameter(s) {unknown} are not accepted by {algo.upper()}{library}"
                           f"{f' (did you mean {hints}?)' if hints else ''}; accepted: {', '.join(shown)}")  # fmt: skip
     checked = dict(params)
     try:
@@ -297,8 +304,8 @@ def rollout_rounding(config: TrainConfig) -> str | None:
             f"{config.total_timesteps} runs {rounded} steps")  # fmt: skip
 
 
-def build_algo_kwargs(params: dict[str, Any]) -> dict[str, Any]:
-    """Turn resolved hyperparameters into the keyword arguments of the SB3 constructor."""
+def build_algo_kwargs(params: dict[str, Any], backend: str = "sb3") -> dict[str, Any]:
+    """Turn resolved hyperparameters into the keyword arguments of the SB3 (or sbx) constructor."""
     import numpy as np
     import torch
 
@@ -308,7 +315,11 @@ def build_algo_kwargs(params: dict[str, Any]) -> dict[str, Any]:
         start = float(lr[4:])
         kwargs["learning_rate"] = lambda progress_remaining: progress_remaining * start
     policy_kwargs = dict(kwargs.get("policy_kwargs") or {})
-    if isinstance(policy_kwargs.get("activation_fn"), str):
+    if backend == "sbx":
+        from train.learning.sbx_backend import sbx_policy_kwargs
+
+        policy_kwargs = sbx_policy_kwargs(policy_kwargs)
+    elif isinstance(policy_kwargs.get("activation_fn"), str):
         policy_kwargs["activation_fn"] = getattr(torch.nn, policy_kwargs["activation_fn"].split(".")[-1])
     kwargs["policy_kwargs"] = policy_kwargs
     kwargs.pop("log_std_final", None)  # PPO's annealed noise: a callback of train.learning.training, not SB3's
