@@ -225,3 +225,57 @@ def test_the_command_writes_a_dataset_that_imitate_clones(
                      "--run-dir", str(run), "--no-progress"]) == 0  # fmt: skip
     assert (run / "model.zip").is_file()
     assert "steps of 6 episodes from dwr-gym/cli-v0" in capsys.readouterr().out
+
+
+def test_the_reference_scores_are_random_actions_and_the_optimum_on_the_nominal_robot(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """ref_min_score is the mean return of random actions on the dataset's env, ref_max_score the optimum's on the
+    same starts without the robot's noise (here PTC stands in for the CasADi plans); both cached, in that order."""
+    from train.datasets import build
+
+    monkeypatch.setattr(build, "controller_policy", lambda name, env_kwargs, seed=0: ptc())
+    noisy = {**env_keywords(V1), "observation_noise": 0.05}
+    nominal = env_keywords(V1)
+    low, high = build.reference_scores(V1, noisy, episodes=3)
+    random_returns = collect(RandomPolicy(build.REF_SEED), noisy, 3, seed=build.REF_SEED).returns()
+    best_returns = collect(ptc(), nominal, 3, seed=build.REF_SEED).returns()
+    assert low == pytest.approx(np.mean(random_returns)) and high == pytest.approx(np.mean(best_returns))
+    assert low < high
+    monkeypatch.setattr(build, "collect", None)  # the second call reads the cache
+    assert build.reference_scores(V1, noisy, episodes=3) == (low, high)
+
+
+def test_a_built_dataset_normalises_returns_with_its_reference_scores(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``minari.get_normalized_score`` of the written dataset maps the random policy's mean return to 0 and the
+    optimum's to 1, and gives the normalised score ``dwr-gym dataset`` reports."""
+    from train.datasets import build
+
+    monkeypatch.setattr(build, "reference_scores", lambda *args, **kwargs: (-100.0, 12.0))
+    request = build.DatasetRequest("dwr-gym/refs-v0", "ptc", V1, env_keywords(V1), 3, seed=2, num_envs=3,
+                                   optimum=False)  # fmt: skip
+    summary = build.build_dataset(request, ptc())
+    dataset = load_dataset("dwr-gym/refs-v0")
+    metadata = dataset.storage.metadata
+    assert (metadata["ref_min_score"], metadata["ref_max_score"]) == (-100.0, 12.0)
+    assert (summary["ref_min_score"], summary["ref_max_score"]) == (-100.0, 12.0)
+    np.testing.assert_allclose(minari.get_normalized_score(dataset, np.array([-100.0, 12.0])), [0.0, 1.0])
+    expected = minari.get_normalized_score(dataset, np.array([summary["return_mean"]]))[0]
+    assert summary["normalized_score"] == pytest.approx(expected) and 0.0 < expected < 1.5
+
+
+def test_e_over_opt_of_a_dataset_is_over_its_episodes_in_time_only(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Each episode's energy_ratio is its energy over its optimum where it arrived in time and has an optimum;
+    None otherwise (late, or no optimum); the dataset's mean E/opt is over those alone."""
+    from train.datasets import build
+    from train.datasets.collect import Episodes
+
+    optima = np.array([1.0, 2.0, np.nan, 0.0])
+    monkeypatch.setattr(build, "optimal_energies", lambda *args, **kwargs: (optima, ["no plan"]))
+    episodes = Episodes(rewards=[np.ones(2)] * 4, metadata=[
+        {"start": [0.0, 0.0, 0.0], "goal": [1.0, 0.0, 0.0], "T_con": 20.0, "energy": energy, "in_time": in_time,
+         "heading_error": 0.1} for energy, in_time in ((3.0, True), (10.0, False), (4.0, True), (5.0, True))])  # fmt: skip
+    assert build.add_optimum(episodes, env_keywords(V1)) == 1
+    assert [m["energy_ratio"] for m in episodes.metadata] == [3.0, None, None, None]
+    assert [m["optimal_energy"] for m in episodes.metadata] == [1.0, 2.0, None, 0.0]
+    assert build.statistics(episodes)["energy_ratio_mean"] == 3.0

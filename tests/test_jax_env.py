@@ -80,6 +80,31 @@ def test_the_gymnax_adapter_steps_under_jit_and_vmap_with_autoreset() -> None:
     assert env.action_space(params).sample(keys[0]).shape == (2,)
 
 
+def test_the_gymnax_discount_is_zero_only_where_the_episode_terminated() -> None:
+    """A value-based learner multiplies the next value by ``discount``: 0 past a termination (leaving the arena or
+    arriving), but 1 at a truncation at the horizon, where the episode goes on beyond the cut."""
+    from dwr_gym.jax_env.func_env import initial_state, observation_space
+
+    env, params = make_gymnax_env(dwr_gym.ENV_ID, T_con=0.5)
+    # robot 0 stands still until the horizon (15 steps); robot 1 starts 2 cm inside the arena, driving outwards
+    start = (jnp.array([0.3, params.arena_radius - 0.02]), jnp.zeros(2), jnp.zeros(2))
+    state = initial_state(start, jnp.full(2, 0.5), jax.random.PRNGKey(0), params, observation_space(params))
+    step = jax.jit(jax.vmap(env.step_env, in_axes=(0, 0, 0, None)))
+    action = jnp.array([[0.0, 0.0], [1.0, 0.0]])
+    keys = jax.random.split(jax.random.PRNGKey(1), 2)
+    seen = {"terminated": 0, "truncated": 0}
+    for _ in range(15):
+        _, state, _, done, info = step(keys, state, action, params)
+        discount = np.asarray(info["discount"])
+        np.testing.assert_array_equal(discount, np.where(np.asarray(info["terminated"]), 0.0, 1.0))
+        np.testing.assert_array_equal(np.asarray(env.discount(state, params)), discount)
+        seen["terminated"] += int(info["terminated"][1])
+        seen["truncated"] += int(info["truncated"][0])
+        assert not bool(info["terminated"][0])
+    assert seen == {"terminated": 15, "truncated": 1}  # robot 1 outside from its first step on; robot 0 cut at 15
+    assert np.asarray(info["discount"]).tolist() == [1.0, 0.0]
+
+
 def test_float64_with_x64_and_a_nan_action_gives_finite_numbers() -> None:
     with jax.enable_x64(True):
         env, params = make_gymnax_env(dtype="float64")

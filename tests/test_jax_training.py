@@ -133,6 +133,22 @@ def test_log_std_final_caps_the_noise_along_the_budget_and_ends_at_its_value() -
     np.testing.assert_allclose(log_std, -3.0, atol=1e-6)
 
 
+def test_every_seeds_learning_curve_is_measured_on_the_same_evaluation_set(tmp_path: Path) -> None:
+    """The jitted trainer evaluates on the starts drawn with --eval-seed, whatever the training seed: the curves of
+    two seeds compare episode for episode (and differ from the starts the training seed would draw)."""
+    from train.evaluation.scenarios import make_scenario
+    from train.learning.jax_training import JaxRun
+
+    runs = [JaxRun(resolved(backend="jax", seed=seed, eval_seed=777, eval_episodes=5), tmp_path, None, None, {}, None)
+            for seed in (0, 5)]  # fmt: skip
+    expected = make_scenario("random", n=5, seed=777, env_kwargs=runs[0].config.env_keywords())
+    for run in runs:
+        np.testing.assert_array_equal(run.scenario.starts, expected.starts)
+        np.testing.assert_array_equal(run.scenario.T_cons, expected.T_cons)
+    own = make_scenario("random", n=5, seed=0, env_kwargs=runs[0].config.env_keywords())
+    assert not np.array_equal(own.starts, expected.starts)
+
+
 def cli(*args: str, **kwargs: Any) -> subprocess.Popen[str]:
     env = {**os.environ, "PYTHONPATH": str(ROOT), "OMP_NUM_THREADS": "1"}
     return subprocess.Popen([sys.executable, "-m", "train.cli", *args], cwd=ROOT, env=env, text=True,
