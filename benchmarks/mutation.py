@@ -69,11 +69,24 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
                       "residual_vec_env_with_zero_residual_is_the_expert", "residual_training_starts_from_the_expert",
                       "zero_init_scales_the_last_layer_to_gain_and_zeroes_its_bias",
                       "short_training_run_of_each_algorithm[ppo-residual]"))]),
+    "jax_env": (["dwr_gym/jax_env/*"], ["tests/test_jax_env.py", "tests/test_jax_equivalence.py"]),
+    "jax_ppo": (["train/learning/jax_ppo.py", "train/learning/jax_policy.py", "train/learning/jax_export.py"],
+                ["tests/test_jax_training.py"]),
+    "protocol": (["train/learning/benchmark.py", "train/evaluation/benchmark.py", "train/reporting/rl_benchmark.py"],
+                 ["tests/test_rl_protocol.py", "tests/test_rl_benchmark.py",
+                  "tests/test_docs.py::test_every_table_agrees_with_its_json"]),
+    "datasets": (["train/datasets/*"], ["tests/test_datasets.py"]),
+    "guards": (["train/threads.py", "train/evaluation/optimum.py"],
+               ["tests/test_threads.py", "tests/test_first_hour_training.py", "tests/test_optimal.py"]),
 }  # fmt: skip
 #: Words of DESELECTED a group keeps: the learning group's subject is the tiny DAgger runs.
 KEPT = {"learning": ("cloning_run",)}
 #: Words a group leaves out besides: the shipped robust agent's evaluations take minutes per mutant.
-EXTRA = {"robust": ("shipped",)}
+EXTRA = {"robust": ("shipped",),
+         # the protocol's older end-to-end run (two minutes per mutant on a busy machine; test_rl_protocol.py trains
+         # two seeds instead), and the RL options' training runs
+         "protocol": ("trains_evaluates_and_aggregates", "tqc_and_crossq", "normalised_observations", "energy_split"),
+         "guards": ("ctrl_c", "train_runs_on_one_thread")}  # fmt: skip
 #: Groups whose module runs code at import (dwr_gym.model builds its torch-backed functions then): mutmut imports
 #: them anew for each mutant instead of forking after collection, which would keep the unmutated import.
 IMPORT_PER_MUTANT = {"model"}

@@ -95,6 +95,7 @@ def test_the_gymnax_discount_is_zero_only_where_the_episode_terminated() -> None
     seen = {"terminated": 0, "truncated": 0}
     for _ in range(15):
         _, state, _, done, info = step(keys, state, action, params)
+        np.testing.assert_array_equal(np.asarray(done), np.asarray(info["terminated"] | info["truncated"]))
         discount = np.asarray(info["discount"])
         np.testing.assert_array_equal(discount, np.where(np.asarray(info["terminated"]), 0.0, 1.0))
         np.testing.assert_array_equal(np.asarray(env.discount(state, params)), discount)

@@ -178,3 +178,28 @@ def test_a_users_entry_makes_each_seed_in_its_own_directory(tmp_path: Path, monk
     assert [seed for seed, _ in made] == [3, 4] and made[0][1] != made[1][1]
     assert [r["curve"][0]["energy"] for r in results] == [3.0, 4.0]
     assert [r["curve"][0]["env_steps"] for r in results] == [30, 40]
+
+
+def test_the_benchmarks_evaluation_measures_e_over_opt_on_its_first_episodes_and_the_rest_on_all() -> None:
+    """The nominal set's in-time rate and energy are over its n episodes; E/opt over the set drawn with n_optimum
+    (the same seed, so its first episodes); the disturbed sets are n_disturbed episodes, without E/opt unless every
+    episode is measured against the optimum (n_optimum None)."""
+    pytest.importorskip("casadi")
+    from train.evaluation.benchmark import evaluate_policy
+
+    kwargs = env_keywords(TASK_ENV_ID)
+
+    def row(name: str, n: int, optimum: str = "none") -> dict[str, Any]:
+        return metrics_of(evaluate_sets({"ptc": "ptc"}, [name], n, EVAL_SEED, kwargs, optimum=optimum)[0])
+
+    sets = evaluate_policy("ptc", n=3, n_disturbed=2, n_optimum=1, sets=("random", "delay"))
+    assert {k: v for k, v in sets["random"].items() if k != "energy_ratio"} == {
+        k: v for k, v in row("random", 3).items() if k != "energy_ratio"}  # fmt: skip
+    assert sets["random"]["energy_ratio"] == pytest.approx(row("random", 1, "pose")["energy_ratio"])
+    assert sets["random"]["energy_ratio"] != row("random", 3)["energy"]  # (a ratio, not the energy)
+    assert sets["delay"] == row("delay", 2) and sets["delay"]["energy_ratio"] is None
+    every = evaluate_policy("ptc", n=1, n_disturbed=1, n_optimum=None, sets=("random", "noise"))
+    assert every["random"] == row("random", 1, "pose") and every["noise"] == row("noise", 1, "pose")
+    assert every["noise"]["in_time"] == 1.0 and every["noise"]["energy_ratio"] > 1.0  # PTC arrives there
+    with pytest.raises(ValueError, match="n=0 and n_disturbed=2 are invalid"):
+        evaluate_policy("ptc", n=0, n_disturbed=2)
