@@ -144,7 +144,7 @@ def test_the_cache_is_read_merged_and_replaced_under_one_exclusive_lock(
     monkeypatch: pytest.MonkeyPatch, tmp_path: Path
 ) -> None:
     """While one command merges its optima (reads, updates, replaces the file) or claims a batch, no other command
-    can take the cache's lock: the read-modify-write is whole. The lock is let go afterwards."""
+    can take the cache's lock, not even to read: the read-modify-write is whole. The lock is let go afterwards."""
     fcntl = pytest.importorskip("fcntl")
     import train.evaluation.optimum as optimum
     from dwr_gym.params import EnvParams
@@ -155,7 +155,7 @@ def test_the_cache_is_read_merged_and_replaced_under_one_exclusive_lock(
     def others_can_lock() -> bool:
         with path.with_suffix(".lock").open("a") as handle:  # another open file: as another process holds it
             try:
-                fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                fcntl.flock(handle, fcntl.LOCK_SH | fcntl.LOCK_NB)  # refused only while the lock is exclusive
             except BlockingIOError:
                 return False
             fcntl.flock(handle, fcntl.LOCK_UN)

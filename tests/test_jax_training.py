@@ -103,6 +103,52 @@ def test_advantages_are_sb3s_with_the_truncation_bootstrap() -> None:
     np.testing.assert_allclose(np.asarray(returns), buffer.returns, rtol=1e-5, atol=1e-5)
 
 
+def test_observation_statistics_are_sb3s_running_mean_and_variance() -> None:
+    """The running statistics of --normalize-observations merge batches of any size as SB3's RunningMeanStd (the
+    parallel algorithm), so the exported model's folded scaling is VecNormalize's."""
+    from stable_baselines3.common.running_mean_std import RunningMeanStd
+
+    from train.learning.jax_ppo import OBS_EPSILON, ObservationStatistics
+
+    rng = np.random.default_rng(4)
+    ours, theirs = ObservationStatistics.create(3), RunningMeanStd(shape=(3,))
+    for size, scale in ((5, 1.0), (17, 4.0), (2, 0.1)):
+        batch = rng.normal(2.0, scale, (size, 3))
+        ours, _ = ours.update(jnp.asarray(batch)), theirs.update(batch)
+        np.testing.assert_allclose(np.asarray(ours.mean), theirs.mean, rtol=1e-5)
+        np.testing.assert_allclose(np.asarray(ours.var), theirs.var, rtol=1e-5)
+        assert float(ours.count) == pytest.approx(theirs.count)
+    obs = rng.normal(size=(4, 3))
+    expected = (obs - theirs.mean) / np.sqrt(theirs.var + OBS_EPSILON)
+    np.testing.assert_allclose(np.asarray(ours.normalize(jnp.asarray(obs))), expected, rtol=1e-4, atol=1e-5)
+
+
+def test_the_loss_is_the_clipped_surrogate_plus_the_value_and_entropy_terms() -> None:
+    """JaxPPO.loss on a minibatch against the PPO loss written out in numpy (SB3's: advantages normalised with
+    ddof 1, the pessimistic min of the clipped and unclipped surrogates, vf_coef * MSE, ent_coef * -entropy)."""
+    from dwr_gym.jax_env.gymnax import make_gymnax_env
+    from train.learning.jax_ppo import JaxPPO
+
+    env, env_params = make_gymnax_env("DWRPointStabilization-v1")
+    settings = PPOSettings(n_envs=2, n_steps=4, batch_size=8, ent_coef=0.03, vf_coef=0.7, clip_range=0.1)
+    ppo = JaxPPO(settings, env, env_params)
+    params = random_params(settings, 3)
+    rng = np.random.default_rng(5)
+    obs, actions = rng.normal(size=(8, 10)).astype(np.float32), rng.normal(size=(8, 2)).astype(np.float32)
+    advantages, returns = rng.normal(1.0, 2.0, 8), rng.normal(size=8)
+    mean, log_std, values = (np.asarray(x, np.float64) for x in ppo.network.apply(params, obs))
+    log_prob = np.asarray(gaussian_log_prob(actions, mean, log_std), np.float64)
+    old_log_prob = log_prob + rng.uniform(-0.3, 0.3, 8)  # ratios on both sides of the clip range
+    ratio = np.exp(log_prob - old_log_prob)
+    assert np.any(ratio > 1.1) and np.any(ratio < 0.9) and np.any(np.abs(ratio - 1) < 0.1)
+    a = (advantages - advantages.mean()) / (advantages.std(ddof=1) + 1e-8)
+    surrogate = -np.mean(np.minimum(a * ratio, a * np.clip(ratio, 0.9, 1.1)))
+    entropy = np.sum(log_std + 0.5 * (1.0 + np.log(2.0 * np.pi)))
+    expected = surrogate + 0.03 * -entropy + 0.7 * np.mean((returns - values) ** 2)
+    batch = tuple(jnp.asarray(x, jnp.float32) for x in (obs, actions, old_log_prob, advantages, returns))
+    assert float(ppo.loss(params, batch)) == pytest.approx(expected, rel=1e-4)
+
+
 def test_settings_read_the_yaml_and_refuse_what_they_do_not_implement() -> None:
     config = resolved()
     settings = PPOSettings.from_algo_kwargs(config.algo_kwargs, 256)

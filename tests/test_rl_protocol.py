@@ -203,3 +203,16 @@ def test_the_benchmarks_evaluation_measures_e_over_opt_on_its_first_episodes_and
     assert every["noise"]["in_time"] == 1.0 and every["noise"]["energy_ratio"] > 1.0  # PTC arrives there
     with pytest.raises(ValueError, match="n=0 and n_disturbed=2 are invalid"):
         evaluate_policy("ptc", n=0, n_disturbed=2)
+
+
+def test_a_curve_with_an_action_repeat_counts_env_steps(tmp_path: Path) -> None:
+    """evaluations.csv counts the agent's decisions; with an action repeat of K the curve's x is K times that."""
+    from train.learning.benchmark import read_curve
+
+    (tmp_path / "evaluations.csv").write_text("timesteps,wall_time,success_rate,final_heading_error_mean,energy_mean,"
+                                              "return_mean\n0,1.5,0.25,0.5,3.0,-1\n100,9.0,0.75,0.125,2.0,-0.5\n")  # fmt: skip
+    assert read_curve(tmp_path, 3) == [
+        {"env_steps": 0, "wall_time": 1.5, "in_time": 0.25, "final_heading": 0.5, "energy": 3.0},
+        {"env_steps": 300, "wall_time": 9.0, "in_time": 0.75, "final_heading": 0.125, "energy": 2.0},
+    ]
+    assert read_curve(tmp_path / "none") == []
