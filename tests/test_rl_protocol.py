@@ -216,3 +216,41 @@ def test_a_curve_with_an_action_repeat_counts_env_steps(tmp_path: Path) -> None:
         {"env_steps": 300, "wall_time": 9.0, "in_time": 0.75, "final_heading": 0.125, "energy": 2.0},
     ]
     assert read_curve(tmp_path / "none") == []
+
+
+def test_every_shipped_entry_resolves_to_a_valid_training_configuration(tmp_path: Path) -> None:
+    """Each name of ENTRIES is a configuration dwr-gym train accepts: its algorithm, backend and expert exist."""
+    from train.learning.benchmark import ENTRIES
+
+    budget = {"env_steps": 1024, "eval_freq": 512, "eval_episodes": 2}
+    for name, options in ENTRIES.items():
+        config = train_config(parse_entry(name), 0, tmp_path / name, budget)
+        assert {key: getattr(config, key) for key in options} == options, name
+        assert config.run_dir == str(tmp_path / name) and config.eval_seed == EVAL_SEED
+
+
+def test_no_seeds_nothing_finite_and_a_missing_rliable_are_said_plainly(monkeypatch: pytest.MonkeyPatch) -> None:
+    import sys
+
+    assert iqm_interval([]) == {"iqm": None, "low": None, "high": None, "n": 0}
+    assert iqm_interval([None, float("nan")]) == {"iqm": None, "low": None, "high": None, "n": 0}
+    summary = aggregate([{**result("a", 0, 0.5, None), "env_steps": None}])
+    assert summary["a"]["learned_from"] == "reward" and summary["a"]["env_steps"]["iqm"] is None
+    assert summary["a"]["sets"]["random"]["energy_ratio"]["iqm"] is None
+    assert set(summary["a"]["curves"]) == {"env_steps", "wall_time"}
+    assert set(summary["a"]["curves"]["wall_time"]) == {"in_time", "energy", "final_heading"}
+    monkeypatch.setitem(sys.modules, "rliable", None)
+    with pytest.raises(ImportError, match=r'^the RL benchmark aggregates with rliable: pip install "dwr-gym\[benchmark\]"$'):
+        iqm_interval([1.0])
+
+
+def test_the_learning_curves_figure_draws_each_entry_and_its_band(tmp_path: Path) -> None:
+    pytest.importorskip("matplotlib")
+    from train.reporting.rl_benchmark import plot_curves
+
+    curve = [{"env_steps": 0.0, "wall_time": 0.0, "in_time": 0.0, "energy": 9.0, "final_heading": 1.0},
+             {"env_steps": 100.0, "wall_time": 5.0, "in_time": 0.5, "energy": 3.0, "final_heading": 0.5}]  # fmt: skip
+    results = [{**result("a", s, 0.5, 1.2), "curve": curve} for s in (0, 1)] + [result("empty", 0, 0.1, None)]
+    path = tmp_path / "figures" / "curves.png"
+    plot_curves(aggregate(results), path, "env_steps")
+    assert path.is_file() and path.stat().st_size > 1000
