@@ -78,6 +78,30 @@ def test_collected_episodes_are_the_single_envs_episodes_robot_by_robot() -> Non
         assert meta["T_con"] == pytest.approx(observations[0, 7])  # the observation's T_con feature
 
 
+def test_each_episodes_outcome_is_the_evaluations_outcome_of_the_same_start() -> None:
+    """An episode's metadata (in time, arrived, arrival time, energy, final distance and heading error) is what the
+    evaluation's rollout measures from the same start and T_con; short prescribed times make some episodes late."""
+    from dwr_gym.params import EnvParams
+    from train.evaluation.rollout import rollout
+
+    kwargs = {**env_keywords(V1), "T_con_range": (3.0, 10.0)}
+    episodes = collect(ptc(), kwargs, 12, seed=11, num_envs=5)
+    meta = episodes.metadata
+    starts = np.array([m["start"] for m in meta])
+    T_con = np.array([m["T_con"] for m in meta])
+    result = rollout(ptc(), EnvParams.from_kwargs(**kwargs), starts, np.zeros_like(starts), T_con=T_con,
+                     env_kwargs=kwargs)  # fmt: skip
+    assert [m["in_time"] for m in meta] == result.success.tolist()
+    assert [m["arrived"] for m in meta] == result.arrived.tolist()
+    assert 0 < sum(result.success) and sum(result.success) < sum(result.arrived)  # in time, and late too
+    np.testing.assert_allclose([np.nan if m["arrival_time"] is None else m["arrival_time"] for m in meta],
+                               result.arrival_time, rtol=1e-9)  # fmt: skip
+    np.testing.assert_allclose([m["energy"] for m in meta], result.energy, rtol=1e-5)
+    np.testing.assert_allclose([m["final_distance"] for m in meta], result.final_distance, rtol=1e-5, atol=1e-7)
+    np.testing.assert_allclose([m["heading_error"] for m in meta], result.final_heading_error, rtol=1e-5, atol=1e-7)
+    assert [m["steps"] for m in meta] == [len(r) for r in episodes.rewards]
+
+
 def test_which_episodes_are_kept_does_not_depend_on_the_batch() -> None:
     few = collect(RandomPolicy(0), env_keywords(V1), 3, seed=2, num_envs=3)
     more = collect(RandomPolicy(0), env_keywords(V1), 6, seed=2, num_envs=6)
