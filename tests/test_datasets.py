@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
@@ -276,10 +277,16 @@ def test_a_built_dataset_normalises_returns_with_its_reference_scores(monkeypatc
     from train.datasets import build
 
     monkeypatch.setattr(build, "reference_scores", lambda *args, **kwargs: (-100.0, 12.0))
-    request = build.DatasetRequest("dwr-gym/refs-v0", "ptc", V1, env_keywords(V1), 3, seed=2, num_envs=3,
-                                   optimum=False)  # fmt: skip
+    kwargs = {**env_keywords(V1), "observation_noise": 0.01}
+    request = build.DatasetRequest("dwr-gym/refs-v0", "ptc", V1, kwargs, 3, seed=2, num_envs=3, optimum=False)
     summary = build.build_dataset(request, ptc())
     dataset = load_dataset("dwr-gym/refs-v0")
+    assert {k: summary[k] for k in ("dataset_id", "policy", "env_id", "episodes", "episodes_without_optimum")} == {
+        "dataset_id": "dwr-gym/refs-v0", "policy": "ptc", "env_id": V1, "episodes": 3.0, "episodes_without_optimum": 3}
+    assert Path(summary["path"]) == Path(os.environ["MINARI_DATASETS_PATH"]) / "dwr-gym" / "refs-v0"
+    assert summary["collect_seconds"] > 0.0
+    assert [m["policy"] for m in episode_metadata(dataset)] == ["ptc"] * 3
+    assert [m["disturbance"] for m in episode_metadata(dataset)] == [{"observation_noise": 0.01}] * 3  # the robot
     metadata = dataset.storage.metadata
     assert (metadata["ref_min_score"], metadata["ref_max_score"]) == (-100.0, 12.0)
     assert (summary["ref_min_score"], summary["ref_max_score"]) == (-100.0, 12.0)
@@ -294,12 +301,44 @@ def test_e_over_opt_of_a_dataset_is_over_its_episodes_in_time_only(monkeypatch: 
     from train.datasets import build
     from train.datasets.collect import Episodes
 
-    optima = np.array([1.0, 2.0, np.nan, 0.0])
-    monkeypatch.setattr(build, "optimal_energies", lambda *args, **kwargs: (optima, ["no plan"]))
+    optima, asked = np.array([1.0, 2.0, np.nan, 0.0]), []
+
+    def optimal_energies(params: object, starts: np.ndarray, goals: np.ndarray, T_cons: np.ndarray, **kwargs: object):
+        asked.append((params, starts, goals, T_cons))
+        return optima, ["no plan"]
+
+    monkeypatch.setattr(build, "optimal_energies", optimal_energies)
     episodes = Episodes(rewards=[np.ones(2)] * 4, metadata=[
         {"start": [0.0, 0.0, 0.0], "goal": [1.0, 0.0, 0.0], "T_con": 20.0, "energy": energy, "in_time": in_time,
          "heading_error": 0.1} for energy, in_time in ((3.0, True), (10.0, False), (4.0, True), (5.0, True))])  # fmt: skip
-    assert build.add_optimum(episodes, env_keywords(V1)) == 1
+    assert build.add_optimum(episodes, {**env_keywords(V1), "u_max": 0.3}) == 1
+    ((params, starts, goals, T_cons),) = asked  # each episode's own start, goal and T_con, the env's limits
+    assert params.u_max == 0.3 and starts.shape == (4, 3) and goals.tolist() == [[1.0, 0.0, 0.0]] * 4
+    assert T_cons.tolist() == [20.0] * 4
     assert [m["energy_ratio"] for m in episodes.metadata] == [3.0, None, None, None]
     assert [m["optimal_energy"] for m in episodes.metadata] == [1.0, 2.0, None, 0.0]
     assert build.statistics(episodes)["energy_ratio_mean"] == 3.0
+
+
+@pytest.mark.parametrize("policy", ["random", "pt-astolfi"])
+def test_make_dataset_writes_the_episodes_of_a_controller_or_random_actions_named(
+    policy: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``make_dataset`` with a name: the episodes of that controller, scaled to the env's own limits (a slower robot
+    here), or of random actions drawn from the dataset's seed; the same as collecting them directly."""
+    from baselines.registry import make_controller
+    from train.datasets import build, make_dataset
+
+    monkeypatch.setattr(build, "reference_scores", lambda *args, **kwargs: (-100.0, 12.0))
+    summary = make_dataset(f"dwr-gym/{policy}-v0", policy=policy, episodes=3, env_kwargs={"u_max": 0.3}, seed=4,
+                           num_envs=2, optimum=False)  # fmt: skip
+    kwargs = {**env_keywords(V1), "u_max": 0.3}
+    acting = RandomPolicy(4) if policy == "random" else ExpertPolicy(make_controller(policy), 0.3, 2.0)
+    expected = collect(acting, kwargs, 3, seed=4, num_envs=2)
+    dataset = load_dataset(f"dwr-gym/{policy}-v0")
+    assert summary["policy"] == policy and dataset.storage.metadata["algorithm_name"] == policy
+    assert dataset.spec.env_spec.kwargs["u_max"] == 0.3
+    for k, episode in enumerate(dataset.iterate_episodes()):
+        np.testing.assert_array_equal(episode.actions, expected.actions[k])
+    with pytest.raises(ValueError, match="env_id 'CartPole-v1' is invalid"):
+        make_dataset("dwr-gym/x-v0", env_id="CartPole-v1")
