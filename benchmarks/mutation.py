@@ -108,7 +108,7 @@ def mutmut_config(group: str) -> str:
         "pytest_add_cli_args_test_selection": tests,
         "pytest_add_cli_args": ["-p", "no:xdist", "-p", "no:cacheprovider", "-m", "not slow", "-k", deselected(group),
                                 "-W", "ignore::DeprecationWarning"],
-        "timeout_multiplier": 5.0,
+        "timeout_multiplier": 20.0,  # a mutant that times out counts as killed: room for a busy shared machine
         "forkserver_warmup": "none" if group in IMPORT_PER_MUTANT else "collect",
     }  # fmt: skip
     return "\n[tool.mutmut]\n" + "".join(f"{key} = {json.dumps(value)}\n" for key, value in table.items())
@@ -130,6 +130,19 @@ def prepare(group: str, work: Path) -> Path:
     pyproject = (target / "pyproject.toml").read_text()
     pyproject = re.sub(r"\n\[tool\.mutmut\].*?(?=\n\[|\Z)", "", pyproject, flags=re.S)
     (target / "pyproject.toml").write_text(pyproject + mutmut_config(group))
+    return target
+
+
+def refresh(group: str, target: Path) -> Path:
+    """An earlier work copy of ``group`` (its mutants already generated, its test statistics taken) with the current
+    tests and mutmut configuration: mutmut then maps only the new tests before testing mutants."""
+    for tests in (target / "tests", target / "mutants" / "tests"):
+        shutil.rmtree(tests, ignore_errors=True)
+        shutil.copytree(ROOT / "tests", tests, ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
+    for pyproject in (target / "pyproject.toml", target / "mutants" / "pyproject.toml"):
+        if pyproject.is_file():
+            text = re.sub(r"\n\[tool\.mutmut\].*?(?=\n\[|\Z)", "", pyproject.read_text(), flags=re.S)
+            pyproject.write_text(text + mutmut_config(group))
     return target
 
 
@@ -204,13 +217,14 @@ def run(
     collect_only: bool = False,
     sample: int = 0,
     seed: int = 0,
+    reuse: bool = False,
 ) -> None:
     """Run mutmut on each group and store its mutants in the results JSON. With ``recheck``, only the mutants
     not killed in the last run are tested again, against the current tests (mutmut still generates all)."""
     for group in groups:
         began = time.perf_counter()
         log = work / f"{group}.log"
-        directory = work / group if collect_only else prepare(group, work)
+        directory = work / group if collect_only else refresh(group, work / group) if reuse else prepare(group, work)
         previous = json.loads(RESULTS.read_text())["groups"][group] if recheck else None
         names = (
             [m["name"] for m in previous["mutants"] if m["status"] not in ("killed", "timeout", "not checked")]
@@ -221,6 +235,11 @@ def run(
               flush=True)  # fmt: skip
         population = None
         if sample and not recheck and not collect_only:
+            if reuse:  # the earlier copy's mutants stay; their statuses are tested afresh
+                for meta in (directory / "mutants").rglob("*.py.meta"):
+                    data = json.loads(meta.read_text())
+                    data["exit_code_by_key"] = dict.fromkeys(data["exit_code_by_key"])
+                    meta.write_text(json.dumps(data))
             # mutmut generates the mutants and maps tests to functions, then stops at the unknown name
             mutmut(directory, "run", "--max-children", str(max_children), "no_such_mutant", log=log)
             everything = all_names(directory)
@@ -373,13 +392,16 @@ def main() -> None:
         "--sample", type=int, default=0, help="test a seeded random sample of this many mutants per group (0: all)"
     )
     parser.add_argument("--seed", type=int, default=0, help="seed of --sample")
+    parser.add_argument("--reuse", action="store_true",
+                        help="keep each group's earlier work copy (its mutants and test statistics), with the current tests")
     parser.add_argument("--recheck", action="store_true",
                         help="test only the mutants not killed last time, against the current tests")  # fmt: skip
     args = parser.parse_args()
     if shutil.which("mutmut", path=str(Path(sys.executable).parent)) is None:
         raise SystemExit('mutmut is not installed: pip install "dwr-gym[mutation]"')
     if not args.docs:
-        run(args.groups, args.work, args.max_children, args.recheck, args.collect_only, args.sample, args.seed)
+        run(args.groups, args.work, args.max_children, args.recheck, args.collect_only, args.sample, args.seed,
+            args.reuse)
     write_docs()
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import sys
 from pathlib import Path
@@ -253,12 +254,13 @@ def test_the_command_writes_a_dataset_that_imitate_clones(
 
 
 def test_the_reference_scores_are_random_actions_and_the_optimum_on_the_nominal_robot(
-    monkeypatch: pytest.MonkeyPatch,
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
 ) -> None:
     """ref_min_score is the mean return of random actions on the dataset's env, ref_max_score the optimum's on the
     same starts without the robot's noise (here PTC stands in for the CasADi plans); both cached, in that order."""
     from train.datasets import build
 
+    monkeypatch.setenv("DWR_GYM_CACHE", str(tmp_path))  # solved here, not read from another test's cache
     monkeypatch.setattr(build, "controller_policy", lambda name, env_kwargs, seed=0: ptc())
     noisy = {**env_keywords(V1), "observation_noise": 0.05}
     nominal = env_keywords(V1)
@@ -269,6 +271,8 @@ def test_the_reference_scores_are_random_actions_and_the_optimum_on_the_nominal_
     assert low < high
     monkeypatch.setattr(build, "collect", None)  # the second call reads the cache
     assert build.reference_scores(V1, noisy, episodes=3) == (low, high)
+    (cached,) = tmp_path.glob("dataset-reference-*.json")
+    assert json.loads(cached.read_text())["ref_min_score"] == low
 
 
 def test_a_built_dataset_normalises_returns_with_its_reference_scores(monkeypatch: pytest.MonkeyPatch) -> None:
