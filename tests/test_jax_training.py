@@ -149,6 +149,40 @@ def test_the_loss_is_the_clipped_surrogate_plus_the_value_and_entropy_terms() ->
     assert float(ppo.loss(params, batch)) == pytest.approx(expected, rel=1e-4)
 
 
+def test_a_rollout_records_what_the_policy_did_and_the_updates_follow_the_schedule() -> None:
+    """collect: each transition's log-probability and value are the policy's at its observation, the totals are
+    the rollout's sums. update: n_epochs x minibatches Adam steps each; with lin_ the rate reaches 0 at the end of
+    the budget, so the last update leaves the weights as they were."""
+    import dwr_gym
+    from dwr_gym.jax_env.gymnax import make_gymnax_env
+    from train.learning.jax_ppo import JaxPPO
+
+    env, env_params = make_gymnax_env(dwr_gym.ENV_ID, T_con=0.5)
+    settings = PPOSettings(n_envs=2, n_steps=16, batch_size=8, n_epochs=2, learning_rate=1e-2, linear_schedule=True)
+    ppo = JaxPPO(settings, env, env_params)
+    runner = ppo.init(seed=1)
+    after, transitions, totals = jax.jit(ppo.collect)(runner)
+    np.testing.assert_array_equal(transitions.obs[0], runner.obs)
+    mean, log_std, value = ppo.policy(runner.params, transitions.obs)
+    np.testing.assert_allclose(transitions.log_prob, gaussian_log_prob(transitions.action, mean, log_std), atol=1e-5)
+    np.testing.assert_allclose(transitions.value, value, atol=1e-6)
+    ended = np.asarray(transitions.terminated | transitions.truncated)
+    assert float(totals["episodes"]) == ended.sum() >= 2  # each robot truncated at 15 steps at the latest
+    assert float(totals["reward_sum"]) == pytest.approx(float(np.sum(transitions.reward)), rel=1e-5)
+    assert int(after.updates) == 0 and not np.array_equal(after.obs, runner.obs)
+
+    budget = 2 * settings.steps_per_update
+    first, metrics = ppo.run(runner, 1, total_timesteps=budget)
+    second, _ = ppo.run(first, 1, total_timesteps=budget)
+    changed = [not np.array_equal(a, b) for a, b in zip(jax.tree.leaves(runner.params), jax.tree.leaves(first.params),
+                                                         strict=True)]  # fmt: skip
+    assert all(changed)  # half the rate: every tensor moved
+    for a, b in zip(jax.tree.leaves(first.params), jax.tree.leaves(second.params), strict=True):
+        np.testing.assert_array_equal(a, b)  # the rate at the end of the budget is 0
+    assert int(second.updates) == 2 and int(second.opt_state[1].count) == 2 * 2 * 4
+    assert float(metrics["episodes"]) == float(totals["episodes"])  # the same first rollout, the same key
+
+
 def test_settings_read_the_yaml_and_refuse_what_they_do_not_implement() -> None:
     config = resolved()
     settings = PPOSettings.from_algo_kwargs(config.algo_kwargs, 256)
