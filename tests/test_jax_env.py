@@ -144,3 +144,40 @@ def test_bad_input_is_a_one_line_error_naming_the_parameter(kwargs: dict, messag
     with pytest.raises(ValueError) as error:
         functional_params(**kwargs)
     assert message in str(error.value) and "\n" not in str(error.value)
+
+
+def test_what_the_jax_envs_cannot_do_is_a_one_line_error_naming_it() -> None:
+    """Rendering, reset options (the JAX env draws its own starts), a bad robot count, params and keywords at once,
+    and parameters that are not EnvParams are refused in one line each, naming the argument."""
+    from dwr_gym.jax_env import FunctionalParams
+    from dwr_gym.jax_env.wrappers import DWRJaxEnv, DWRJaxVectorEnv
+
+    cases = [
+        (lambda: DWRJaxEnv(render_mode="human"), "render_mode='human' is invalid for the JAX env: expected None"),
+        (lambda: DWRJaxEnv().reset(options={"start": [1.0, 0.0, 0.0]}), "reset options ['start'] are invalid"),
+        (lambda: DWRJaxVectorEnv(2).reset(options={"T_con": 3.0}), "reset options ['T_con'] are invalid"),
+        (lambda: DWRJaxVectorEnv(num_envs=0), "num_envs=0 is invalid"),
+        (lambda: DWRFuncEnv(params=functional_params(), u_max=0.2), "env_kwargs=['u_max'] are invalid with params"),
+        (lambda: FunctionalParams.from_env_params({"u_max": 0.2}), "is invalid: expected a dwr_gym.params.EnvParams"),
+        (lambda: functional_params(disturbance_distribution=dwr_gym.randomization.DisturbanceDistribution(seed=1)),
+         "disturbance_distribution=DisturbanceDistribution("),
+    ]
+    for make, message in cases:
+        with pytest.raises(ValueError) as error:
+            make()
+        assert message in str(error.value) and "\n" not in str(error.value), str(error.value)
+
+
+def test_the_functional_params_are_the_envs_in_the_dtype_asked_for() -> None:
+    """A numpy dtype type is read as its name; a fixed T_con is the interval (T_con, T_con); no heading tolerance
+    is an infinite one; the spaces and the horizon are the numpy env's."""
+    params = functional_params(dwr_gym.ENV_ID, dtype=np.float32, T_con=7.0)
+    numpy_env = gym.make(dwr_gym.ENV_ID, T_con=7.0).unwrapped
+    assert params.dtype == "float32" and params.T_con_range == (7.0, 7.0) and params.T_con == 7.0
+    assert params.heading_tolerance == float("inf") and params.max_episode_steps == numpy_env.params.max_episode_steps
+    assert DWRFuncEnv(dwr_gym.ENV_ID, T_con=7.0).observation_space == numpy_env.observation_space
+    with jax.enable_x64(True):
+        space = DWRFuncEnv(dwr_gym.ENV_ID, dtype="float64", T_con=7.0).observation_space
+        assert space.dtype == np.float64
+        np.testing.assert_array_equal(space.high, numpy_env.observation_space.high.astype(np.float64))
+    assert functional_params(dwr_gym.ENV_ID, heading_tolerance=0.2).heading_tolerance == 0.2
