@@ -48,7 +48,7 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
               ["tests/test_model.py", "tests/test_paper_by_hand.py", "tests/test_golden.py", "tests/test_env.py"]),
     "core": (["dwr_gym/core.py", "dwr_gym/state.py", "dwr_gym/observation.py"],
              ["tests/test_env.py", "tests/test_vector_env.py", "tests/test_golden.py", "tests/test_paper_by_hand.py",
-              "tests/test_prescribed_time.py", "tests/test_goal_env.py", "tests/test_jax_equivalence.py"]),
+              "tests/test_prescribed_time.py", "tests/test_goal_env.py"]),
     "disturbances": (["dwr_gym/disturbances.py"],
                      ["tests/test_robustness.py", "tests/test_paper_by_hand.py"]),
     "randomization": (["dwr_gym/randomization.py"], ["tests/test_randomization.py"]),
