@@ -89,8 +89,10 @@ def test_the_seed_shipped_is_the_one_most_in_time_then_the_most_frugal() -> None
 
 def test_the_aggregate_is_per_entry_over_its_own_seeds() -> None:
     results = [result("a", 1, 0.2, 1.5), result("b", 0, 1.0, 1.2), result("a", 0, 0.4, 2.5), result("a", 2, 0.9, 9.0)]
+    results[1]["learned_from"] = "demonstrations"
     summary = aggregate(results)
     assert list(summary) == ["a", "b"] and summary["a"]["seeds"] == [0, 1, 2]
+    assert summary["b"]["learned_from"] == "demonstrations" and summary["a"]["learned_from"] == "reward"
     assert summary["a"]["per_seed"]["random"]["in_time"] == [0.4, 0.2, 0.9]  # in the order of the seeds
     assert summary["a"]["sets"]["random"]["in_time"]["iqm"] == pytest.approx(0.5)  # 3 seeds: int(0.75) = 0 cut
     assert summary["b"]["sets"]["random"]["energy_ratio"]["iqm"] == pytest.approx(1.2)
@@ -246,11 +248,30 @@ def test_no_seeds_nothing_finite_and_a_missing_rliable_are_said_plainly(monkeypa
 
 def test_the_learning_curves_figure_draws_each_entry_and_its_band(tmp_path: Path) -> None:
     pytest.importorskip("matplotlib")
+    from matplotlib import image as mpimg
+
     from train.reporting.rl_benchmark import plot_curves
 
     curve = [{"env_steps": 0.0, "wall_time": 0.0, "in_time": 0.0, "energy": 9.0, "final_heading": 1.0},
              {"env_steps": 100.0, "wall_time": 5.0, "in_time": 0.5, "energy": 3.0, "final_heading": 0.5}]  # fmt: skip
     results = [{**result("a", s, 0.5, 1.2), "curve": curve} for s in (0, 1)] + [result("empty", 0, 0.1, None)]
-    path = tmp_path / "figures" / "curves.png"
-    plot_curves(aggregate(results), path, "env_steps")
-    assert path.is_file() and path.stat().st_size > 1000
+    summary = aggregate(results)
+    for x in ("env_steps", "wall_time"):  # both figures into one folder, as dwr-gym benchmark writes them
+        path = tmp_path / "figures" / f"curves_{x}.png"
+        plot_curves(summary, path, x)
+        image = mpimg.imread(path)
+        assert image.shape[:2] == (324, 900)  # 10 x 3.6 inches at 90 dpi: the docs' width
+        assert len(np.unique(image.reshape(-1, image.shape[2]), axis=0)) > 20  # lines and a translucent band
+
+
+def test_the_table_shows_every_entry_evaluated_on_the_set_asked_for() -> None:
+    """An entry without the set (say, evaluated on the nominal set only) is left out of that set's table, not the
+    entries after it."""
+    from train.reporting.rl_benchmark import table
+
+    disturbed = {**result("b", 0, 0.5, 1.5), "sets": {"delay": result("b", 0, 0.5, 1.5)["sets"]["random"]}}
+    summary = aggregate([result("a", 0, 0.9, 1.2), disturbed, result("c", 0, 0.7, 1.4)])
+    rows = table(summary, set_name="delay").splitlines()
+    assert [row.split(" | ")[0] for row in rows[2:]] == ["| b"]
+    rows = table(summary).splitlines()
+    assert [row.split(" | ")[0] for row in rows[2:]] == ["| a", "| c"]
