@@ -324,9 +324,9 @@ def test_e_over_opt_of_a_dataset_is_over_its_episodes_in_time_only(monkeypatch: 
     assert build.statistics(episodes)["energy_ratio_mean"] == 3.0
 
 
-@pytest.mark.parametrize("policy", ["random", "pt-astolfi"])
+@pytest.mark.parametrize("policy", ["random", "pt-astolfi", "object"])
 def test_make_dataset_writes_the_episodes_of_a_controller_or_random_actions_named(
-    policy: str, monkeypatch: pytest.MonkeyPatch
+    policy: str, monkeypatch: pytest.MonkeyPatch, tmp_path: Path
 ) -> None:
     """``make_dataset`` with a name: the episodes of that controller, scaled to the env's own limits (a slower robot
     here), or of random actions drawn from the dataset's seed; the same as collecting them directly."""
@@ -334,13 +334,17 @@ def test_make_dataset_writes_the_episodes_of_a_controller_or_random_actions_name
     from train.datasets import build, make_dataset
 
     monkeypatch.setattr(build, "reference_scores", lambda *args, **kwargs: (-100.0, 12.0))
-    summary = make_dataset(f"dwr-gym/{policy}-v0", policy=policy, episodes=3, env_kwargs={"u_max": 0.3}, seed=4,
+    monkeypatch.setenv("MINARI_DATASETS_PATH", str(tmp_path / "new" / "folders"))  # made as needed
+    given = ExpertPolicy(make_controller("ptc"), 0.3, 2.0) if policy == "object" else policy  # or any predict()
+    summary = make_dataset(f"dwr-gym/{policy}-v0", policy=given, episodes=3, env_kwargs={"u_max": 0.3}, seed=4,
                            num_envs=2, optimum=False)  # fmt: skip
     kwargs = {**env_keywords(V1), "u_max": 0.3}
-    acting = RandomPolicy(4) if policy == "random" else ExpertPolicy(make_controller(policy), 0.3, 2.0)
+    name = "ExpertPolicy" if policy == "object" else policy
+    acting = (RandomPolicy(4) if policy == "random" else
+              ExpertPolicy(make_controller("ptc" if policy == "object" else policy), 0.3, 2.0))  # fmt: skip
     expected = collect(acting, kwargs, 3, seed=4, num_envs=2)
     dataset = load_dataset(f"dwr-gym/{policy}-v0")
-    assert summary["policy"] == policy and dataset.storage.metadata["algorithm_name"] == policy
+    assert summary["policy"] == name and dataset.storage.metadata["algorithm_name"] == name
     assert dataset.spec.env_spec.kwargs["u_max"] == 0.3
     for k, episode in enumerate(dataset.iterate_episodes()):
         np.testing.assert_array_equal(episode.actions, expected.actions[k])
