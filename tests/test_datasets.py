@@ -121,8 +121,11 @@ def written(dataset_id: str = "dwr-gym/test-v0", episodes: int = 5, **kwargs: ob
 
 
 def test_loading_round_trips_the_same_arrays_and_metadata() -> None:
+    from minari.namespace import list_local_namespaces
+
     data, dataset = written()
     assert dataset.total_episodes == 5 and dataset.total_steps == data.steps
+    assert list_local_namespaces() == ["dwr-gym"]  # the id's namespace, made for it
     for k, episode in enumerate(dataset.iterate_episodes()):
         np.testing.assert_array_equal(episode.observations, data.observations[k])
         np.testing.assert_array_equal(episode.actions, data.actions[k])

@@ -141,10 +141,16 @@ def test_two_seeds_of_one_entry_train_in_their_own_runs_and_their_curves_are_the
     import train.learning.benchmark as benchmark
     from train.learning.agents import load_agent
 
-    monkeypatch.setattr(benchmark, "evaluate_policy", lambda policy, **kwargs: {"random": {"in_time": 0.0}})
+    asked: list[dict[str, Any]] = []
+    monkeypatch.setattr(benchmark, "evaluate_policy",
+                        lambda policy, **kwargs: asked.append(kwargs) or {"random": {"in_time": 0.0}})  # fmt: skip
     n = 3
     results = run_benchmark([parse_entry(TINY)], [0, 1], tmp_path, {"env_steps": 128, "eval_freq": 128,
-                                                                     "eval_episodes": n})  # fmt: skip
+                                                                     "eval_episodes": n, "disturbed_episodes": 2,
+                                                                     "optimum_episodes": 1})  # fmt: skip
+    assert [(a["n"], a["n_disturbed"], a["n_optimum"]) for a in asked] == [(3, 2, 1)] * 2  # the budget's sizes
+    assert [r["env_steps"] for r in results] == [128, 128]
+    assert all(isinstance(r["seconds"], float) and r["seconds"] > 0 for r in results)
     run_dirs = [Path(r["config"]["run_dir"]) for r in results]
     assert run_dirs[0] != run_dirs[1] and all(d.parent == tmp_path / "runs" for d in run_dirs)
     for r, run_dir in zip(results, run_dirs, strict=True):
@@ -175,8 +181,12 @@ def test_a_users_entry_makes_each_seed_in_its_own_directory(tmp_path: Path, monk
                                                  f"energy_mean\n{10 * seed},1.5,0.5,0.25,{seed}.0\n")  # fmt: skip
         return ExpertPolicy(make_controller("ptc"), 0.5, 2.0)
 
-    monkeypatch.setattr(benchmark, "evaluate_policy", lambda policy, **kwargs: {"random": {"in_time": 1.0}})
+    asked: list[dict[str, Any]] = []
+    monkeypatch.setattr(benchmark, "evaluate_policy",
+                        lambda policy, **kwargs: asked.append(kwargs) or {"random": {"in_time": 1.0}})  # fmt: skip
     results = run_benchmark([Entry("mine", make=make)], [3, 4], tmp_path, {})
+    assert [(a["n"], a["n_disturbed"], a["n_optimum"]) for a in asked] == [(1000, 200, 50)] * 2  # the defaults
+    assert [r["env_steps"] for r in results] == [None, None]  # a user's entry reports no env steps
     assert [seed for seed, _ in made] == [3, 4] and made[0][1] != made[1][1]
     assert [r["curve"][0]["energy"] for r in results] == [3.0, 4.0]
     assert [r["curve"][0]["env_steps"] for r in results] == [30, 40]
