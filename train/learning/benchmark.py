@@ -21,7 +21,9 @@ from typing import Any
 from train.env_ids import TASK_ENV_ID
 from train.evaluation.benchmark import DISTURBED_EPISODES, EVAL_EPISODES, EVAL_SEED, OPTIMUM_EPISODES, evaluate_policy
 from train.learning.config import ConfigError, TrainConfig
+from train.learning.hyperparams import HYPERPARAMS_DIR
 
+V2 = "DWRPointStabilization-v2"
 #: The shipped entries: the options of ``dwr-gym train`` each one trains with (on top of train/hyperparams/).
 ENTRIES: dict[str, dict[str, Any]] = {
     "ppo": {"algo": "ppo"},
@@ -43,6 +45,14 @@ ENTRIES: dict[str, dict[str, Any]] = {
     "sac-sbx": {"algo": "sac", "backend": "sbx"},
     "tqc-sbx": {"algo": "tqc", "backend": "sbx"},
     "crossq-sbx": {"algo": "crossq", "backend": "sbx"},
+    # the task held to T_con (issue 40): gamma 1 (the v2 sections of train/hyperparams/), the jitted PPO with its
+    # exploration noise on a fixed schedule, the off-policy learners of sbx
+    "ppo-jax-v2": {"algo": "ppo", "backend": "jax", "env_id": V2},
+    "ppo-jax-fixed-noise-v2": {"algo": "ppo", "backend": "jax", "env_id": V2,
+                               "hyperparams": str(HYPERPARAMS_DIR / "ppo_jax_v2.yml")},
+    "sac-sbx-v2": {"algo": "sac", "backend": "sbx", "env_id": V2},
+    "tqc-sbx-v2": {"algo": "tqc", "backend": "sbx", "env_id": V2},
+    "crossq-sbx-v2": {"algo": "crossq", "backend": "sbx", "env_id": V2},
 }
 RESULTS_DIR, RUNS_DIR = "results", "runs"
 
