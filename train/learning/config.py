@@ -14,9 +14,10 @@ from typing import Any
 from dwr_gym.validation import as_bool, as_choice, as_float, as_int
 from train.env_ids import ENV_HELP, TASK_ENV_ID, UNRECORDED_ENV_ID, check_env_id, env_keywords
 
-ALGORITHMS: tuple[str, ...] = ("ppo", "sac", "td3", "tqc", "crossq")
+ALGORITHMS: tuple[str, ...] = ("ppo", "sac", "td3", "tqc", "crossq", "es")
 BACKENDS: tuple[str, ...] = ("sb3", "jax")
-"""Training libraries: stable-baselines3 on torch, or the jitted PPO on the JAX functional env (PPO only).
+"""Training libraries: stable-baselines3 on torch, or the jitted trainers on the JAX functional env (PPO, and ES,
+which only it trains).
 Both write the same run directory, whose model.zip loads as a stable-baselines3 model."""
 LEARNED_FROM: tuple[str, ...] = ("reward", "expert", "expert, then reward")
 """What an agent learned from, as its config.yaml records it (``learned_from``): the env's reward (RL, residual
@@ -45,7 +46,8 @@ def option(default: Any, help: str, **kwargs: Any) -> Any:
 class TrainConfig:
     """Everything a training run needs; written beside the model as config.yaml so it can be re-run exactly."""
 
-    algo: str = option("ppo", "algorithm: ppo, sac, td3, tqc or crossq (the last two from sb3-contrib)")
+    algo: str = option("ppo", "algorithm: ppo, sac, td3, tqc, crossq (these two from sb3-contrib) or es (evolution "
+                       "strategies, --backend jax)")
     backend: str = option("sb3", "training library: sb3 (stable-baselines3 on torch) or jax (jitted PPO, extra 'jax')")
     threads: int | None = option(
         None,
@@ -127,6 +129,9 @@ class TrainConfig:
             raise ConfigError(f"--hyperparams {self.hyperparams!r} is invalid: no such file")
         if self.init_from is not None and not Path(self.init_from).exists():
             raise ConfigError(f"--init-from {self.init_from!r} is invalid: no such run directory or model file")
+        if self.algo == "es" and self.backend != "jax":
+            raise ConfigError("--algo es is invalid with --backend sb3: evolution strategies train on the JAX env; "
+                              "add --backend jax")
         if self.init_from is not None and self.backend != "sb3":
             raise ConfigError("--init-from is implemented by --backend sb3 only")
         if self.critic_warmup and (self.init_from is None or self.algo != "ppo"):

@@ -37,7 +37,8 @@ def default_hyperparams(algo: str, residual: bool, env_id: str) -> dict[str, Any
 def default_budget(algo: str, residual: bool, env_id: str) -> tuple[int, int]:
     """(n_envs, n_timesteps) of the shipped YAML: the defaults of --num-envs and --total-timesteps."""
     section = load_zoo_yaml(str(hyperparams_file(algo, residual)), env_id)
-    return int(section["n_envs"]), int(float(section["n_timesteps"]))
+    # (ES has no n_envs: its robots are population_size x episodes of its own keys)
+    return int(section.get("n_envs", 1)), int(float(section["n_timesteps"]))
 
 
 def fill_budget(config: TrainConfig) -> TrainConfig:
@@ -205,7 +206,7 @@ def _check_policy_kwargs(value: Any) -> dict[str, Any]:
 
 
 def algorithm_class(algo: str) -> Any:
-    """The stable-baselines3 class of ``algo``."""
+    """The stable-baselines3 class of ``algo`` (ES: PPO, whose MlpPolicy its evolved actor is exported as)."""
     import stable_baselines3
 
     if algo in ("tqc", "crossq"):
@@ -214,7 +215,8 @@ def algorithm_class(algo: str) -> Any:
         except ImportError as error:
             raise ConfigError(f'--algo {algo} needs sb3-contrib: pip install "dwr-gym[train]"') from error
         return {"tqc": sb3_contrib.TQC, "crossq": sb3_contrib.CrossQ}[algo]
-    return {"ppo": stable_baselines3.PPO, "sac": stable_baselines3.SAC, "td3": stable_baselines3.TD3}[algo]
+    return {"ppo": stable_baselines3.PPO, "es": stable_baselines3.PPO, "sac": stable_baselines3.SAC,
+            "td3": stable_baselines3.TD3}[algo]
 
 
 _ALIASES = {"lr": "learning_rate", "learning-rate": "learning_rate", "batch": "batch_size", "epochs": "n_epochs",
@@ -224,6 +226,12 @@ _ALIASES = {"lr": "learning_rate", "learning-rate": "learning_rate", "batch": "b
 
 def check_algo_kwargs(algo: str, params: dict[str, Any]) -> dict[str, Any]:
     """The hyperparameters coerced to their types; unknown or ill-typed ones raise ConfigError before any work."""
+    if algo == "es":
+        from train.learning.es_settings import check_es_kwargs
+
+        if "policy_kwargs" in params:
+            params = {**params, "policy_kwargs": _check_policy_kwargs(params["policy_kwargs"] or {})}
+        return check_es_kwargs(params)
     accepted = set(inspect.signature(algorithm_class(algo).__init__).parameters) - {"self", "env", "device", "seed"}
     accepted |= {"action_noise_sigma"} | ({"log_std_final"} if algo == "ppo" else set())
     unknown = sorted(set(params) - accepted)
