@@ -24,7 +24,7 @@ import jax
 import jax.numpy as jnp
 import optax
 from evosax.core.optimizer import clipup
-from jax.sharding import PartitionSpec
+from jax.sharding import NamedSharding, PartitionSpec
 
 from train.learning.es_settings import STRATEGIES, ESSettings
 from train.learning.jax_policy import make_network
@@ -106,8 +106,11 @@ class JaxES:
         shapes = jax.eval_shape(self.network.init, jax.random.PRNGKey(0), jnp.zeros((self.obs_dim,), jnp.float32))
         solution = jax.tree.map(lambda s: jnp.zeros(s.shape, s.dtype), self.actor(shapes))
         self.strategy, self.strategy_params = make_strategy(settings, solution)
-        # the state stays on the first device between generations (else the second compiles again for a mesh)
-        self.generation = jax.jit(self._generation, out_shardings=jax.sharding.SingleDeviceSharding(jax.devices()[0]))
+        self.mesh = jax.make_mesh((self.devices,), ("c",), (jax.sharding.AxisType.Auto,),
+                                  devices=jax.devices()[: self.devices])  # fmt: skip
+        # the state is replicated on the mesh before and after a generation (else the second compiles again)
+        self.replicated = NamedSharding(self.mesh, PartitionSpec())
+        self.generation = jax.jit(self._generation, out_shardings=self.replicated)
 
     def actor(self, params: Any) -> dict[str, Any]:
         """The layers of ``params`` (the whole network's) that the ES evolves: the hidden layers and the mean head."""
@@ -115,7 +118,7 @@ class JaxES:
 
     def init(self, seed: int) -> Any:
         """A fresh state: the network initialised from ``seed`` as the jitted PPO's, the search centred on it."""
-        return jax.jit(self._init)(jax.random.PRNGKey(seed))
+        return jax.jit(self._init, out_shardings=self.replicated)(jax.random.PRNGKey(seed))
 
     def _init(self, rng: Any) -> Any:
         rng, key_net, key_strategy, key_obs = jax.random.split(rng, 4)
@@ -176,8 +179,7 @@ class JaxES:
 
         if self.devices == 1:
             return shard(population)
-        mesh = jax.make_mesh((self.devices,), ("c",), (jax.sharding.AxisType.Auto,), devices=jax.devices()[: self.devices])
-        split = jax.shard_map(shard, mesh=mesh, in_specs=PartitionSpec("c"),
+        split = jax.shard_map(shard, mesh=self.mesh, in_specs=PartitionSpec("c"),
                               out_specs=(PartitionSpec("c"), PartitionSpec(), PartitionSpec()), check_vma=False)  # fmt: skip
         return split(population)
 
