@@ -25,6 +25,7 @@ from train.learning.config import ConfigError, TrainConfig
 ENTRIES: dict[str, dict[str, Any]] = {
     "ppo": {"algo": "ppo"},
     "ppo-jax": {"algo": "ppo", "backend": "jax"},
+    "es": {"algo": "es", "backend": "jax"},  # evolution strategies on the JAX env (train/hyperparams/es.yml)
     "sac": {"algo": "sac"},
     "td3": {"algo": "td3"},
     "tqc": {"algo": "tqc"},
@@ -169,7 +170,7 @@ def run_one(entry: Entry, seed: int, out: Path, budget: dict[str, Any], progress
             config.overwrite = True
         if not (state.is_file() and json.loads(state.read_text()).get("finished")):
             trainer = train
-            if config.backend == "jax":  # the jitted PPO (train.learning.jax_training), where it is installed
+            if config.backend == "jax":  # the jitted PPO or ES (train.learning.jax_training), where it is installed
                 try:
                     from train.learning.jax_training import train_jax as trainer
                 except ImportError as error:
