@@ -7,10 +7,10 @@ mean *deterministic* return (the policy's mean action, clipped: no action noise,
 and the strategy's ``tell`` moves the search distribution by the centered ranks of the fitnesses (a NaN return, a
 diverged candidate, ranks last). The episodes are stepped under ``vmap`` over candidates and episodes, in
 ``lax.scan`` chunks of steps inside a ``lax.while_loop`` that stops when every episode has ended; the candidates are
-split across the host's XLA devices with ``shard_map`` (one device per core: :func:`force_host_devices`).
+split across the host's XLA devices with ``shard_map`` (one device per core: :func:`train.learning.es_training.force_host_devices`).
 
 The policy is the actor of the jitted PPO's network (:func:`train.learning.jax_policy.make_network`): only its
-layers ``policy_<i>`` and ``action`` evolve; :meth:`JaxES.export_params` puts the mean into the whole network so
+layers ``policy_<i>`` and ``action`` evolve; :meth:`JaxES.mean_params` puts the mean into the whole network so
 :class:`train.learning.jax_export.SB3Exporter` writes it as an SB3 PPO model like any other agent.
 """
 
