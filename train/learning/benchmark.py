@@ -25,7 +25,9 @@ from train.learning.config import ConfigError, TrainConfig
 ENTRIES: dict[str, dict[str, Any]] = {
     "ppo": {"algo": "ppo"},
     "ppo-jax": {"algo": "ppo", "backend": "jax"},
-    "es": {"algo": "es", "backend": "jax"},  # evolution strategies on the JAX env (train/hyperparams/es.yml)
+    # evolution strategies on the JAX env (train/hyperparams/es.yml): a generation is some 500,000 env steps, so
+    # its curve is evaluated every 5 M of them rather than at the benchmark's --eval-freq
+    "es": {"algo": "es", "backend": "jax", "eval_freq": 5_000_000, "checkpoint_freq": 5_000_000},
     "sac": {"algo": "sac"},
     "td3": {"algo": "td3"},
     "tqc": {"algo": "tqc"},
