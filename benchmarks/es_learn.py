@@ -1,11 +1,12 @@
 """What `dwr-gym train --algo es --backend jax` learns on DWRPointStabilization-v1 within a wall-clock budget (issue 41).
 
     nice -n 5 python benchmarks/es_learn.py --seeds 0 --time-limit 900 --docs     # docs/jax/es_learn.json
-    nice -n 5 python benchmarks/es_learn.py --seeds 0 --time-limit 900 --hyperparams sigma=0.1 --docs
+    nice -n 5 python benchmarks/es_learn.py --name es-arena50 --seeds 0 --time-limit 900 --env-kwargs arena_radius=50 --docs
     python benchmarks/es_learn.py --render                                        # docs/evolution.md's block
 
 Each seed trains in ``<out>/<name>-seed<k>`` with the shipped settings (train/hyperparams/es.yml) and the overrides
-given, for ``--time-limit`` seconds (compilation included) or ``--env-steps``, evaluated every ``--eval-freq`` env
+given (and the training env's keywords ``--env-kwargs``; the evaluation is on v1 as registered), for
+``--time-limit`` seconds (compilation included) or ``--env-steps``, evaluated every ``--eval-freq`` env
 steps on `dwr-gym train`'s fixed set (100 starts of v1, seed 12345); then its last model (model.zip) is evaluated
 as `dwr-gym benchmark` evaluates an agent: issue 32's metrics on the benchmark's nominal set (``--n`` starts of v1,
 seed 3232; E/opt on its first 50 episodes, the optimum cached) and at each fixed T_con of 10, 20, 40 and 60 s. The
@@ -31,7 +32,8 @@ T_CONS = (10.0, 20.0, 40.0, 60.0)
 CRITERIA = {"in_time": 0.99, "energy_ratio": 1.5, "final_heading": 0.1}
 
 
-def train_seed(name: str, seed: int, out: Path, overrides: dict[str, Any], args: argparse.Namespace) -> Path:
+def train_seed(name: str, seed: int, out: Path, overrides: dict[str, Any], env_kwargs: dict[str, Any],
+               args: argparse.Namespace) -> Path:  # fmt: skip
     from train.learning.config import TrainConfig
     from train.learning.hyperparams import resolve_hyperparams
     from train.learning.jax_training import train_jax
@@ -42,7 +44,7 @@ def train_seed(name: str, seed: int, out: Path, overrides: dict[str, Any], args:
         return run_dir
     config = TrainConfig(algo="es", backend="jax", seed=seed, run_dir=str(run_dir), progress=False, overwrite=True,
                          eval_freq=args.eval_freq, checkpoint_freq=args.eval_freq, time_limit=args.time_limit,
-                         hyperparam_overrides=overrides)  # fmt: skip
+                         hyperparam_overrides=overrides, env_kwargs=env_kwargs)  # fmt: skip
     if args.env_steps:
         config.total_timesteps = args.env_steps
     config.validate()
@@ -132,25 +134,30 @@ def main() -> None:
     parser.add_argument("--env-steps", type=int, help="env steps per seed (default: es.yml's n_timesteps)")
     parser.add_argument("--eval-freq", type=int, default=5_000_000, help="env steps between evaluations (5000000)")
     parser.add_argument("--hyperparams", nargs="*", default=[], metavar="KEY=VALUE", help="ES overrides")
+    parser.add_argument("--env-kwargs", nargs="*", default=[], metavar="KEY=VALUE", help="training env keywords")
     parser.add_argument("--n", type=int, default=200, help="evaluation starts (default: 200)")
     parser.add_argument("--out", default="results/es", help="run directories (default: results/es)")
     parser.add_argument("--docs", action="store_true", help="add to docs/jax/es_learn.json, render the docs block")
     parser.add_argument("--render", action="store_true", help="only render docs/evolution.md's block from the JSON")
     args = parser.parse_args()
     if not args.render:
+        from train.commands.shared import parse_env_kwargs
         from train.learning.hyperparams import parse_overrides
 
-        overrides = parse_overrides(args.hyperparams)
+        overrides, env_kwargs = parse_overrides(args.hyperparams), parse_env_kwargs(args.env_kwargs)
         path = OUT / "es_learn.json"
         data = json.loads(path.read_text()) if path.is_file() else {"runs": {}}
         data.update({"machine": f"{platform.machine()}, {os.cpu_count()} cores", "n": args.n})
         for seed in args.seeds:
-            run_dir = train_seed(args.name, seed, Path(args.out), overrides, args)
-            data["runs"][f"{args.name}-seed{seed}"] = {"overrides": args.hyperparams, **evaluate_seed(run_dir, args.n)}
+            run_dir = train_seed(args.name, seed, Path(args.out), overrides, env_kwargs, args)
+            data["runs"][f"{args.name}-seed{seed}"] = {"overrides": args.hyperparams, "env_kwargs": args.env_kwargs,
+                                                       **evaluate_seed(run_dir, args.n)}  # fmt: skip
             data["load_average_1min_at_end"] = round(os.getloadavg()[0], 2)
             print("\n".join(render(data)))
-            if args.docs:
+            if args.docs:  # read again: another call may have added its runs meanwhile
                 OUT.mkdir(parents=True, exist_ok=True)
+                saved = json.loads(path.read_text()) if path.is_file() else {"runs": {}}
+                data["runs"] = {**saved["runs"], **data["runs"]}
                 path.write_text(json.dumps(data, indent=1) + "\n")
     if args.docs or args.render:
         write_docs()
