@@ -76,6 +76,9 @@ class ESTrainer:
 
     def advance(self, state: Any, steps: int, target: int, stop: Callable[[], bool]) -> tuple[Any, int]:
         """Generations until ``target`` env steps (or ``stop()``); at least one."""
+        import jax
+
+        state = jax.device_put(state, self.es.replicated)  # (a state read from a file is on one device)
         while True:
             state, metrics = self.es.generation(state)
             steps += int(metrics["steps"])
