@@ -28,6 +28,14 @@ V2 = "DWRPointStabilization-v2"
 ENTRIES: dict[str, dict[str, Any]] = {
     "ppo": {"algo": "ppo"},
     "ppo-jax": {"algo": "ppo", "backend": "jax"},
+    # evolution strategies on the JAX env (train/hyperparams/es.yml): a generation is some 500,000 env steps, so
+    # its curve is evaluated every 5 M of them rather than at the benchmark's --eval-freq
+    "es": {"algo": "es", "backend": "jax", "eval_freq": 5_000_000, "checkpoint_freq": 5_000_000},
+    # the same on v1 with an arena of 50 m: leaving v1's 5 m arena ends an episode at a cost (-10 + the start's
+    # potential) that a policy which cannot yet arrive prefers to the late penalty, a trap ES falls into
+    # (docs/evolution.md); the evaluation is on v1 as registered
+    "es-arena50": {"algo": "es", "backend": "jax", "eval_freq": 5_000_000, "checkpoint_freq": 5_000_000,
+                   "env_kwargs": {"arena_radius": 50.0}},
     "sac": {"algo": "sac"},
     "td3": {"algo": "td3"},
     "tqc": {"algo": "tqc"},
@@ -191,7 +199,7 @@ def run_one(entry: Entry, seed: int, out: Path, budget: dict[str, Any], progress
             config.overwrite = True
         if not (state.is_file() and json.loads(state.read_text()).get("finished")):
             trainer = train
-            if config.backend == "jax":  # the jitted PPO (train.learning.jax_training), where it is installed
+            if config.backend == "jax":  # the jitted PPO or ES (train.learning.jax_training), where it is installed
                 try:
                     from train.learning.jax_training import train_jax as trainer
                 except ImportError as error:

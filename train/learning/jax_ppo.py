@@ -47,7 +47,10 @@ class ObservationStatistics(flax.struct.PyTreeNode):
         return cls(jnp.zeros(size), jnp.ones(size), jnp.asarray(1e-4))
 
     def update(self, batch: Any) -> ObservationStatistics:
-        batch_mean, batch_var, batch_count = jnp.mean(batch, axis=0), jnp.var(batch, axis=0), batch.shape[0]
+        return self.update_moments(jnp.mean(batch, axis=0), jnp.var(batch, axis=0), batch.shape[0])
+
+    def update_moments(self, batch_mean: Any, batch_var: Any, batch_count: Any) -> ObservationStatistics:
+        """The statistics after a batch of ``batch_count`` observations of this mean and variance."""
         delta, total = batch_mean - self.mean, self.count + batch_count
         m2 = self.var * self.count + batch_var * batch_count + delta**2 * self.count * batch_count / total
         return ObservationStatistics(self.mean + delta * batch_count / total, m2 / total, total)
