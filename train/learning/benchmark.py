@@ -36,6 +36,7 @@ ENTRIES: dict[str, dict[str, Any]] = {
     # (docs/evolution.md); the evaluation is on v1 as registered
     "es-arena50": {"algo": "es", "backend": "jax", "eval_freq": 5_000_000, "checkpoint_freq": 5_000_000,
                    "env_kwargs": {"arena_radius": 50.0}},
+    "es-v2": {"algo": "es", "backend": "jax", "env_id": V2, "eval_freq": 5_000_000, "checkpoint_freq": 5_000_000},
     "sac": {"algo": "sac"},
     "td3": {"algo": "td3"},
     "tqc": {"algo": "tqc"},
