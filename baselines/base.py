@@ -60,16 +60,30 @@ class ControllerParams:
         return cls(**kwargs)
 
 
+def array_namespace(*values: Any) -> Any:
+    """numpy for numpy arrays and Python floats, ``jax.numpy`` for jax arrays (traced or not): the namespace the
+    stateless laws compute in (:func:`dwr_gym.model.namespace`), so one copy of each law runs in numpy and in jitted
+    JAX code (``jax.jit``, ``lax.scan``; the residual agents of ``dwr-gym train --backend jax``)."""
+    xp = model.namespace(*values)
+    return xp if model.is_traceable(xp) else np
+
+
 class Controller:
-    """A batched feedback law (u, omega) = law(input)."""
+    """A batched feedback law (u, omega) = law(input).
+
+    ``traceable``: the law is a pure function of its input, written on :func:`array_namespace`, so it also runs on
+    jax arrays inside ``jax.jit``; laws with state (an integral, a plan) are not.
+    """
 
     name: ClassVar[str] = "controller"
+    traceable: ClassVar[bool] = False
     params: ControllerParams
 
     def __call__(self, inputs: ControllerInput) -> tuple[FloatArray, FloatArray]:
         u, omega = self.compute(inputs)
+        xp = array_namespace(u, omega)
         # Guard: no NaN or inf may leave a controller, whatever the state.
-        return np.nan_to_num(u, nan=0.0, posinf=0.0, neginf=0.0), np.nan_to_num(omega, nan=0.0, posinf=0.0, neginf=0.0)
+        return xp.nan_to_num(u, nan=0.0, posinf=0.0, neginf=0.0), xp.nan_to_num(omega, nan=0.0, posinf=0.0, neginf=0.0)
 
     def compute(self, inputs: ControllerInput) -> tuple[FloatArray, FloatArray]:
         """The law itself; subclasses implement it."""
@@ -88,6 +102,8 @@ def prescribed_time(inputs: ControllerInput, own: float) -> FloatArray | float:
 
 
 def signed_power(x: ArrayLike, exponent: float) -> FloatArray:
-    """|x|^exponent sign(x)."""
-    x = np.asarray(x, dtype=np.float64)
-    return np.sign(x) * np.abs(x) ** exponent
+    """|x|^exponent sign(x), in numpy (float64) or, for a jax array, in jax.numpy."""
+    xp = array_namespace(x)
+    if xp is np:
+        x = np.asarray(x, dtype=np.float64)
+    return xp.sign(x) * xp.abs(x) ** exponent  # type: ignore[no-any-return]

@@ -13,7 +13,15 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from baselines.base import K_MAX, Controller, ControllerInput, ControllerParams, prescribed_time, signed_power
+from baselines.base import (
+    K_MAX,
+    Controller,
+    ControllerInput,
+    ControllerParams,
+    array_namespace,
+    prescribed_time,
+    signed_power,
+)
 from dwr_gym import model
 from dwr_gym.model import FloatArray
 from dwr_gym.validation import as_float, as_int
@@ -93,6 +101,7 @@ class PTCController(Controller):
     """The paper's prescribed-time fractional-order law: u of eq. (16), omega of eqs. (18)-(19)."""
 
     name = "ptc"
+    traceable = True
 
     def __init__(self, params: PTCParams | None = None, **kwargs: Any) -> None:
         self.params: PTCParams = params if params is not None else PTCParams.from_kwargs(**kwargs)
@@ -117,7 +126,8 @@ class PTCController(Controller):
         omega = feedforward + p.K2 * p_star * mu * signed_power(orientation_err, 2.0 * p.beta - 1.0)  # eq. (18)
         # Guard: eqs. (5) and (18) are singular at d = 0; stop within stop_distance as the paper suggests.
         moving = d >= p.stop_distance
-        return np.where(moving, u, 0.0), np.where(moving, omega, 0.0)
+        xp = array_namespace(d)
+        return xp.where(moving, u, 0.0), xp.where(moving, omega, 0.0)
 
 
 @dataclass(frozen=True)
@@ -148,6 +158,7 @@ class ConventionalPTCController(Controller):
     """Conventional PTC: the structure of eqs. (16)-(18) with beta = 1 and the scaling of eqs. (12)-(13)."""
 
     name = "conventional-ptc"
+    traceable = True
 
     def __init__(self, params: ConventionalPTCParams | None = None, **kwargs: Any) -> None:
         self.params: ConventionalPTCParams = (
@@ -159,7 +170,7 @@ class ConventionalPTCController(Controller):
         p = self.params
         T_con = prescribed_time(inputs, p.T_con)
         mu = model.conventional_scaling_power(inputs.time, T_con, p.power, 0, max_gain=1e12)  # type: ignore[arg-type]
-        return np.minimum(mu / T_con, p.max_gain)
+        return array_namespace(mu).minimum(mu / T_con, p.max_gain)  # type: ignore[no-any-return]
 
     def compute(self, inputs: ControllerInput) -> tuple[FloatArray, FloatArray]:
         p = self.params
@@ -170,7 +181,8 @@ class ConventionalPTCController(Controller):
         feedforward, _ = feedforward_angular_velocity(inputs, u, p.k)
         omega = feedforward + p.K2 * p_star * mu * orientation_err
         moving = inputs.distance >= p.stop_distance  # Guard: as in PTCController.
-        return np.where(moving, u, 0.0), np.where(moving, omega, 0.0)
+        xp = array_namespace(inputs.distance)
+        return xp.where(moving, u, 0.0), xp.where(moving, omega, 0.0)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -268,6 +280,7 @@ class FixedTimeController(Controller):
     """
 
     name = "fixed-time"
+    traceable = True
 
     def __init__(self, params: FixedTimeParams | None = None, **kwargs: Any) -> None:
         self.params: FixedTimeParams = params if params is not None else FixedTimeParams.from_kwargs(**kwargs)
@@ -291,7 +304,8 @@ class FixedTimeController(Controller):
         feedback = p.k3 * signed_power(orientation_err, p.a) + p.k4 * signed_power(orientation_err, p.b)
         omega = feedforward + p_star * feedback
         moving = d >= p.stop_distance  # Guard: eqs. (5) and (18) are singular at d = 0.
-        return np.where(moving, u, 0.0), np.where(moving, omega, 0.0)
+        xp = array_namespace(d)
+        return xp.where(moving, u, 0.0), xp.where(moving, omega, 0.0)
 
 
 __all__ = [

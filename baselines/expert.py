@@ -8,25 +8,38 @@ import gymnasium as gym
 import numpy as np
 from numpy.typing import NDArray
 
-from baselines.base import Controller, ControllerInput
+from baselines.base import Controller, ControllerInput, array_namespace
 from dwr_gym.params import EnvParams, check_range
 
 
 def controller_input_from_observation(obs: NDArray[np.floating]) -> ControllerInput:
-    """Decode a batch of observations (N, 10) of DWRPointStabilization-v0 into controller inputs.
+    """Decode observations (..., 10) of DWRPointStabilization-v0 (a batch (N, 10)) into controller inputs.
 
-    The prescribed time T_con is read from the observation too, so one expert serves envs of any T_con.
+    The prescribed time T_con is read from the observation too, so one expert serves envs of any T_con. numpy
+    observations are read in float64; jax arrays (maybe traced) stay jax arrays of their own dtype.
     """
-    obs = np.asarray(obs, dtype=np.float64)
+    xp = array_namespace(obs)
+    if xp is np:
+        obs = np.asarray(obs, dtype=np.float64)
     return ControllerInput(
-        distance=obs[:, 0],
-        azimuth=np.arctan2(obs[:, 2], obs[:, 1]),
-        heading=np.arctan2(obs[:, 4], obs[:, 3]),
-        time=obs[:, 6] * obs[:, 7],
-        initial_distance=obs[:, 8],
-        initial_orientation_error=obs[:, 9],
-        prescribed_time=obs[:, 7],
+        distance=obs[..., 0],
+        azimuth=xp.arctan2(obs[..., 2], obs[..., 1]),
+        heading=xp.arctan2(obs[..., 4], obs[..., 3]),
+        time=obs[..., 6] * obs[..., 7],
+        initial_distance=obs[..., 8],
+        initial_orientation_error=obs[..., 9],
+        prescribed_time=obs[..., 7],
     )
+
+
+def normalized_action(controller: Controller, obs: Any, u_max: float, omega_max: float) -> Any:
+    """The controller's (u / u_max, omega / omega_max) from observations (..., 10), clipped to [-1, 1], shape
+    (..., 2), in the observations' array library: what :class:`ExpertPolicy` acts with (numpy, float64) and what
+    the residual agents of ``dwr-gym train --backend jax`` add their residual to, inside the compiled loop (jax;
+    ``controller.traceable`` laws only)."""
+    xp = array_namespace(obs)
+    u, omega = controller(controller_input_from_observation(obs))
+    return xp.clip(xp.stack([u / u_max, omega / omega_max], axis=-1), -1.0, 1.0)
 
 
 def env_params_of(env: Any) -> EnvParams:
@@ -89,9 +102,7 @@ class ExpertPolicy:
             raise ValueError(f"observation of shape {obs.shape} is invalid: expected (10,) or (N, 10)")
         if episode_start is not None:
             self.controller.reset(np.asarray(episode_start, dtype=bool).reshape(-1))
-        u, omega = self.commands(batch)
-        actions = np.stack([u / self.u_max, omega / self.omega_max], axis=1)
-        actions = np.clip(actions, -1.0, 1.0).astype(np.float32)
+        actions = normalized_action(self.controller, batch, self.u_max, self.omega_max).astype(np.float32)
         return (actions[0] if single else actions), state
 
     def __call__(self, observation: NDArray[np.floating]) -> NDArray[np.float32]:

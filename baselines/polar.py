@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from baselines.base import Controller, ControllerInput, ControllerParams, prescribed_time
+from baselines.base import Controller, ControllerInput, ControllerParams, array_namespace, prescribed_time
 from dwr_gym import model
 from dwr_gym.model import FloatArray
 from dwr_gym.validation import as_bool, as_float
@@ -25,10 +25,11 @@ def astolfi_commands(
     for reversing when ``reverse`` and the goal is behind (|alpha| > pi/2), or as ``direction`` (+1 forward,
     -1 reverse, per robot) says when it is given."""
     rho = inputs.distance
+    xp = array_namespace(rho)
     alpha = model.bearing_error(inputs.azimuth, inputs.heading)
     if direction is None:
-        direction = np.where(np.abs(alpha) > 0.5 * np.pi, -1.0, 1.0) if reverse else np.ones_like(rho)
-    alpha = np.where(direction < 0.0, model.wrap_angle(alpha + np.pi), alpha)
+        direction = xp.where(xp.abs(alpha) > 0.5 * np.pi, -1.0, 1.0) if reverse else xp.ones_like(rho)
+    alpha = xp.where(direction < 0.0, model.wrap_angle(alpha + np.pi), alpha)
     beta = model.wrap_angle(-inputs.heading - alpha)
     return direction * k_rho * rho, k_alpha * alpha + k_beta * beta
 
@@ -57,6 +58,7 @@ class AstolfiController(Controller):
     """Astolfi (1999) / Siegwart's polar law, the one that also steers the final heading to the goal's."""
 
     name = "astolfi"
+    traceable = True
 
     def __init__(self, params: AstolfiParams | None = None, **kwargs: Any) -> None:
         self.params: AstolfiParams = params if params is not None else AstolfiParams.from_kwargs(**kwargs)
@@ -110,6 +112,7 @@ class PrescribedTimeAstolfiController(Controller):
     """
 
     name = "pt-astolfi"
+    traceable = True
 
     def __init__(self, params: PrescribedTimeAstolfiParams | None = None, **kwargs: Any) -> None:
         self.params: PrescribedTimeAstolfiParams = (
@@ -119,6 +122,7 @@ class PrescribedTimeAstolfiController(Controller):
     def compute(self, inputs: ControllerInput) -> tuple[FloatArray, FloatArray]:
         p = self.params
         u, omega = astolfi_commands(inputs, p.k_rho, p.k_alpha, p.k_beta, p.reverse)
-        T = p.arrival_fraction * np.asarray(prescribed_time(inputs, p.T_con), dtype=np.float64)
+        T_con = prescribed_time(inputs, p.T_con)
+        T = p.arrival_fraction * (np.asarray(T_con, dtype=np.float64) if array_namespace(u) is np else T_con)
         rate = model.conventional_scaling(inputs.time, T, max_gain=p.max_gain) / T  # eq. (12) over T: 1 / (T - t)
         return u * rate, omega * rate

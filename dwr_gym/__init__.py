@@ -45,11 +45,12 @@ V1_DEFAULTS: dict[str, object] = {
 #: v2, the task held to T_con: v1's robot, starts and T_con range, but the episode runs until T_con whatever the
 #: robot does before (terminated there: the time is observed), every executed command is charged until then, and
 #: what the task pays for is paid at T_con: the arrival bonus if the robot is at the goal, the heading, and
-#: 10 per metre of the miss. Nothing depends on *when* the robot arrived, so neither exploration noise nor the
+#: 10 per metre of the miss; the progress shaping's potential is the distance (continuous at the goal, where v2 keeps
+#: robots; eq. (21)'s orientation error jumps there). Nothing depends on *when* the robot arrived, so neither exploration noise nor the
 #: discount pays for rushing; train it with gamma = 1 (the env's docstring derives why the optimum is the optimum).
 V2_DEFAULTS: dict[str, object] = {
     **V1_DEFAULTS,
-    "zero_terminal_potential": False,
+    "shaping_potential": "distance",
     "hold_to_T_con": True,
     "terminal_distance_weight": 10.0,
 }

@@ -32,6 +32,7 @@ from dwr_gym.state import (
     reset_robots,
     sample_start,
     sample_T_con,
+    shaping_potential,
 )
 
 if TYPE_CHECKING:
@@ -147,7 +148,7 @@ def transition(
         is_success = is_success & (xp.abs(coords.psi) <= params.heading_tolerance)
     out_of_arena = coords.distance > params.arena_radius
     in_time = state.step_count <= state.prescribed_steps  # integer comparison: exact in any dtype
-    lyapunov = model.lyapunov(coords.distance, coords.orientation_error)
+    lyapunov = shaping_potential(coords, params)  # eq. (21)'s L (v0, v1) or the distance (v2)
     hold = params.hold_to_T_con  # v2: the episode runs to T_con whatever the robot does before
     terminated = ((state.step_count >= state.prescribed_steps) if hold else is_success) | out_of_arena
     # Exact shaping in an episodic task gives terminal states the potential 0 (v1); v0 keeps Phi(s') there.
@@ -184,6 +185,10 @@ def transition(
     # (late, the term between them there, is 0 where arrival and heading are not).
     ended = terminated if scalar or traced else np.flatnonzero(terminated)
     arrival, heading, arena = terminal_terms(is_success, in_time, out_of_arena, ended, coords.psi, params)
+    if hold:  # leaving the arena would save the energy of the episode's rest (noise included): charged at its most
+        rest = (state.prescribed_steps - state.step_count) * (dt * params.energy_weight * params.u_max * params.u_max
+                                                              + dt * params.energy_weight * params.omega_max * params.omega_max)  # fmt: skip
+        arena = arena - xp.where(out_of_arena, rest, 0.0)
     if scalar or traced:
         reward = reward + arrival + heading + arena
     elif ended.size:

@@ -174,28 +174,30 @@ class DWRPointStabilizationEnv(HorizonSpec, OneRobotRendering, gym.Env[NDArray[n
     cheaper earns more. The task's optimum is defined on this undiscounted return; an agent that
     discounts (gamma < 1) values an early bonus more, so train with gamma close to 1 (0.999 or more).
 
-    **Held to T_con (v2,** ``hold_to_T_con=True``, ``zero_terminal_potential=False``,
+    **Held to T_con (v2,** ``hold_to_T_con=True``, ``shaping_potential="distance"``,
     ``terminal_distance_weight=10``**).** Arriving does not end the episode: the robot acts, and pays
     the energy of every executed command, until T_con, where the task is scored: arrival = +arrival_bonus
     if d(T_con) <= goal_tolerance, heading = heading_weight * (cos(psi(T_con) - psi_d) - 1) at the goal or
-    not, late = -terminal_distance_weight * d(T_con) (the miss), and Phi is not zeroed, so with
-    gamma = 1 the return of every episode that stays in the arena is
+    not, late = -terminal_distance_weight * d(T_con) (the miss). The potential is Phi = -d (the distance:
+    eq. (21)'s L holds the orientation error, whose azimuth is undefined at the goal and jumps there, where v2
+    keeps robots), 0 at the end, so with gamma = 1 the return of every episode that stays in the arena is
 
-        G = L(s_0) - L(s_T) - energy_weight * E(0, T_con) + arrival_bonus [d_T <= tol]
+        G = d_0 - energy_weight * E(0, T_con) + arrival_bonus [d_T <= tol]
             + heading_weight (cos psi_T - 1) - terminal_distance_weight * d_T.
 
-    L(s_0) is fixed by the start; no term depends on *when* the robot reached the goal, and action noise
+    d_0 is fixed by the start; no term depends on *when* the robot reached the goal, and action noise
     costs the same energy whether the robot has arrived or not. Why the optimum is the optimum: every
-    term but the energy is at its maximum (L(s_T) = 0, the bonus, cos = 1, no miss) exactly when the robot
-    ends at the goal pose at T_con, so among such policies G is highest for the least energy E*, the
-    optimal-control problem's own (minimum energy to the goal pose by T_con); a policy that ends elsewhere
-    gives up at least the bonus or a term of the miss, the heading and L(s_T), which outweighs the energy it
-    can save, up to the goal tolerance: a policy may stop anywhere within ``goal_tolerance`` of the goal, and
-    save the energy of at most that last centimetre. Leaving the arena ends the episode with its penalty on
-    top of what staying at its edge would pay. With gamma < 1 set ``shaping_discount`` to gamma: the
-    progress then sums to L(s_0) - gamma^T L(s_T), and the terminal terms are discounted by gamma^T, the same
-    for every policy of the episode (T is fixed); only the energy is then weighed by when it is spent, which
-    favours spending it late, never rushing. Train v2 with gamma = 1 (the shipped hyperparameters do).
+    term but the energy is at its maximum (the bonus, cos = 1, no miss) exactly when the robot ends at the
+    goal pose at T_con, so among such policies G is highest for the least energy E*, the optimal-control
+    problem's own (minimum energy to the goal pose by T_con); a policy that ends elsewhere gives up the
+    bonus or a term of the miss and the heading, which outweighs the energy it can save, up to the goal
+    tolerance: a policy may stop anywhere within ``goal_tolerance`` of the goal, and save the energy of at
+    most that last centimetre. Leaving the arena ends the episode with its penalty and the most energy the
+    rest of the episode could cost (every command at its limit until T_con): an exit never saves energy, noise
+    included, where an exploring agent would otherwise leave to stop paying for its noise. With gamma < 1 set ``shaping_discount`` to gamma: the progress still sums to d_0, and
+    the terminal terms are discounted by gamma^T, the same for every policy of the episode (T is fixed);
+    only the energy is then weighed by when it is spent, which favours spending it late, never rushing.
+    Train v2 with gamma = 1 (the shipped hyperparameters do).
 
     ## Starting State
     Without options the goal is (0, 0, 0) and the start is drawn from ``self.np_random``: distance
@@ -241,10 +243,11 @@ class DWRPointStabilizationEnv(HorizonSpec, OneRobotRendering, gym.Env[NDArray[n
 
     ## Version History
     * v2: the defaults of ``dwr_gym.V2_DEFAULTS``: v1's robot, T_con range and starts, held to T_con
-      (``hold_to_T_con``: energy paid until T_con, arrival, heading and the miss paid there, the potential
-      not zeroed), so that its return pays nothing for arriving early (see Rewards). ``info["is_success"]``
+      (``hold_to_T_con``: energy paid until T_con, arrival, heading and the miss paid there; the progress
+      term's potential the distance), so that its return pays nothing for arriving early (see Rewards). ``info["is_success"]``
       is whether the robot is at the goal now; in time means at the goal at T_con. The keywords
-      ``hold_to_T_con`` and ``terminal_distance_weight`` exist in every id (off in v0 and v1).
+      ``hold_to_T_con``, ``terminal_distance_weight`` and ``shaping_potential`` exist in every id (v0's and
+      v1's values keep their behaviour).
     * v1: the defaults of ``dwr_gym.V1_DEFAULTS``: T_con drawn per episode from ``T_con_range`` = (10, 60) s
       (observed, in info["T_con"]), starts 0.3 to 3 m away, and the reward above (energy instead of
       effort and the prescribed-time term, exact shaping with Phi = 0 at terminal states). A new ``energy``

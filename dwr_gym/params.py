@@ -12,6 +12,7 @@ from dwr_gym.model import INTEGRATORS
 from dwr_gym.validation import as_bool, as_choice, as_float, as_int, as_interval, blame, reject_unknown
 
 MIN_T_CON = 1e-3  # [s]
+POTENTIALS = ("lyapunov", "distance")
 MIN_DT = 1e-6  # [s]
 
 
@@ -56,6 +57,9 @@ class EnvParams:
     """Weight of the potential-based progress term on the Lyapunov function (21)."""
     shaping_discount: float = 0.99
     """gamma of the shaping term gamma*Phi(s') - Phi(s); set it to your algorithm's discount."""
+    shaping_potential: str = "lyapunov"
+    """The potential Phi = -P of the progress term: P = L of eq. (21) ('lyapunov', v0 and v1), or P = d ('distance',
+    v2: continuous at the goal, where eq. (21)'s orientation error, through the azimuth, is undefined and jumps)."""
     zero_terminal_potential: bool = False
     """Give terminal states the potential 0 in the progress term, which makes its sum over an episode that
     arrives exactly L(s_0) whatever the path (exact potential-based shaping); False is v0's Phi(s')."""
@@ -118,6 +122,7 @@ class EnvParams:
         set_(self, "shaping_discount", as_float("shaping_discount", self.shaping_discount, 0.0, 1.0))
         set_(self, "zero_terminal_potential", as_bool("zero_terminal_potential", self.zero_terminal_potential))
         set_(self, "hold_to_T_con", as_bool("hold_to_T_con", self.hold_to_T_con))
+        set_(self, "shaping_potential", as_choice("shaping_potential", self.shaping_potential, POTENTIALS))
         weight = as_float("terminal_distance_weight", self.terminal_distance_weight, 0.0, 1e6)
         set_(self, "terminal_distance_weight", weight)
         set_(self, "time_gain_cap", as_float("time_gain_cap", self.time_gain_cap, 1.0, 1e6))

@@ -56,7 +56,7 @@ class TaskState:
     energy: FloatArray
     initial_distance: FloatArray
     initial_orientation_error: FloatArray
-    lyapunov: FloatArray  # eq. (21) at the current pose, kept for the next progress term
+    lyapunov: FloatArray  # the progress term's potential at the current pose (:func:`shaping_potential`), kept for the next
     goal_cos: FloatArray  # cos(goal_psi), set with the goal by new_state so world_pose needs no trigonometry
     goal_sin: FloatArray
     T_con: FloatArray  # the episode's prescribed time [s]
@@ -96,6 +96,13 @@ class TaskState:
             return (self.x.copy(), self.y.copy(), self.psi.copy()) if copy else (self.x, self.y, self.psi)
         dx, dy = model.rotate(self.x, self.y, self.goal_cos, self.goal_sin)
         return self.goal_x + dx, self.goal_y + dy, model.wrap_angle(self.psi + self.goal_psi)
+
+
+def shaping_potential(coords: ErrorCoordinates, params: EnvParams) -> FloatArray:
+    """P of the progress term's potential Phi = -P: L of eq. (21), or the distance d (``params.shaping_potential``)."""
+    if params.shaping_potential == "distance":
+        return coords.distance
+    return model.lyapunov(coords.distance, coords.orientation_error)
 
 
 def sample_start(rng: np.random.Generator, params: EnvParams) -> tuple[float, float, float]:
@@ -149,7 +156,7 @@ def new_state_and_coordinates(
     zero = 0.0 * coords.distance
     steps = 0 if xp is model.SCALAR_MATH else (xp.zeros if traced else np.zeros)(coords.distance.shape, int)
     state = TaskState(x, y, psi, goal[0] + zero, goal[1] + zero, goal[2] + zero, steps, zero, coords.distance,
-                      coords.orientation_error, model.lyapunov(coords.distance, coords.orientation_error),
+                      coords.orientation_error, shaping_potential(coords, params),
                       xp.cos(goal[2]) + zero, xp.sin(goal[2]) + zero, *episode_length(T_con, zero, params, xp))  # fmt: skip
     return state, coords
 

@@ -1,8 +1,10 @@
 """The docs: every Python snippet of the README and of the site runs as written, each in a fresh interpreter as a
-user pastes it; every results table agrees with the JSON it is generated from; the README reads in one sitting."""
+user pastes it; every generated block names its producer and agrees with the JSON it is rendered from (a hand edit, a
+block without a producer, a JSON off its schema all fail); the README reads in one sitting."""
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import subprocess
@@ -11,7 +13,8 @@ from pathlib import Path
 
 import pytest
 
-from train.reporting.doc_tables import markdown_files, regenerate, render, stale
+from benchmarks.core import docs
+from train.reporting.doc_tables import markdown_files, regenerate, render
 
 ROOT = Path(__file__).resolve().parents[1]
 BLOCK = re.compile(r"(<!-- snippet: not run \((?P<why>.+?)\) -->\n)?```python\n(?P<code>.*?)```", re.DOTALL)
@@ -58,14 +61,55 @@ def test_every_snippet_that_is_not_run_says_why() -> None:
     assert all(why.strip() for _, why in skipped) and len(skipped) <= 2, skipped
 
 
-def test_every_table_agrees_with_its_json() -> None:
-    assert stale() == [], "run: python -m train.reporting.doc_tables"
+def test_every_generated_block_names_its_producer_and_is_what_its_json_renders() -> None:
+    assert docs.problems() == [], "run: python -m benchmarks render (python -m benchmarks render --check says why)"
 
 
 def test_a_table_that_disagrees_with_its_json_is_found() -> None:
     table = render("claims")
-    text = f"<!-- table: claims -->\n{table.replace('holds', 'fails', 1)}<!-- /table -->\n"
-    assert regenerate(text) == f"<!-- table: claims -->\n{table}<!-- /table -->\n" != text
+    opening = docs.marker("claims", "reproduce")
+    text = f"{opening}\n{table.replace('holds', 'fails', 1)}<!-- /generated -->\n"
+    assert regenerate(text) == f"{opening}\n{table}<!-- /generated -->\n" != text
+
+
+def page_with(tmp_path: Path, block: str) -> Path:
+    """A copy of the repository's docs JSON and one page holding ``block`` (a README must exist too)."""
+    import shutil
+
+    shutil.copytree(ROOT / "docs", tmp_path / "docs", ignore=shutil.ignore_patterns("*.md", "*.png", "*.gif", "*.csv"))
+    (tmp_path / "README.md").write_text("# dwr-gym\n")
+    (tmp_path / "docs" / "page.md").write_text(f"Some prose.\n\n{block}\nMore prose.\n")
+    return tmp_path
+
+
+@pytest.mark.parametrize(
+    ("producer", "edit", "found"),
+    [
+        ("reproduce", lambda body: body.replace("holds", "fails", 1), "differs from what docs/reproduce/claims.json"),
+        ("compare", lambda body: body, "but 'reproduce' produces it"),
+        (None, lambda body: body, "names no producer"),
+        ("legacy", lambda body: body, "names no producer"),
+    ],
+    ids=["hand edit", "wrong producer", "no producer", "a marker of before the convention"],
+)
+def test_a_block_edited_by_hand_or_without_its_producer_fails(tmp_path: Path, producer, edit, found: str) -> None:
+    body = "\n" + render("claims")
+    opening = {None: "<!-- generated: claims -->", "legacy": "<!-- table: claims -->"}.get(producer) or docs.marker(
+        "claims", producer
+    )
+    problems = docs.problems(page_with(tmp_path, f"{opening}{edit(body)}<!-- /generated -->"))
+    assert len(problems) == 1 and found in problems[0], problems
+
+
+def test_a_json_off_its_schema_fails(tmp_path: Path) -> None:
+    root = page_with(tmp_path, f"{docs.marker('claims', 'reproduce')}\n{render('claims')}<!-- /generated -->")
+    assert docs.problems(root) == []
+    path = root / "docs" / "reproduce" / "claims.json"
+    data = json.loads(path.read_text())
+    data["claims"] = {"renamed": data.pop("claims")}
+    path.write_text(json.dumps(data))
+    (problem,) = docs.problems(root)
+    assert "does not fit its schema: 'claims' is dict, expected list" in problem
 
 
 def test_the_readme_reads_in_one_sitting() -> None:

@@ -1,23 +1,12 @@
 """The env's float64 results are pinned: seeded rollouts equal the recorded ones to 1e-12 (issue 14's speed work
-must not change them). Re-record with ``python benchmarks/golden_rollouts.py --write`` only for a new env version."""
+must not change them). Re-record with ``python -m benchmarks run golden-rollouts --write`` only for a new env version."""
 
 from __future__ import annotations
-
-import importlib.util
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-SCRIPT = Path(__file__).resolve().parents[1] / "benchmarks" / "golden_rollouts.py"
-
-
-def load_script():  # benchmarks/ is not a package
-    spec = importlib.util.spec_from_file_location("golden_rollouts", SCRIPT)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+from benchmarks.testing import golden_rollouts
 
 
 @pytest.mark.filterwarnings("ignore:.*out of date")
@@ -36,7 +25,7 @@ def test_seeded_rollouts_equal_the_record_to_1e_12(num_envs: int, torch: str, mo
         monkeypatch.setattr(model, "TORCH_FUNCTIONS", frozenset(("sin", "cos", "tanh", "arcsin", "arctan2")))
         monkeypatch.setattr(model, "TORCH_MIN_SIZE", num_envs)
     assert (num_envs >= model.TORCH_MIN_SIZE) == (torch != "off" and num_envs > 16)  # each case takes its path
-    script = load_script()
+    script = golden_rollouts
     golden = np.load(script.PATH)
     arrays = script.rollouts(num_envs)
     assert sorted(arrays) == sorted(golden.files)

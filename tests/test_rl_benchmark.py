@@ -183,7 +183,7 @@ def test_docs_keep_the_agents_of_earlier_runs_and_take_this_runs_rows(tmp_path: 
 def test_a_runs_recorded_recipe_trains_the_same_configuration(
     text: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """config.yaml's command (what benchmarks/retrain_pretrained.py runs again) is a valid dwr-gym train command
+    """config.yaml's command (what the retrain-pretrained entry runs again) is a valid dwr-gym train command
     that resolves to the configuration the benchmark trained: the YAML file and the overrides together."""
     import train.learning.training as training
     from train.cli import main
@@ -202,16 +202,11 @@ def test_a_runs_recorded_recipe_trains_the_same_configuration(
 
 
 def test_the_energy_split_multiplies_back_and_prices_early_arrival(capsys: pytest.CaptureFixture[str]) -> None:
-    """benchmarks/rl_rushing.py: E/opt = timing x motion per policy; arriving earlier never needs less than the
+    """The rl-rushing entry of the suite: E/opt = timing x motion per policy; arriving earlier never needs less than the
     optimum by T_con (timing >= 1); the optimum's own arrival costs it (almost) nothing, PTC's more."""
     pytest.importorskip("casadi")
-    import importlib.util
+    from benchmarks.learning import rl_rushing as module
 
-    script = Path(__file__).resolve().parents[1] / "benchmarks" / "rl_rushing.py"
-    spec = importlib.util.spec_from_file_location("rl_rushing", script)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
     assert module.main(["--controllers", "ptc", "optimal", "--n", "4"]) == 0
     rows = {line.split(" ", 1)[0]: json.loads(line.split(" ", 1)[1])
             for line in capsys.readouterr().out.splitlines() if line.startswith(("ptc {", "optimal {"))}  # fmt: skip

@@ -1,9 +1,10 @@
-"""benchmarks/training_speed.py, training_old_vs_new.py, retrain_pretrained.py, training_threads.py and
-readme_training.py: the blocks of docs/training.md and the README are what they render from their JSON, and the
-retraining replays each shipped agent's recorded recipe."""
+"""The training entries of the suite (benchmarks/training/: training-speed, training-old-vs-new, retrain-pretrained,
+training-threads and readme-training): the blocks of docs/training.md and the README are what they render from their
+JSON, and the retraining replays each shipped agent's recorded recipe."""
 
 from __future__ import annotations
 
+import importlib
 import importlib.util
 import json
 from pathlib import Path
@@ -11,22 +12,16 @@ from types import ModuleType
 
 import pytest
 
-BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
+from benchmarks.core import docs
 
 
-def load(name: str) -> ModuleType:  # benchmarks/ is not a package
-    spec = importlib.util.spec_from_file_location(name, BENCHMARKS / f"{name}.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+def load(name: str) -> ModuleType:
+    return importlib.import_module(f"benchmarks.training.{name}")
 
 
-@pytest.mark.parametrize("name", ["training_speed", "training_old_vs_new", "retrain_pretrained", "training_threads"])
-def test_each_docs_block_is_what_its_benchmark_renders_from_its_json(name: str) -> None:
-    module = load(name)
-    results = json.loads(module.JSON_PATH.read_text())
-    assert module.docs_block() == module.rendered_block(results)
+@pytest.mark.parametrize("block", ["training-speed", "old-vs-new", "retrain", "training-threads"])
+def test_each_docs_block_is_what_its_benchmark_renders_from_its_json(block: str) -> None:
+    assert docs.written(block) == docs.rendered(block)
 
 
 def test_the_speed_verdict_follows_the_measured_ratio() -> None:
@@ -48,9 +43,9 @@ def test_the_threads_verdict_follows_the_measured_ratios() -> None:
 def test_the_readmes_training_example_is_what_its_benchmark_measured() -> None:
     module = load("readme_training")
     results = json.loads(module.JSON_PATH.read_text())
-    assert module.readme_block() == module.render(results)
+    assert docs.written("readme-training") == module.render(results)
     best = max(results["curve"], key=lambda row: (row["success_rate"], -row["energy_mean"], row["return_mean"]))
-    assert results["command"] in module.readme_block()
+    assert results["command"] in docs.written("readme-training")
     assert results["best"]["timesteps"] == best["timesteps"]  # the most episodes in time, then the least energy
 
 

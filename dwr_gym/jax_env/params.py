@@ -85,6 +85,7 @@ class FunctionalParams:
     substeps: int = struct.field(pytree_node=False, default=1)
     zero_terminal_potential: bool = struct.field(pytree_node=False, default=False)
     hold_to_T_con: bool = struct.field(pytree_node=False, default=False)
+    shaping_potential: str = struct.field(pytree_node=False, default="lyapunov")
     observation_noise: float = struct.field(pytree_node=False, default=0.0)  # [m, rad]
     actuation_noise: float = struct.field(pytree_node=False, default=0.0)
 

@@ -108,7 +108,7 @@ def report(
 ) -> dict[str, Any]:  # fmt: skip
     """Aggregate, print the tables, and write benchmark.json and the two figures of learning curves in ``out``."""
     from train.evaluation.benchmark import reference_controllers
-    from train.reporting.rl_benchmark import aggregate, best_seed, disturbed_table, plot_curves, table
+    from train.reporting.rl_benchmark import aggregate, best_seed, disturbed_table, per_T_con_table, plot_curves, table
 
     if data is None:
         refs = reference_controllers(references, n=budget["eval_episodes"], n_disturbed=budget["disturbed_episodes"],
@@ -122,6 +122,7 @@ def report(
     plot_curves(data["summary"], out / "curves_wall.png", "wall_time")
     print(table(data["summary"], data["references"]))
     print(disturbed_table(data["summary"], data["references"]))
+    print(per_T_con_table(data["summary"], data["references"]))
     print(f"wrote {out / 'benchmark.json'}, {out / 'curves_steps.png'}, {out / 'curves_wall.png'}")
     return data
 

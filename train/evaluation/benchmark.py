@@ -28,6 +28,17 @@ OPTIMUM_EPISODES = 50
 """E/opt on the nominal set is measured on the set drawn with ``n = 50`` and the same seed (and not on the disturbed
 sets) unless ``n_optimum`` is None: the optimum is a CasADi solve per episode, about 0.65 CPU-seconds each, once
 (cached), which a busy 2-core machine cannot spare for 1,000 episodes."""
+#: The prescribed times at which every policy is also evaluated, one set each (an aggregate over the drawn range
+#: hides the short deadlines), on PER_T_CON_EPISODES starts of the nominal set's seed.
+PER_T_CON: tuple[float, ...] = (10.0, 20.0, 40.0, 60.0)
+PER_T_CON_EPISODES = 100
+
+
+def per_T_con_set(T_con: float) -> str:
+    """The name of the set at prescribed time ``T_con``: ``T_con=10``."""
+    return f"T_con={T_con:g}"
+
+
 METRICS: dict[str, tuple[str, str]] = {
     "in_time": ("success_rate", "in time"),
     "energy_ratio": ("energy_ratio_mean", "E/opt"),
@@ -57,9 +68,12 @@ def evaluate_policy(
     n_optimum: int | None = OPTIMUM_EPISODES,
     sets: tuple[str, ...] = SETS,
     progress: bool = False,
+    per_T_con: tuple[float, ...] = PER_T_CON,
+    n_per_T_con: int = PER_T_CON_EPISODES,
 ) -> dict[str, dict[str, float | None]]:
-    """{set: metrics} of ``policy`` (or a controller's name) on the nominal set (``n`` episodes; E/opt on the set of
-    ``n_optimum`` episodes, all ``n`` when None) and the disturbed ones (``n_disturbed``)."""
+    """{set: metrics} of ``policy`` (or a controller's name) on ``env_id``: the nominal set (``n`` episodes; E/opt on
+    the set of ``n_optimum`` episodes, all ``n`` when None), the disturbed ones (``n_disturbed``), and the nominal
+    starts at each prescribed time of ``per_T_con`` (``n_per_T_con`` episodes each, E/opt on all)."""
     if n < 1 or n_disturbed < 1:
         raise ValueError(f"n={n!r} and n_disturbed={n_disturbed!r} are invalid: expected integers >= 1")
     kwargs = env_keywords(env_id, {})
@@ -74,6 +88,11 @@ def evaluate_policy(
         if optimum == "none" and name == "random":  # E/opt on the set drawn with n = n_optimum
             rows = evaluate_sets({"agent": policy}, [name], n_optimum, seed, kwargs, progress=progress, optimum="pose")  # type: ignore[arg-type]
             results[name]["energy_ratio"] = metrics_of(rows[0])["energy_ratio"]
+    if per_T_con:
+        rows = evaluate_sets({"agent": policy}, ["random"], n_per_T_con, seed, kwargs, progress=progress,
+                             optimum="pose", T_cons=list(per_T_con))  # fmt: skip
+        for T_con, row in zip(per_T_con, rows, strict=True):
+            results[per_T_con_set(T_con)] = metrics_of(row)
     return results
 
 
@@ -82,5 +101,5 @@ def reference_controllers(names: tuple[str, ...], env_id: str = TASK_ENV_ID, **k
     return {name: evaluate_policy(name, env_id, **kwargs) for name in names}
 
 
-__all__ = ["DISTURBED_EPISODES", "EVAL_EPISODES", "EVAL_SEED", "METRICS", "OPTIMUM_EPISODES", "SETS", "evaluate_policy", "metrics_of",
-           "reference_controllers"]  # fmt: skip
+__all__ = ["DISTURBED_EPISODES", "EVAL_EPISODES", "EVAL_SEED", "METRICS", "OPTIMUM_EPISODES", "PER_T_CON",
+           "PER_T_CON_EPISODES", "SETS", "evaluate_policy", "metrics_of", "per_T_con_set", "reference_controllers"]  # fmt: skip

@@ -116,13 +116,15 @@ def rollout(
     description: str = "rollout",
     T_con: NDArray[np.float64] | None = None,
     env_kwargs: dict[str, Any] | None = None,
+    discount: float = 1.0,
 ) -> RolloutResult:
     """Run ``policy`` from N start poses to N goals (world frame, (N, 3)) until every episode ends.
 
     ``T_con`` (N,) gives each episode its prescribed time (default: ``params.T_con``). Robots that
     have terminated are held still with zero actions and no longer counted. The ``robot`` and
     ``disturbances`` of ``env_kwargs`` act as in the envs (robot i's random disturbances seeded with
-    (seed, i)); its other keywords are those of ``params``.
+    (seed, i)); its other keywords are those of ``params``. ``episode_return`` sums the rewards discounted by
+    ``discount`` per step (1: the undiscounted return).
     """
     starts, goals = np.asarray(starts, dtype=np.float64), np.asarray(goals, dtype=np.float64)
     if starts.ndim != 2 or starts.shape[1] != 3 or goals.shape != starts.shape:
@@ -167,6 +169,7 @@ def rollout(
 
         steps = Progress(steps, desc=description, unit="step", leave=False)
     episode_start = np.ones(n, dtype=bool)
+    weight = 1.0  # discount ** steps: every episode starts at step 0
     for _ in steps:
         actions, _ = policy.predict(obs, episode_start=episode_start, deterministic=True)
         episode_start = np.zeros(n, dtype=bool)
@@ -187,7 +190,8 @@ def rollout(
         prev_command = command
         steps_taken += live
         prev_u, prev_w = u, w
-        ret += np.where(live, result.reward, 0.0)
+        ret += np.where(live, result.reward, 0.0) * weight
+        weight *= discount
         final_distance = np.where(live, result.coords.distance, final_distance)
         final_heading = np.where(live, np.abs(result.coords.psi), final_heading)
         final_energy = np.where(live, state.energy, final_energy)

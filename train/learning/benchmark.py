@@ -18,23 +18,49 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from train.env_ids import TASK_ENV_ID
 from train.evaluation.benchmark import DISTURBED_EPISODES, EVAL_EPISODES, EVAL_SEED, OPTIMUM_EPISODES, evaluate_policy
 from train.learning.config import ConfigError, TrainConfig
+from train.learning.hyperparams import HYPERPARAMS_DIR
 
+V2 = "DWRPointStabilization-v2"
 #: The shipped entries: the options of ``dwr-gym train`` each one trains with (on top of train/hyperparams/).
 ENTRIES: dict[str, dict[str, Any]] = {
     "ppo": {"algo": "ppo"},
     "ppo-jax": {"algo": "ppo", "backend": "jax"},
+    # evolution strategies on the JAX env (train/hyperparams/es.yml): a generation is some 500,000 env steps, so
+    # its curve is evaluated every 5 M of them rather than at the benchmark's --eval-freq
+    "es": {"algo": "es", "backend": "jax", "eval_freq": 5_000_000, "checkpoint_freq": 5_000_000},
+    # the same on v1 with an arena of 50 m: leaving v1's 5 m arena ends an episode at a cost (-10 + the start's
+    # potential) that a policy which cannot yet arrive prefers to the late penalty, a trap ES falls into
+    # (docs/evolution.md); the evaluation is on v1 as registered
+    "es-arena50": {"algo": "es", "backend": "jax", "eval_freq": 5_000_000, "checkpoint_freq": 5_000_000,
+                   "env_kwargs": {"arena_radius": 50.0}},
     "sac": {"algo": "sac"},
     "td3": {"algo": "td3"},
     "tqc": {"algo": "tqc"},
     "crossq": {"algo": "crossq"},
     "residual-ppo": {"algo": "ppo", "residual": True, "expert": "ptc"},
     "residual-ppo-astolfi": {"algo": "ppo", "residual": True, "expert": "pt-astolfi"},
+    # the residual inside the jitted PPO's compiled loop (train.learning.jax_residual): millions of steps per run
+    "residual-ppo-jax": {"algo": "ppo", "backend": "jax", "residual": True, "expert": "ptc"},
+    "residual-ppo-jax-astolfi": {"algo": "ppo", "backend": "jax", "residual": True, "expert": "pt-astolfi"},
+    "residual-ppo-jax-v2": {"algo": "ppo", "backend": "jax", "residual": True, "expert": "ptc",
+                            "env_id": "DWRPointStabilization-v2"},
+    "residual-ppo-jax-astolfi-v2": {"algo": "ppo", "backend": "jax", "residual": True, "expert": "pt-astolfi",
+                                    "env_id": "DWRPointStabilization-v2"},
     # sbx-rl, the JAX stable-baselines (issue 40): the same algorithms and settings, compiled by XLA
     "sac-sbx": {"algo": "sac", "backend": "sbx"},
     "tqc-sbx": {"algo": "tqc", "backend": "sbx"},
     "crossq-sbx": {"algo": "crossq", "backend": "sbx"},
+    # the task held to T_con (issue 40): gamma 1 (the v2 sections of train/hyperparams/), the jitted PPO with its
+    # exploration noise on a fixed schedule, the off-policy learners of sbx
+    "ppo-jax-v2": {"algo": "ppo", "backend": "jax", "env_id": V2},
+    "ppo-jax-fixed-noise-v2": {"algo": "ppo", "backend": "jax", "env_id": V2,
+                               "hyperparams": str(HYPERPARAMS_DIR / "ppo_jax_v2.yml")},
+    "sac-sbx-v2": {"algo": "sac", "backend": "sbx", "env_id": V2},
+    "tqc-sbx-v2": {"algo": "tqc", "backend": "sbx", "env_id": V2},
+    "crossq-sbx-v2": {"algo": "crossq", "backend": "sbx", "env_id": V2},
 }
 RESULTS_DIR, RUNS_DIR = "results", "runs"
 
@@ -116,7 +142,7 @@ def train_config(entry: Entry, seed: int, run_dir: Path, budget: dict[str, Any])
 
 def train_command(entry: Entry, config: TrainConfig) -> list[str]:
     """The ``dwr-gym train`` command that trains this run alone (config.yaml's recipe, which
-    benchmarks/retrain_pretrained.py runs again)."""
+    ``python -m benchmarks run retrain-pretrained`` runs again)."""
     command = ["dwr-gym", "train", "--seed", str(config.seed), "--total-timesteps", str(config.total_timesteps),
                "--eval-freq", str(config.eval_freq), "--checkpoint-freq", str(config.checkpoint_freq),
                "--eval-episodes", str(config.eval_episodes), "--eval-seed", str(config.eval_seed)]  # fmt: skip
@@ -173,7 +199,7 @@ def run_one(entry: Entry, seed: int, out: Path, budget: dict[str, Any], progress
             config.overwrite = True
         if not (state.is_file() and json.loads(state.read_text()).get("finished")):
             trainer = train
-            if config.backend == "jax":  # the jitted PPO (train.learning.jax_training), where it is installed
+            if config.backend == "jax":  # the jitted PPO or ES (train.learning.jax_training), where it is installed
                 try:
                     from train.learning.jax_training import train_jax as trainer
                 except ImportError as error:
@@ -182,12 +208,14 @@ def run_one(entry: Entry, seed: int, out: Path, budget: dict[str, Any], progress
         _, policy = load_agent(run_dir)
         repeat, config_dict = config.action_repeat, config.to_dict()
     train_seconds = time.time() - start
-    sets = evaluate_policy(policy, n=int(budget.get("eval_episodes", EVAL_EPISODES)),
+    env_id = config_dict.get("env_id", TASK_ENV_ID)  # each agent on its own env id: v1's or v2's episode end
+    sets = evaluate_policy(policy, env_id, n=int(budget.get("eval_episodes", EVAL_EPISODES)),
                            n_disturbed=int(budget.get("disturbed_episodes", DISTURBED_EPISODES)),
                            n_optimum=budget.get("optimum_episodes", OPTIMUM_EPISODES) or None, progress=progress)  # fmt: skip
     state_path = run_dir / "run_state.json"
     steps = json.loads(state_path.read_text()).get("timesteps", 0) * repeat if state_path.is_file() else None
     result = {"entry": entry.name, "seed": seed, "learned_from": entry.learned_from, "action_repeat": repeat,
+              "env_id": env_id,
               "env_steps": steps,
               "seconds": round(train_seconds, 1), "sets": sets, "curve": read_curve(run_dir, repeat),
               "config": config_dict}  # fmt: skip

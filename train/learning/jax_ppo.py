@@ -47,7 +47,10 @@ class ObservationStatistics(flax.struct.PyTreeNode):
         return cls(jnp.zeros(size), jnp.ones(size), jnp.asarray(1e-4))
 
     def update(self, batch: Any) -> ObservationStatistics:
-        batch_mean, batch_var, batch_count = jnp.mean(batch, axis=0), jnp.var(batch, axis=0), batch.shape[0]
+        return self.update_moments(jnp.mean(batch, axis=0), jnp.var(batch, axis=0), batch.shape[0])
+
+    def update_moments(self, batch_mean: Any, batch_var: Any, batch_count: Any) -> ObservationStatistics:
+        """The statistics after a batch of ``batch_count`` observations of this mean and variance."""
         delta, total = batch_mean - self.mean, self.count + batch_count
         m2 = self.var * self.count + batch_var * batch_count + delta**2 * self.count * batch_count / total
         return ObservationStatistics(self.mean + delta * batch_count / total, m2 / total, total)
@@ -118,6 +121,16 @@ def gae(rewards: Any, values: Any, terminated: Any, truncated: Any, final_values
     _, advantages = jax.lax.scan(backward, (jnp.zeros_like(last_value), last_value), (rewards, values, alive),
                                  reverse=True)  # fmt: skip
     return advantages, advantages + values
+
+
+def actor_masked_grad(grad: Any, frozen: Any, params: Any, batch: Any) -> Any:
+    """``grad(params, batch)`` with the actor's gradients (the policy layers, the mean head, log_std) zero where
+    ``frozen``."""
+    grads = grad(params, batch)
+    actor = {name for name in grads["params"] if name.startswith("policy_") or name in ("action", "log_std")}
+    masked = {name: jax.tree.map(lambda g: jnp.where(frozen, 0.0, g), leaf) if name in actor else leaf
+              for name, leaf in grads["params"].items()}  # fmt: skip
+    return {**grads, "params": masked}
 
 
 class JaxPPO:
@@ -241,6 +254,8 @@ class JaxPPO:
         progress_remaining = 1.0 - done_after / jnp.asarray(total_timesteps, jnp.float32)
         rate = s.learning_rate * (jnp.maximum(progress_remaining, 0.0) if s.linear_schedule else 1.0)
         grad = jax.grad(self.loss)
+        if s.critic_warmup:  # the actor frozen (its gradients zero) until critic_warmup env steps are done
+            grad = functools.partial(actor_masked_grad, grad, runner.updates * s.steps_per_update < s.critic_warmup)
 
         def minibatch_step(carry: tuple[Any, Any], batch: tuple[Any, ...]) -> tuple[tuple[Any, Any], None]:
             params, opt_state = carry
@@ -259,9 +274,10 @@ class JaxPPO:
         (params, opt_state, rng), _ = jax.lax.scan(
             epoch, (runner.params, runner.opt_state, runner.rng), None, s.n_epochs
         )
-        if s.log_std_final is not None:  # the annealed exploration noise: log_std capped by the schedule
+        if s.log_std_final is not None or s.log_std_fixed:  # the exploration noise capped by (or set to) its schedule
             cap = s.log_std_cap(jnp.clip(1.0 - progress_remaining, 0.0, 1.0))
             inner = params["params"]
-            params = {**params, "params": {**inner, "log_std": jnp.minimum(inner["log_std"], cap)}}
+            log_std = jnp.full_like(inner["log_std"], cap) if s.log_std_fixed else jnp.minimum(inner["log_std"], cap)
+            params = {**params, "params": {**inner, "log_std": log_std}}
         runner = runner.replace(params=params, opt_state=opt_state, rng=rng, updates=runner.updates + 1)
         return runner, totals

@@ -176,8 +176,9 @@ def make_anneal_callback(config: TrainConfig) -> Any:
     import torch
     from stable_baselines3.common.callbacks import BaseCallback
 
-    final = float(config.algo_kwargs["log_std_final"])
     init = float((config.algo_kwargs.get("policy_kwargs") or {}).get("log_std_init", 0.0))
+    final = float(config.algo_kwargs.get("log_std_final", init))
+    fixed = bool(config.algo_kwargs.get("log_std_fixed", False))  # set to the schedule, not capped by it
 
     class AnnealCallback(BaseCallback):
         def _on_step(self) -> bool:
@@ -192,7 +193,11 @@ def make_anneal_callback(config: TrainConfig) -> Any:
         def cap(self) -> None:
             fraction = min(self.num_timesteps / config.total_timesteps, 1.0)
             with torch.no_grad():
-                self.model.policy.log_std.clamp_(max=init + (final - init) * fraction)
+                value = init + (final - init) * fraction
+                if fixed:
+                    self.model.policy.log_std.fill_(value)
+                else:
+                    self.model.policy.log_std.clamp_(max=value)
 
     return AnnealCallback()
 
@@ -373,7 +378,8 @@ def _train(
         previous = signal.signal(signal.SIGINT, on_sigint) if main_thread else None
         start = time.time()
         try:
-            anneal = [make_anneal_callback(config)] if "log_std_final" in config.algo_kwargs else []
+            noise_schedule = "log_std_final" in config.algo_kwargs or config.algo_kwargs.get("log_std_fixed")
+            anneal = [make_anneal_callback(config)] if noise_schedule else []
             if config.critic_warmup:
                 anneal.append(finetune.make_warmup_callback(config.critic_warmup))
             model.learn(remaining, callback=[callback, *anneal] + ([bar] if bar else []), progress_bar=False,

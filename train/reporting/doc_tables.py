@@ -1,10 +1,17 @@
 """The results tables of the README and the docs, generated from the JSON that the commands and benchmarks write.
 
-A table in a Markdown file sits between ``<!-- table: NAME -->`` and ``<!-- /table -->``; :data:`TABLES` says
-which JSON file and which function make table NAME. ::
+Every generated block of a Markdown page names its producer, the suite entry that writes its JSON::
 
-    python -m train.reporting.doc_tables            # rewrite every table from its JSON
+    <!-- generated: NAME by PRODUCER (python -m benchmarks run PRODUCER --docs) -->
+    ...
+    <!-- /generated -->
+
+:data:`TABLES` says which JSON file and which function make table NAME; ``benchmarks/core/docs.py`` adds the
+blocks the benchmarks render themselves and says which entry produces each. ::
+
+    python -m train.reporting.doc_tables            # rewrite every table of TABLES from its JSON
     python -m train.reporting.doc_tables --check    # exit 1, naming the tables, if one disagrees with its JSON
+    python -m benchmarks render [--check]           # the same for every generated block, the benchmarks' too
 
 ``tests/test_docs.py`` runs the check, so a table can not drift from the numbers it states.
 """
@@ -12,18 +19,28 @@ which JSON file and which function make table NAME. ::
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import math
 import re
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
-from train.reporting import dataset_tables
+from train.reporting import dataset_tables, incentive_tables
 
 ROOT = Path(__file__).resolve().parents[2]
-MARKER = re.compile(r"(<!-- table: (?P<name>[\w-]+) -->\n)(?P<body>.*?)(<!-- /table -->)", re.DOTALL)
+#: A generated block: its name, its producer and the command that writes its JSON, then its body.
+MARKER = re.compile(
+    r"^(<!-- generated: (?P<name>[\w-]+) by (?P<producer>[\w-]+) \((?P<command>[^)]*)\) -->)(?P<body>.*?)"
+    r"(<!-- /generated -->)",
+    re.DOTALL | re.MULTILINE,
+)
+#: Anything that opens a generated block at the start of a line, well formed or not, the markers of before the
+#: convention included (``<!-- table: NAME -->``, ``<!-- NAME:begin -->``): a block without a producer is found by
+#: this alone; the convention quoted inside a line of prose is not a block.
+OPENING = re.compile(r"^<!-- (?:generated\b[^>]*|table: [\w-]+|[\w-]+:begin) -->", re.MULTILINE)
 
 #: How the tables name the policies: the controllers of baselines and the agents shipped in train/pretrained.
 POLICY_NAMES = {
@@ -148,7 +165,7 @@ def verdict(by_T_con: dict[str, bool]) -> str:
 
 
 def robust_goal_table(data: dict[str, Any]) -> str:
-    """Issue 22's goal (benchmarks/robust_goal.py): each policy on each (T_con, set), then each one's verdicts."""
+    """Issue 22's goal (``python -m benchmarks run robust-goal``): each policy on each (T_con, set), then each one's verdicts."""
     rows = data["rows"]
     policies = list(dict.fromkeys(r["policy"] for r in rows))
     by = {(r["T_con"], r["set"], r["policy"]): r for r in rows}
@@ -170,13 +187,13 @@ def robust_goal_table(data: dict[str, Any]) -> str:
                          f"{len(checks)} | {missed or 'none'} |")  # fmt: skip
     caption = (
         f"Each cell: in time / mean \\|psi_end\\| [rad] / mean energy / command-rate RMS; {data['n']} starts "
-        f"0.3-3 m per (T_con, set), seed {data['seed']}; `python benchmarks/robust_goal.py` ({data['seconds']} s)."
+        f"0.3-3 m per (T_con, set), seed {data['seed']}; `python -m benchmarks run robust-goal` ({data['seconds']} s)."
     )
     return "\n".join(lines) + f"\n\n*{caption}*\n"
 
 
 def filter_rates_table(data: dict[str, Any]) -> str:
-    """robust-pt's in-time rate and energy with each rate of its filter (benchmarks/robust_filter_rates.py)."""
+    """robust-pt's in-time rate and energy with each rate of its filter (``python -m benchmarks run robust-filter-rates``)."""
     kinds = list(dict.fromkeys(r["kind"] for r in data["rows"]))
     rates = list(dict.fromkeys(tuple(r["disturbance_rate"]) for r in data["rows"]))
     by = {(r["kind"], tuple(r["disturbance_rate"])): r for r in data["rows"]}
@@ -204,7 +221,7 @@ def optimal_timing_table(rows: list[dict[str, Any]]) -> str:
 
 
 def jax_env_step_table(data: dict[str, Any]) -> str:
-    """benchmarks/jax_env_step.py: the JAX env's step against the numpy vector env's."""
+    """``python -m benchmarks run jax-env-step``: the JAX env's step against the numpy vector env's."""
     lines = ["| step | dtype | us per step | env-steps per second | x the numpy env's | CPU us per step | "
              "x the numpy env's, CPU time |", "|---|---|---|---|---|---|---|"]  # fmt: skip
     for r in data["rows"]:
@@ -265,6 +282,8 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "datasets-baselines": ("docs/datasets/suite.json", lambda data: dataset_tables.baselines_table(data)),
     "datasets-speed": ("docs/datasets/speed.json", lambda data: dataset_tables.speed_table(data)),
     "jax-env-step": ("docs/jax/env_step.json", jax_env_step_table),
+    "incentives-ranking": ("docs/rl_benchmark/incentives.json", lambda data: incentive_tables.ranking_table(data)),
+    "incentives-rushing": ("docs/rl_benchmark/incentives.json", lambda data: incentive_tables.rushing_table(data)),
     "sbx-speed": ("docs/rl_benchmark/sbx_speed.json", sbx_speed_table),
     "sbx-v1": ("docs/rl_benchmark/sbx_v1.json", lambda data: rl_table(data, "random")),
     "sbx-v2": ("docs/rl_benchmark/sbx_v2.json", lambda data: rl_table(data, "random")),
@@ -299,6 +318,8 @@ def _rl_table(data: dict[str, Any], kind: str) -> str:
         )
     if kind == "disturbed":
         return rl_benchmark.disturbed_table(data["summary"], data["references"])
+    if kind == "per-T_con":
+        return rl_benchmark.per_T_con_table(data["summary"], data["references"])
     return rl_benchmark.table(data["summary"], data["references"])
 
 
@@ -317,19 +338,6 @@ def robust_headline(rows: list[dict[str, Any]]) -> str:
     )
 
 
-def block(text: str, name: str) -> str:
-    """The text between ``<!-- NAME:begin -->`` and ``<!-- NAME:end -->`` (a benchmark's block in a docs page)."""
-    begin = f"<!-- {name}:begin -->"
-    return text[text.index(begin) + len(begin) : text.index(f"<!-- {name}:end -->")]
-
-
-def with_block(text: str, name: str, body: str) -> str:
-    """``text`` with block ``name`` replaced by ``body``."""
-    begin = f"<!-- {name}:begin -->"
-    start, stop = text.index(begin) + len(begin), text.index(f"<!-- {name}:end -->")
-    return text[:start] + body + text[stop:]
-
-
 def markdown_files(root: Path = ROOT) -> list[Path]:
     """The README and every page of the docs."""
     return [root / "README.md", *sorted((root / "docs").rglob("*.md"))]
@@ -343,19 +351,36 @@ def render(name: str, root: Path = ROOT) -> str:
     return make(json.loads((root / path).read_text()))
 
 
-def regenerate(text: str, root: Path = ROOT) -> str:
-    """``text`` with every marked table made anew from its JSON."""
-    return MARKER.sub(lambda m: m.group(1) + render(m.group("name"), root) + m.group(4), text)
+def table_bodies(root: Path = ROOT) -> dict[str, Callable[[], str]]:
+    """Block name -> what makes its body (a newline, then the table) for every table of :data:`TABLES`."""
+    return {name: functools.partial(table_body, name, root) for name in TABLES}
 
 
-def stale(root: Path = ROOT) -> list[str]:
-    """The marked tables (as 'file: name') that differ from what their JSON gives."""
+def table_body(name: str, root: Path = ROOT) -> str:
+    """The body of table ``name``'s block: a newline, then the table."""
+    return "\n" + render(name, root)
+
+
+def regenerate(text: str, bodies: Mapping[str, Callable[[], str]] | None = None) -> str:
+    """``text`` with every generated block that ``bodies`` makes (default: the tables) made anew."""
+    bodies = table_bodies() if bodies is None else bodies
+
+    def body(match: re.Match[str]) -> str:
+        name = match.group("name")
+        return match.group(1) + (bodies[name]() if name in bodies else match.group("body")) + match.group(6)
+
+    return MARKER.sub(body, text)
+
+
+def stale(root: Path = ROOT, bodies: Mapping[str, Callable[[], str]] | None = None) -> list[str]:
+    """The generated blocks (as 'file: name') that ``bodies`` (default: the tables) make differently."""
+    bodies = table_bodies(root) if bodies is None else bodies
     found = []
     for path in markdown_files(root):
-        text = path.read_text()
-        for match in MARKER.finditer(text):
-            if match.group("body") != render(match.group("name"), root):
-                found.append(f"{path.relative_to(root)}: {match.group('name')}")
+        for match in MARKER.finditer(path.read_text()):
+            name = match.group("name")
+            if name in bodies and match.group("body") != bodies[name]():
+                found.append(f"{path.relative_to(root)}: {name}")
     return found
 
 

@@ -12,7 +12,10 @@ from typing import Any
 
 import numpy as np
 
-from train.evaluation.benchmark import METRICS, SETS
+from train.evaluation.benchmark import METRICS, PER_T_CON, SETS, per_T_con_set
+
+#: Every set a result may hold: the nominal and disturbed sets, then the nominal starts at each of PER_T_CON.
+ALL_SETS: tuple[str, ...] = (*SETS, *(per_T_con_set(T_con) for T_con in PER_T_CON))
 
 BOOTSTRAP_REPS = 2000
 CURVE_POINTS = 40
@@ -67,11 +70,12 @@ def aggregate(results: list[dict[str, Any]]) -> dict[str, Any]:
     for name in dict.fromkeys(r["entry"] for r in results):
         runs = sorted((r for r in results if r["entry"] == name), key=lambda r: r["seed"])
         sets = {s: {m: iqm_interval([r["sets"][s][m] for r in runs if s in r["sets"]]) for m in METRICS}
-                for s in SETS if any(s in r["sets"] for r in runs)}  # fmt: skip
+                for s in ALL_SETS if any(s in r["sets"] for r in runs)}  # fmt: skip
         curves = [r["curve"] for r in runs]
         out[name] = {
             "seeds": [r["seed"] for r in runs],
             "learned_from": runs[0].get("learned_from", "reward"),
+            "env_id": runs[0].get("env_id", "DWRPointStabilization-v1"),
             "seconds": iqm_interval([r["seconds"] for r in runs]),
             "env_steps": iqm_interval([r.get("env_steps") or math.nan for r in runs]),
             "sets": sets,
@@ -137,7 +141,7 @@ def table(
 
 
 FROM_REWARD = ("ppo", "ppo-jax", "ppo-jax-12m", "ppo-jax-tuned", "ppo-jax-anneal", "sac", "sac-tuned", "td3", "tqc",
-               "tqc-tuned", "crossq")  # fmt: skip
+               "tqc-tuned", "crossq", "es", "es-arena50")  # fmt: skip
 """The benchmark's entries of a network alone learned from the reward (the candidates of the first goal)."""
 GOALS = {
     "from the reward alone": (FROM_REWARD, 0.99, 1.5, 0.1),
@@ -182,6 +186,25 @@ def disturbed_table(summary: dict[str, Any], references: dict[str, Any] | None =
     return "\n".join(lines)
 
 
+def per_T_con_table(summary: dict[str, Any], references: dict[str, Any] | None = None) -> str:
+    """In time and E/opt (IQM over seeds) of each entry at each prescribed time of PER_T_CON."""
+    names = [per_T_con_set(T_con) for T_con in PER_T_CON]
+    head = " | ".join(f"{name.replace('T_con=', 'T_con ')} s: in time, E/opt" for name in names)
+    lines = [f"| agent | env | {head} |", "|---" * (len(names) + 2) + "|"]
+    for entry_name, entry in summary.items():
+        if not any(name in entry["sets"] for name in names):
+            continue
+        cells = [f"{_cell(entry['sets'][n]['in_time'], 2)}, {_cell(entry['sets'][n]['energy_ratio'], 2)}"
+                 if n in entry["sets"] else "-" for n in names]  # fmt: skip
+        env = str(entry.get("env_id", "DWRPointStabilization-v1")).rsplit("-", 1)[-1]
+        lines.append(f"| {entry_name} | {env} | " + " | ".join(cells) + " |")
+    for ref_name, sets in (references or {}).items():
+        cells = [f"{sets[n]['in_time']:.2f}, {'-' if sets[n]['energy_ratio'] is None else format(sets[n]['energy_ratio'], '.2f')}"
+                 if n in sets else "-" for n in names]  # fmt: skip
+        lines.append(f"| {ref_name} (controller) | v1 | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
 def plot_curves(summary: dict[str, Any], path: Path, x: str) -> None:
     """Learning curves (IQM over seeds and its 95 % band) of the in-time rate and the energy against ``x``."""
     import matplotlib
@@ -210,7 +233,7 @@ def plot_curves(summary: dict[str, Any], path: Path, x: str) -> None:
 
 
 def diagnosis_table(data: dict[str, Any]) -> str:
-    """The table of benchmarks/rl_diagnosis.py: PTC with exploration noise, what the noise's energy costs."""
+    """The table of ``python -m benchmarks run rl-diagnosis``: PTC with exploration noise, what the noise's energy costs."""
     lines = ["| exploration noise sigma | in time | energy | E/opt | return | noise's energy cost per s | over the "
              "episode |", "|---|---|---|---|---|---|---|"]  # fmt: skip
     for r in data["rows"]:
@@ -238,7 +261,7 @@ def levers_table(data: dict[str, Any]) -> str:
 
 
 def residual_table(data: dict[str, Any]) -> str:
-    """benchmarks/rl_residual.py: each residual agent beside its expert, and where its corrections act."""
+    """``python -m benchmarks run rl-residual``: each residual agent beside its expert, and where its corrections act."""
     lines = ["| policy | in time | E/opt | final heading [rad] | energy |", "|---|---|---|---|---|"]
     for name, entry in data["agents"].items():
         for label, m in ((f"{name} (residual)", entry["agent"]), (f"{entry['expert']} alone", entry["expert_alone"])):
@@ -255,7 +278,7 @@ def residual_table(data: dict[str, Any]) -> str:
 
 
 def sweep_table(data: dict[str, Any]) -> str:
-    """The trials of a ``dwr-gym sweep`` (benchmarks/rl_levers.py --sweep): hyperparameters and final evaluation."""
+    """The trials of a ``dwr-gym sweep`` (``python -m benchmarks run rl-sweep``): hyperparameters and final evaluation."""
     lines = ["| trial | hyperparameters | in time | return | energy |", "|---|---|---|---|---|"]
     for t in data["trials"]:
         params = ", ".join(f"{k} {v:.4g}" if isinstance(v, float) else f"{k} {v}"
@@ -266,7 +289,7 @@ def sweep_table(data: dict[str, Any]) -> str:
 
 
 def rushing_table(data: dict[str, Any]) -> str:
-    """benchmarks/rl_rushing.py: E/opt split into the price of the arrival time and the price of the motion."""
+    """``python -m benchmarks run rl-rushing``: E/opt split into the price of the arrival time and the price of the motion."""
     lines = ["| policy | episodes | arrival / T_con | E/opt | timing: E_opt(t_arr) / E_opt(T_con) | "
              "motion: E / E_opt(t_arr) |", "|---|---|---|---|---|---|"]  # fmt: skip
     for name, r in data["policies"].items():

@@ -1,0 +1,1 @@
+"""Datasets: the offline suite, its baselines, and how fast a dataset is made."""

@@ -1,0 +1,1 @@
+"""Learning: what the learned agents reach on the task, and why (levers, sweeps, diagnosis, residuals, timing)."""

@@ -1,0 +1,1 @@
+"""Quality: the controllers and agents against the paper's claims and the optimum."""

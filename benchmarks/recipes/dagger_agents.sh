@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# The hand-over agents of the README's "Prescribed-time agents" (issue 10): minimum-energy plans from random
+# starts (0.3-3 m, T_con in [10, 60] s, DWRPointStabilization-v1), four DAgger rounds in which the network
+# drives and plans are solved again from the states it reaches, then the choice of the hand-over to the
+# pt-astolfi law on the run's own evaluation starts (seed 12345). Seed 0 ships in train/pretrained/dagger_handover.
+# About 40 minutes per seed on 2 shared cores (planning and fitting on 2 million samples); needs the optimal and
+# train extras. (The earlier, smaller recipe of train/pretrained/dagger: --episodes 250 --dagger-rounds 2
+# --dagger-episodes 80 --replans-per-episode 3 --epochs 20, no hand-over.)
+set -euo pipefail
+export OMP_NUM_THREADS=1
+for seed in 0 1 2; do
+  python -m train.learning.dagger --run-dir "runs/dagger_handover_s$seed" --seed "$seed" --episodes 1000 --dagger-rounds 4 \
+    --dagger-episodes 300 --replans-per-episode 5 --epochs 30 --workers 2 --near-goal-weight 1 \
+    --handover-expert pt-astolfi --eval-episodes 200
+done
+# The goal, measured at T_con in {10, 20, 40, 60} on 500 random starts each (seed 0), the seeds as mean +- sd:
+python -m benchmarks run prescribed-time-goal runs/dagger_handover_s{0,1,2}

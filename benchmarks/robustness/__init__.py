@@ -1,0 +1,1 @@
+"""Robustness: the deadline under disturbances, for the controllers and the agents."""

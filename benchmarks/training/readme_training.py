@@ -1,0 +1,102 @@
+"""The README's training example, run as a user runs it: its wall and CPU time, and whether the agent arrives.
+
+    nice -n 10 python -m benchmarks run readme-training --docs     # writes docs/training/readme_example.json, ~5-30 min
+
+Runs ``COMMAND`` (a fresh `dwr-gym train` process, in a temporary directory), times it (wall clock, and the CPU time
+of the process and its children: on an idle machine the wall time of a run on one thread), then evaluates the
+run's best_model.zip and the PTC expert with `dwr-gym evaluate` on 200 random starts of the task (seed 0, not the
+training's evaluation set). The README quotes both times, the load average and the share that arrives in time.
+"""
+
+from __future__ import annotations
+
+import json
+import resource
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+from benchmarks.core.commands import checkout_env, dwr_gym, parser_for
+from benchmarks.core.docs import NUMBER, Block, Schema
+from benchmarks.core.record import load_average, torch_machine, write_json
+
+ROOT = Path(__file__).resolve().parents[2]
+JSON_PATH = ROOT / "docs" / "training" / "readme_example.json"
+COMMAND = ["dwr-gym", "train", "--run-dir", "runs/ppo-v1"]
+EVALUATE = ["dwr-gym", "evaluate", "--agents", "runs/ppo-v1", "--controllers", "ptc", "--scenarios", "random",
+            "--n", "200", "--optimum", "none"]  # fmt: skip
+
+
+KEPT = ("policy", "n", "success_rate", "energy_mean", "final_heading_error_mean")
+
+
+def cli(args: list[str], cwd: str) -> subprocess.CompletedProcess[str]:
+    """``dwr-gym ...`` (``args`` as the README types them) as this checkout's code, in ``cwd``."""
+    env = checkout_env()
+    env.pop("OMP_NUM_THREADS", None)  # the user's setting: none
+    return dwr_gym(args[1:], cwd, env=env, capture_output=True)
+
+
+def measure() -> dict[str, Any]:
+    """Train as the README says, then evaluate the best model and PTC; the times and the rows."""
+    with tempfile.TemporaryDirectory() as tmp:
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        began = time.perf_counter()
+        cli([*COMMAND, "--no-progress"], tmp)
+        wall = time.perf_counter() - began
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        load = load_average()
+        cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+        from train.learning.runs import read_evaluations
+
+        curve = read_evaluations(Path(tmp) / "runs/ppo-v1/evaluations.csv")
+        best = json.loads((Path(tmp) / "runs/ppo-v1/run_state.json").read_text())["best"]
+        cli([*EVALUATE, "--no-progress", "--out", "out"], tmp)
+        rows = json.loads((Path(tmp) / "out" / "evaluation.json").read_text())
+    return {
+        "machine": torch_machine(),
+        "command": " ".join(COMMAND),
+        "evaluate": " ".join(EVALUATE),
+        "wall_seconds": round(wall, 1),
+        "cpu_seconds": round(cpu, 1),
+        "load_average_1min_at_end": load,
+        "curve": curve,
+        "best": best,
+        "evaluation": [{k: row[k] for k in KEPT} for row in rows],
+    }
+
+
+def render(results: dict[str, Any]) -> str:
+    """The README's lines: the command, its times, and who arrives in time on the 200 starts."""
+    rows = {row["policy"]: row for row in results["evaluation"]}
+    agent = next(row for name, row in rows.items() if name != "ptc")
+    ptc = rows["ptc"]
+    steps = int(results["curve"][-1]["timesteps"])
+    return (
+        f"\n```bash\n{results['command']}     # {steps:,} env steps\n{results['evaluate']}\n```\n\n"
+        f"Measured ({results['machine']}): {results['cpu_seconds'] / 60:.1f} min of CPU time, about its wall time on "
+        f"an idle machine (it runs on one core); {results['wall_seconds'] / 60:.1f} min of wall time on the shared "
+        f"machine it ran on (load average {results['load_average_1min_at_end']:g}). Its best model arrives in time on "
+        f"{agent['success_rate']:.0%} of the 200 random starts of the task, with a mean energy of {agent['energy_mean']:.2f} "
+        f"(PTC: {ptc['success_rate']:.0%}, {ptc['energy_mean']:.2f}); final heading error "
+        f"{agent['final_heading_error_mean']:.2f} rad on average (PTC: {ptc['final_heading_error_mean']:.2f}). "
+        "One seed, from `docs/training/readme_example.json` (`python -m benchmarks run readme-training`).\n"
+    )
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = parser_for("readme-training", __doc__)
+    parser.add_argument("--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} and render its block")
+    args = parser.parse_args(argv)
+    results = measure()
+    print(render(results))
+    if args.docs:
+        write_json(JSON_PATH, results)
+
+
+#: The block of the README.
+BLOCKS = (Block("readme-training", "docs/training/readme_example.json", render,
+                Schema({"machine": str, "command": str, "evaluate": str, "wall_seconds": NUMBER, "cpu_seconds": NUMBER,
+                        "load_average_1min_at_end": NUMBER, "curve": list, "best": dict, "evaluation": list})),)  # fmt: skip

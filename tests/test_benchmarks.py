@@ -1,0 +1,79 @@
+"""The benchmarks as one suite: every module is an entry of the registry, listed with one line, runnable by name, and
+the docs' blocks render again from the JSON already written without changing a byte."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from benchmarks import registry
+from benchmarks.core import docs
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_every_benchmark_module_is_an_entry_and_every_entry_has_a_main() -> None:
+    modules = {str(path.relative_to(ROOT).with_suffix("")).replace("/", ".") for path in ROOT.glob("benchmarks/*/*.py")
+               if path.name != "__init__.py" and path.parent.name != "core"}  # fmt: skip
+    reports = {"benchmarks.speed.throughput_report"}  # a part of an entry: its report, from the JSON alone
+    assert modules - reports == set(registry.SUITE.values())
+    for name in registry.SUITE:
+        assert callable(registry.load(name).main), name
+        assert registry.summary(name), f"{name} has no docstring to list"
+    top = {path.name for path in ROOT.glob("benchmarks/*") if path.is_file()}
+    assert top == {"__init__.py", "__main__.py", "registry.py"}, "a benchmark belongs in a group, named in registry.py"
+
+
+def test_each_recipe_is_an_entry_beside_its_script() -> None:
+    scripts = {path.stem for path in ROOT.glob("benchmarks/recipes/*.sh")}
+    entries = {module.rsplit(".", 1)[1] for module in registry.SUITE.values() if ".recipes." in module}
+    assert scripts == entries and len(scripts) == 6
+
+
+def test_list_prints_one_line_per_entry() -> None:
+    result = subprocess.run([sys.executable, "-m", "benchmarks", "list"], cwd=ROOT, capture_output=True, text=True)
+    lines = result.stdout.splitlines()
+    assert result.returncode == 0 and [line.split()[0] for line in lines] == list(registry.SUITE)
+    assert all(line.split()[1] in ("speed", "training", "learning", "robustness", "quality", "testing", "datasets",
+                                   "recipes") for line in lines)  # fmt: skip
+
+
+def test_an_unknown_entry_is_named_in_one_line() -> None:
+    result = subprocess.run([sys.executable, "-m", "benchmarks", "run", "nope"], cwd=ROOT, capture_output=True,
+                            text=True)  # fmt: skip
+    assert result.returncode != 0 and "benchmark 'nope' is unknown: expected one of throughput" in result.stderr
+    assert "Traceback" not in result.stderr
+
+
+def test_run_gives_its_arguments_to_the_entry(capsys: pytest.CaptureFixture[str]) -> None:
+    from benchmarks.__main__ import main
+
+    with pytest.raises(SystemExit) as exit_:
+        main(["run", "memory", "--steps", "5"])
+    assert exit_.value.code == 2 and "--steps 5 is invalid" in capsys.readouterr().err
+
+
+def test_render_rewrites_nothing_when_every_block_is_current() -> None:
+    before = {path: path.read_text() for path in docs.doc_tables.markdown_files()}
+    assert docs.render() == []
+    assert {path: path.read_text() for path in before} == before
+
+
+def test_every_block_is_declared_once_and_every_declared_json_exists_or_is_not_shown() -> None:
+    shown = {m.group("name") for path in docs.doc_tables.markdown_files() for m in
+             docs.doc_tables.MARKER.finditer(path.read_text())}  # fmt: skip
+    for name, (_, block) in docs.producers().items():
+        assert (ROOT / block.json).is_file() or name not in shown, name
+    assert shown <= set(docs.producers())
+
+
+@pytest.mark.parametrize("name", list(registry.SUITE))
+def test_each_entry_says_how_to_run_it(name: str, capsys: pytest.CaptureFixture[str]) -> None:
+    try:
+        code = registry.load(name).main(["--help"])
+    except SystemExit as exit_:
+        code = exit_.code
+    assert code in (0, None) and capsys.readouterr().out.strip(), name

@@ -1,0 +1,132 @@
+"""What an env id's return pays for (issue 40): does the optimum earn the most, and does arriving early pay?
+
+Two measurements, each on any env id, scored with the discount the shipped hyperparameters train that id with
+(``gamma`` of ``train/hyperparams/ppo.yml``: 0.999 on v1, 1 on v2):
+
+- :func:`return_ranking`: the discounted return of each policy (the optimum, the analytic laws, the shipped
+  agents) on the same episodes; the optimum should rank first.
+- :func:`rushing_returns`: the minimum-energy plan to arrive at a fraction f of T_con (each deadline its own
+  optimal-control problem, ``optimal`` with ``arrival_fraction`` f, re-planned every second from the observed pose,
+  so it arrives under noise too), executed with Gaussian action noise of standard deviation sigma (the env's
+  ``actuation_noise``, on the normalised action, the noise an exploring agent adds): the return should be highest
+  at the latest arrival, whatever sigma; on v1 the early arrival pays (issue 32's diagnosis, as numbers).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from train.env_ids import env_keywords
+
+#: The shipped agents by path that are not registered names (their rows are in the RL benchmark).
+EXTRA_PRETRAINED = ("sac_tuned_v1", "tqc_tuned_v1")
+CONTROLLERS = ("optimal", "ptc", "pt-astolfi")
+
+
+def training_discount(env_id: str) -> float:
+    """The discount PPO trains ``env_id`` with by default (its section of train/hyperparams/ppo.yml)."""
+    from train.learning.hyperparams import default_hyperparams
+
+    return float(default_hyperparams("ppo", False, env_id).get("gamma", 0.99))
+
+
+def controller_policy(name: str, params: Any, **overrides: Any) -> Any:
+    """An expert policy acting by the controller ``name`` (of :mod:`baselines`) in an env of ``params``."""
+    from baselines import ExpertPolicy
+    from baselines.registry import make_controller
+
+    kwargs: dict[str, Any] = {}
+    if name in ("optimal", "robust-pt"):
+        kwargs.update(dt=params.dt, u_max=params.u_max, omega_max=params.omega_max)
+    return ExpertPolicy(make_controller(name, **{**kwargs, **overrides}), params.u_max, params.omega_max)
+
+
+def shipped_agents() -> dict[str, Any]:
+    """{name: policy} of every agent in train/pretrained (the registered names and those loaded by path)."""
+    from train.learning.agents import PRETRAINED_DIR, load_agent, pretrained_paths
+
+    paths = dict(pretrained_paths())
+    for name in EXTRA_PRETRAINED:
+        if (PRETRAINED_DIR / name / "model.zip").is_file():
+            paths[name] = PRETRAINED_DIR / name
+    return {name: load_agent(path)[1] for name, path in sorted(paths.items())}
+
+
+def _episodes(env_id: str, n: int, seed: int, **env_overrides: Any) -> tuple[Any, Any]:
+    from dwr_gym.params import EnvParams
+    from train.evaluation.scenarios import make_scenario
+
+    kwargs = env_keywords(env_id, env_overrides)
+    scenario = make_scenario("random", n=n, seed=seed, env_kwargs=kwargs)
+    params_kwargs = {k: v for k, v in kwargs.items() if k in EnvParams.__dataclass_fields__}
+    return scenario, EnvParams.from_kwargs(**params_kwargs)
+
+
+def return_ranking(
+    env_id: str, policies: dict[str, Any] | None = None, n: int = 200, seed: int = 4040, progress: bool = False
+) -> dict[str, Any]:
+    """The discounted return of each policy on ``n`` random episodes of ``env_id``: its mean, and the share of
+    episodes where the optimum's return is at least the policy's. ``policies`` default: :data:`CONTROLLERS` and
+    every shipped agent."""
+    from train.evaluation.rollout import rollout
+
+    scenario, params = _episodes(env_id, n, seed)
+    gamma = training_discount(env_id)
+    if policies is None:
+        policies = {name: controller_policy(name, params) for name in CONTROLLERS} | shipped_agents()
+    returns: dict[str, np.ndarray] = {}
+    for name, policy in policies.items():
+        result = rollout(policy, params, scenario.starts, scenario.goals, T_con=scenario.T_cons, seed=seed,
+                         discount=gamma, progress=progress, description=name)  # fmt: skip
+        returns[name] = result.episode_return
+    best = max(returns, key=lambda name: float(np.mean(returns[name])))
+    optimum = returns.get("optimal")
+    rows = [{"policy": name, "return_mean": float(np.mean(values)),
+             "optimum_at_least": None if optimum is None else float(np.mean(optimum >= values - 1e-9))}
+            for name, values in returns.items()]  # fmt: skip
+    rows.sort(key=lambda row: -row["return_mean"])
+    return {"env_id": env_id, "episodes": n, "seed": seed, "discount": gamma, "first": best, "rows": rows}
+
+
+def rushing_returns(
+    env_id: str,
+    fractions: tuple[float, ...] = (0.3, 0.5, 0.8, 1.0),
+    sigmas: tuple[float, ...] = (0.0, 0.1, 0.3),
+    n: int = 20,
+    seed: int = 4041,
+    workers: int = 1,
+    progress: bool = False,
+) -> dict[str, Any]:
+    """The discounted return of the minimum-energy plan to arrive at each fraction of T_con, under action noise of
+    each sigma, on ``n`` random episodes of ``env_id`` (the same episodes and noise draws for every fraction)."""
+    from train.evaluation.rollout import rollout
+
+    gamma = training_discount(env_id)
+    rows = []
+    for sigma in sigmas:
+        scenario, params = _episodes(env_id, n, seed, actuation_noise=sigma)
+        for fraction in fractions:
+            policy = controller_policy("optimal", params, arrival_fraction=fraction, workers=workers)
+            result = rollout(policy, params, scenario.starts, scenario.goals, T_con=scenario.T_cons, seed=seed,
+                             discount=gamma, progress=progress, description=f"sigma {sigma}, f {fraction}")  # fmt: skip
+            policy.controller.close()
+            arrived = np.isfinite(result.arrival_time)
+            rows.append({
+                "sigma": sigma, "fraction": fraction, "return_mean": float(np.mean(result.episode_return)),
+                "return_sem": float(np.std(result.episode_return) / np.sqrt(n)),
+                "in_time": float(np.mean(result.success)), "energy_mean": float(np.mean(result.energy)),
+                "arrival_fraction": float(np.mean(result.arrival_time[arrived] / result.T_con[arrived]))
+                if arrived.any() else None,
+            })  # fmt: skip
+    latest = {}
+    for sigma in sigmas:
+        mine = [row for row in rows if row["sigma"] == sigma]
+        latest[str(sigma)] = max(mine, key=lambda row: row["return_mean"])["fraction"] == max(fractions)
+    return {"env_id": env_id, "episodes": n, "seed": seed, "discount": gamma, "rows": rows,
+            "latest_pays_most": latest}  # fmt: skip
+
+
+__all__ = ["CONTROLLERS", "controller_policy", "return_ranking", "rushing_returns", "shipped_agents",
+           "training_discount"]  # fmt: skip
