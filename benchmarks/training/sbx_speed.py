@@ -1,7 +1,6 @@
 """Env steps per second of sbx-rl (JAX) against stable-baselines3 (torch) for SAC, TQC and CrossQ, in one run.
 
-    nice -n 5 python benchmarks/sbx_speed.py --docs      # writes docs/rl_benchmark/sbx_speed.json
-    python -m train.reporting.doc_tables                  # its table in docs/rl-libraries.md
+    nice -n 5 python -m benchmarks run sbx-speed --docs    # docs/rl_benchmark/sbx_speed.json and its table
 
 Each algorithm trains with the settings of ``dwr-gym train`` (train/hyperparams/<algo>.yml on
 DWRPointStabilization-v1: 64 robots, one gradient step of 256 samples per step of the 64) on the native vector env,
@@ -16,24 +15,26 @@ thread (torch's ``set_num_threads(1)``, XLA without its Eigen thread pool), as `
 from __future__ import annotations
 
 import os
-
-os.environ.setdefault("OMP_NUM_THREADS", "1")
-os.environ["XLA_FLAGS"] = f"{os.environ.get('XLA_FLAGS', '')} --xla_cpu_multi_thread_eigen=false".strip()
-
-import argparse
-import json
 import platform
 import statistics
-import sys
 import time
 from pathlib import Path
 from typing import Any
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+from benchmarks.core.commands import parser_for
+from benchmarks.core.docs import NUMBER, Schema, table
+from benchmarks.core.record import write_json
+
+ROOT = Path(__file__).resolve().parents[2]
 JSON_PATH = ROOT / "docs" / "rl_benchmark" / "sbx_speed.json"
 ALGORITHMS = ("sac", "tqc", "crossq")
 BACKENDS = ("sb3", "sbx")
+
+
+def one_thread() -> None:
+    """torch and XLA on one thread each, as ``dwr-gym train`` runs by default; before either is imported."""
+    os.environ.setdefault("OMP_NUM_THREADS", "1")
+    os.environ["XLA_FLAGS"] = f"{os.environ.get('XLA_FLAGS', '')} --xla_cpu_multi_thread_eigen=false".strip()
 
 
 def steps_per_second(algo: str, backend: str, steps: int, env_id: str) -> float:
@@ -72,7 +73,7 @@ def run(repeats: int, steps: int, env_id: str, algorithms: tuple[str, ...], path
         print(f"round {index + 1}/{repeats}: " + ", ".join(f"{k} {v:.0f}" for k, v in entry.items()), flush=True)
         data = summarize(rounds, steps, env_id, algorithms)
         if path is not None:
-            path.write_text(json.dumps(data, indent=1) + "\n")
+            write_json(path, data)
     return data
 
 
@@ -96,21 +97,24 @@ def _versions() -> dict[str, str]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = parser_for("sbx-speed", __doc__)
     parser.add_argument("--repeats", type=int, default=3, help="rounds, each timing every library (default: 3)")
     parser.add_argument("--steps", type=int, default=32_000, help="env steps timed per measurement (default: 32000)")
     parser.add_argument("--env", default="DWRPointStabilization-v1", help="env id (default: DWRPointStabilization-v1)")
     parser.add_argument("--algorithms", nargs="+", default=list(ALGORITHMS), choices=ALGORITHMS)
-    parser.add_argument("--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)}")
+    parser.add_argument("--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} (and its table)")
     args = parser.parse_args(argv)
+    if args.repeats < 1 or args.steps < 1:
+        parser.error(f"--repeats {args.repeats} and --steps {args.steps}: expected both >= 1")
+    one_thread()
     data = run(args.repeats, args.steps, args.env, tuple(args.algorithms), JSON_PATH if args.docs else None)
     from train.reporting.doc_tables import sbx_speed_table
 
     print(sbx_speed_table(data))
-    if args.docs:
-        print(f"wrote {JSON_PATH}")
     return 0
 
 
-if __name__ == "__main__":
-    raise SystemExit(main())
+#: The table of docs/rl-libraries.md.
+BLOCKS = (table("sbx-speed", Schema({"env_id": str, "steps_timed": int, "repeats": int, "rounds": list,
+                                     "summary": dict, "machine": str, "load_average": NUMBER,
+                                     "versions": dict})),)  # fmt: skip
