@@ -217,9 +217,9 @@ def test_every_seeds_learning_curve_is_measured_on_the_same_evaluation_set(tmp_p
     """The jitted trainer evaluates on the starts drawn with --eval-seed, whatever the training seed: the curves of
     two seeds compare episode for episode (and differ from the starts the training seed would draw)."""
     from train.evaluation.scenarios import make_scenario
-    from train.learning.jax_training import JaxRun
+    from train.learning.jax_run import JaxRun
 
-    runs = [JaxRun(resolved(backend="jax", seed=seed, eval_seed=777, eval_episodes=5), tmp_path, None, None, {}, None)
+    runs = [JaxRun(resolved(backend="jax", seed=seed, eval_seed=777, eval_episodes=5), tmp_path, None, {}, None)
             for seed in (0, 5)]  # fmt: skip
     expected = make_scenario("random", n=5, seed=777, env_kwargs=runs[0].config.env_keywords())
     for run in runs:
