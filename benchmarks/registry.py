@@ -28,6 +28,8 @@ SUITE: dict[str, str] = {
     "retrain-pretrained": "benchmarks.training.retrain_pretrained",
     "jax-training": "benchmarks.training.jax_training",
     "jax-residual": "benchmarks.training.jax_residual",
+    "es-speed": "benchmarks.training.es_speed",
+    "sbx-speed": "benchmarks.training.sbx_speed",
     # learning: what the learned agents reach, and why
     "rl-levers": "benchmarks.learning.rl_levers",
     "rl-sweep": "benchmarks.learning.rl_sweep",
@@ -37,6 +39,8 @@ SUITE: dict[str, str] = {
     "incentives": "benchmarks.learning.incentives",
     "ship-rl-agents": "benchmarks.learning.ship_rl_agents",
     "prescribed-time-goal": "benchmarks.learning.prescribed_time_goal",
+    "es-learn": "benchmarks.learning.es_learn",
+    "sbx-learn": "benchmarks.learning.sbx_learn",
     # robustness: the deadline under disturbances
     "robustness": "benchmarks.robustness.robustness",
     "robust-goal": "benchmarks.robustness.robust_goal",

@@ -185,6 +185,10 @@ def transition(
     # (late, the term between them there, is 0 where arrival and heading are not).
     ended = terminated if scalar or traced else np.flatnonzero(terminated)
     arrival, heading, arena = terminal_terms(is_success, in_time, out_of_arena, ended, coords.psi, params)
+    if hold:  # leaving the arena would save the energy of the episode's rest (noise included): charged at its most
+        rest = (state.prescribed_steps - state.step_count) * (dt * params.energy_weight * params.u_max * params.u_max
+                                                              + dt * params.energy_weight * params.omega_max * params.omega_max)  # fmt: skip
+        arena = arena - xp.where(out_of_arena, rest, 0.0)
     if scalar or traced:
         reward = reward + arrival + heading + arena
     elif ended.size:

@@ -192,8 +192,9 @@ class DWRPointStabilizationEnv(HorizonSpec, OneRobotRendering, gym.Env[NDArray[n
     problem's own (minimum energy to the goal pose by T_con); a policy that ends elsewhere gives up the
     bonus or a term of the miss and the heading, which outweighs the energy it can save, up to the goal
     tolerance: a policy may stop anywhere within ``goal_tolerance`` of the goal, and save the energy of at
-    most that last centimetre. Leaving the arena ends the episode with its penalty on top of what staying at
-    its edge would pay. With gamma < 1 set ``shaping_discount`` to gamma: the progress still sums to d_0, and
+    most that last centimetre. Leaving the arena ends the episode with its penalty and the most energy the
+    rest of the episode could cost (every command at its limit until T_con): an exit never saves energy, noise
+    included, where an exploring agent would otherwise leave to stop paying for its noise. With gamma < 1 set ``shaping_discount`` to gamma: the progress still sums to d_0, and
     the terminal terms are discounted by gamma^T, the same for every policy of the episode (T is fixed);
     only the energy is then weighed by when it is spent, which favours spending it late, never rushing.
     Train v2 with gamma = 1 (the shipped hyperparameters do).

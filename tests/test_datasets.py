@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+import os
 import sys
 from pathlib import Path
 
@@ -78,6 +80,30 @@ def test_collected_episodes_are_the_single_envs_episodes_robot_by_robot() -> Non
         assert meta["T_con"] == pytest.approx(observations[0, 7])  # the observation's T_con feature
 
 
+def test_each_episodes_outcome_is_the_evaluations_outcome_of_the_same_start() -> None:
+    """An episode's metadata (in time, arrived, arrival time, energy, final distance and heading error) is what the
+    evaluation's rollout measures from the same start and T_con; short prescribed times make some episodes late."""
+    from dwr_gym.params import EnvParams
+    from train.evaluation.rollout import rollout
+
+    kwargs = {**env_keywords(V1), "T_con_range": (3.0, 10.0)}
+    episodes = collect(ptc(), kwargs, 12, seed=11, num_envs=5)
+    meta = episodes.metadata
+    starts = np.array([m["start"] for m in meta])
+    T_con = np.array([m["T_con"] for m in meta])
+    result = rollout(ptc(), EnvParams.from_kwargs(**kwargs), starts, np.zeros_like(starts), T_con=T_con,
+                     env_kwargs=kwargs)  # fmt: skip
+    assert [m["in_time"] for m in meta] == result.success.tolist()
+    assert [m["arrived"] for m in meta] == result.arrived.tolist()
+    assert 0 < sum(result.success) and sum(result.success) < sum(result.arrived)  # in time, and late too
+    np.testing.assert_allclose([np.nan if m["arrival_time"] is None else m["arrival_time"] for m in meta],
+                               result.arrival_time, rtol=1e-9)  # fmt: skip
+    np.testing.assert_allclose([m["energy"] for m in meta], result.energy, rtol=1e-5)
+    np.testing.assert_allclose([m["final_distance"] for m in meta], result.final_distance, rtol=1e-5, atol=1e-7)
+    np.testing.assert_allclose([m["heading_error"] for m in meta], result.final_heading_error, rtol=1e-5, atol=1e-7)
+    assert [m["steps"] for m in meta] == [len(r) for r in episodes.rewards]
+
+
 def test_which_episodes_are_kept_does_not_depend_on_the_batch() -> None:
     few = collect(RandomPolicy(0), env_keywords(V1), 3, seed=2, num_envs=3)
     more = collect(RandomPolicy(0), env_keywords(V1), 6, seed=2, num_envs=6)
@@ -95,8 +121,11 @@ def written(dataset_id: str = "dwr-gym/test-v0", episodes: int = 5, **kwargs: ob
 
 
 def test_loading_round_trips_the_same_arrays_and_metadata() -> None:
+    from minari.namespace import list_local_namespaces
+
     data, dataset = written()
     assert dataset.total_episodes == 5 and dataset.total_steps == data.steps
+    assert list_local_namespaces() == ["dwr-gym"]  # the id's namespace, made for it
     for k, episode in enumerate(dataset.iterate_episodes()):
         np.testing.assert_array_equal(episode.observations, data.observations[k])
         np.testing.assert_array_equal(episode.actions, data.actions[k])
@@ -225,3 +254,102 @@ def test_the_command_writes_a_dataset_that_imitate_clones(
                      "--run-dir", str(run), "--no-progress"]) == 0  # fmt: skip
     assert (run / "model.zip").is_file()
     assert "steps of 6 episodes from dwr-gym/cli-v0" in capsys.readouterr().out
+
+
+def test_the_reference_scores_are_random_actions_and_the_optimum_on_the_nominal_robot(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    """ref_min_score is the mean return of random actions on the dataset's env, ref_max_score the optimum's on the
+    same starts without the robot's noise (here PTC stands in for the CasADi plans); both cached, in that order."""
+    from train.datasets import build
+
+    monkeypatch.setenv("DWR_GYM_CACHE", str(tmp_path))  # solved here, not read from another test's cache
+    monkeypatch.setattr(build, "controller_policy", lambda name, env_kwargs, seed=0: ptc())
+    noisy = {**env_keywords(V1), "observation_noise": 0.05}
+    nominal = env_keywords(V1)
+    low, high = build.reference_scores(V1, noisy, episodes=3)
+    random_returns = collect(RandomPolicy(build.REF_SEED), noisy, 3, seed=build.REF_SEED).returns()
+    best_returns = collect(ptc(), nominal, 3, seed=build.REF_SEED).returns()
+    assert low == pytest.approx(np.mean(random_returns)) and high == pytest.approx(np.mean(best_returns))
+    assert low < high
+    monkeypatch.setattr(build, "collect", None)  # the second call reads the cache
+    assert build.reference_scores(V1, noisy, episodes=3) == (low, high)
+    (cached,) = tmp_path.glob("dataset-reference-*.json")
+    assert json.loads(cached.read_text())["ref_min_score"] == low
+
+
+def test_a_built_dataset_normalises_returns_with_its_reference_scores(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``minari.get_normalized_score`` of the written dataset maps the random policy's mean return to 0 and the
+    optimum's to 1, and gives the normalised score ``dwr-gym dataset`` reports."""
+    from train.datasets import build
+
+    monkeypatch.setattr(build, "reference_scores", lambda *args, **kwargs: (-100.0, 12.0))
+    kwargs = {**env_keywords(V1), "observation_noise": 0.01}
+    request = build.DatasetRequest("dwr-gym/refs-v0", "ptc", V1, kwargs, 3, seed=2, num_envs=3, optimum=False)
+    summary = build.build_dataset(request, ptc())
+    dataset = load_dataset("dwr-gym/refs-v0")
+    assert {k: summary[k] for k in ("dataset_id", "policy", "env_id", "episodes", "episodes_without_optimum")} == {
+        "dataset_id": "dwr-gym/refs-v0", "policy": "ptc", "env_id": V1, "episodes": 3.0, "episodes_without_optimum": 3}
+    assert Path(summary["path"]) == Path(os.environ["MINARI_DATASETS_PATH"]) / "dwr-gym" / "refs-v0"
+    assert summary["collect_seconds"] > 0.0
+    assert [m["policy"] for m in episode_metadata(dataset)] == ["ptc"] * 3
+    assert [m["disturbance"] for m in episode_metadata(dataset)] == [{"observation_noise": 0.01}] * 3  # the robot
+    metadata = dataset.storage.metadata
+    assert (metadata["ref_min_score"], metadata["ref_max_score"]) == (-100.0, 12.0)
+    assert (summary["ref_min_score"], summary["ref_max_score"]) == (-100.0, 12.0)
+    np.testing.assert_allclose(minari.get_normalized_score(dataset, np.array([-100.0, 12.0])), [0.0, 1.0])
+    expected = minari.get_normalized_score(dataset, np.array([summary["return_mean"]]))[0]
+    assert summary["normalized_score"] == pytest.approx(expected) and 0.0 < expected < 1.5
+
+
+def test_e_over_opt_of_a_dataset_is_over_its_episodes_in_time_only(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Each episode's energy_ratio is its energy over its optimum where it arrived in time and has an optimum;
+    None otherwise (late, or no optimum); the dataset's mean E/opt is over those alone."""
+    from train.datasets import build
+    from train.datasets.collect import Episodes
+
+    optima, asked = np.array([1.0, 2.0, np.nan, 0.0]), []
+
+    def optimal_energies(params: object, starts: np.ndarray, goals: np.ndarray, T_cons: np.ndarray, **kwargs: object):
+        asked.append((params, starts, goals, T_cons))
+        return optima, ["no plan"]
+
+    monkeypatch.setattr(build, "optimal_energies", optimal_energies)
+    episodes = Episodes(rewards=[np.ones(2)] * 4, metadata=[
+        {"start": [0.0, 0.0, 0.0], "goal": [1.0, 0.0, 0.0], "T_con": 20.0, "energy": energy, "in_time": in_time,
+         "heading_error": 0.1} for energy, in_time in ((3.0, True), (10.0, False), (4.0, True), (5.0, True))])  # fmt: skip
+    assert build.add_optimum(episodes, {**env_keywords(V1), "u_max": 0.3}) == 1
+    ((params, starts, goals, T_cons),) = asked  # each episode's own start, goal and T_con, the env's limits
+    assert params.u_max == 0.3 and starts.shape == (4, 3) and goals.tolist() == [[1.0, 0.0, 0.0]] * 4
+    assert T_cons.tolist() == [20.0] * 4
+    assert [m["energy_ratio"] for m in episodes.metadata] == [3.0, None, None, None]
+    assert [m["optimal_energy"] for m in episodes.metadata] == [1.0, 2.0, None, 0.0]
+    assert build.statistics(episodes)["energy_ratio_mean"] == 3.0
+
+
+@pytest.mark.parametrize("policy", ["random", "pt-astolfi", "object"])
+def test_make_dataset_writes_the_episodes_of_a_controller_or_random_actions_named(
+    policy: str, monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    """``make_dataset`` with a name: the episodes of that controller, scaled to the env's own limits (a slower robot
+    here), or of random actions drawn from the dataset's seed; the same as collecting them directly."""
+    from baselines.registry import make_controller
+    from train.datasets import build, make_dataset
+
+    monkeypatch.setattr(build, "reference_scores", lambda *args, **kwargs: (-100.0, 12.0))
+    monkeypatch.setenv("MINARI_DATASETS_PATH", str(tmp_path / "new" / "folders"))  # made as needed
+    given = ExpertPolicy(make_controller("ptc"), 0.3, 2.0) if policy == "object" else policy  # or any predict()
+    summary = make_dataset(f"dwr-gym/{policy}-v0", policy=given, episodes=3, env_kwargs={"u_max": 0.3}, seed=4,
+                           num_envs=2, optimum=False)  # fmt: skip
+    kwargs = {**env_keywords(V1), "u_max": 0.3}
+    name = "ExpertPolicy" if policy == "object" else policy
+    acting = (RandomPolicy(4) if policy == "random" else
+              ExpertPolicy(make_controller("ptc" if policy == "object" else policy), 0.3, 2.0))  # fmt: skip
+    expected = collect(acting, kwargs, 3, seed=4, num_envs=2)
+    dataset = load_dataset(f"dwr-gym/{policy}-v0")
+    assert summary["policy"] == name and dataset.storage.metadata["algorithm_name"] == name
+    assert dataset.spec.env_spec.kwargs["u_max"] == 0.3
+    for k, episode in enumerate(dataset.iterate_episodes()):
+        np.testing.assert_array_equal(episode.actions, expected.actions[k])
+    with pytest.raises(ValueError, match="env_id 'CartPole-v1' is invalid"):
+        make_dataset("dwr-gym/x-v0", env_id="CartPole-v1")

@@ -52,7 +52,7 @@ def test_v0_and_v1_still_end_on_arrival() -> None:
 
 
 @settings(max_examples=15, deadline=None)
-@given(seed=st.integers(0, 2**31 - 1), T_con=st.floats(10.0, 14.0), gain=st.floats(0.0, 1.0))
+@given(seed=st.integers(0, 2**31 - 1), T_con=st.floats(10.0, 14.0), gain=st.floats(0.0, 3.0))
 def test_the_return_is_the_documented_sum_whatever_the_path(seed: int, T_con: float, gain: float) -> None:
     """G = d_0 - 2 E + 10 [at goal] + 5 (cos psi_T - 1) - 10 d_T (the env's docstring, gamma 1)."""
     env = gym.make(V2)
@@ -61,8 +61,9 @@ def test_the_return_is_the_documented_sum_whatever_the_path(seed: int, T_con: fl
                           {"T_con": T_con}, seed)  # fmt: skip
     first, last = infos[0], infos[-1]
     left = last["distance"] > env.unwrapped.params.arena_radius
+    rest = (int(last["T_con"] / 0.05 + 1e-9) - round(last["time"] / 0.05)) * 0.05 * (0.5**2 + 2.0**2)  # [s] x power
     expected = (first["distance"] - 2.0 * last["energy"] + 10.0 * last["is_success"] + 5.0 * (np.cos(last["heading_error"]) - 1)
-                - 10.0 * last["distance"] - 10.0 * left)  # fmt: skip
+                - 10.0 * last["distance"] - (10.0 + 2.0 * rest) * left)  # fmt: skip
     assert total == pytest.approx(expected, abs=1e-9)
 
 
@@ -135,3 +136,16 @@ def test_the_vector_env_is_the_single_env_on_v2() -> None:
             assert reward == pytest.approx(rewards[i], abs=1e-12)
             assert (single_terminated, single_truncated) == (terminated[i], truncated[i])
     assert ended.all()
+
+
+def test_leaving_the_arena_never_saves_the_energy_of_the_rest_of_the_episode() -> None:
+    """An exit at time t is charged the most the remaining T_con - t could cost, so standing still at the edge, or
+    flailing at full commands until T_con, pays at least as much as leaving."""
+    def exit_then(after: str) -> float:
+        env = gym.make(V2)
+        start = {"start": (4.99, 0.0, 0.0), "goal": (0.0, 0.0, 0.0), "T_con": 10.0}
+        if after == "leave":
+            return run(env, lambda obs, t: np.array([1.0, 0.0], np.float32), start)[0]
+        return run(env, lambda obs, t: np.array([0.0, 1.0], np.float32), start)[0]  # spins at full speed to T_con
+
+    assert exit_then("flail") > exit_then("leave")

@@ -140,6 +140,44 @@ def test_two_commands_caching_at_once_keep_each_others_optima(monkeypatch: pytes
     assert set(written) < set(cache) and len(written) == 4 and list(cache.values()).count(2.0) == 4
 
 
+def test_the_cache_is_read_merged_and_replaced_under_one_exclusive_lock(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    """While one command merges its optima (reads, updates, replaces the file) or claims a batch, no other command
+    can take the cache's lock, not even to read: the read-modify-write is whole. The lock is let go afterwards."""
+    fcntl = pytest.importorskip("fcntl")
+    import train.evaluation.optimum as optimum
+    from dwr_gym.params import EnvParams
+
+    monkeypatch.setenv("DWR_GYM_CACHE", str(tmp_path))
+    path = optimum._cache_file(EnvParams(), True)
+
+    def others_can_lock() -> bool:
+        with path.with_suffix(".lock").open("a") as handle:  # another open file: as another process holds it
+            try:
+                fcntl.flock(handle, fcntl.LOCK_SH | fcntl.LOCK_NB)  # refused only while the lock is exclusive
+            except BlockingIOError:
+                return False
+            fcntl.flock(handle, fcntl.LOCK_UN)
+            return True
+
+    replace, held = optimum._replace, []
+
+    def watched(target: Path, data: dict) -> None:
+        held.append((target.suffix, not others_can_lock()))
+        replace(target, data)
+
+    monkeypatch.setattr(optimum, "_replace", watched)
+    optimum._merge_into_cache(path, {"a": 1.0})
+    optimum._claim(path, ["a", "b", "c"], 1)
+    optimum._merge_into_cache(path, {"b": 2.0}, release=True)
+    assert held == [(".json", True), (".claims", True), (".claims", True), (".json", True), (".claims", True)]
+    assert others_can_lock() and json.loads(path.read_text()) == {"a": 1.0, "b": 2.0}
+    with optimum._locked(path):
+        assert not others_can_lock()
+    assert others_can_lock()
+
+
 def test_two_commands_solving_the_same_episodes_share_the_work(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     import os
     import subprocess

@@ -80,6 +80,32 @@ def test_the_gymnax_adapter_steps_under_jit_and_vmap_with_autoreset() -> None:
     assert env.action_space(params).sample(keys[0]).shape == (2,)
 
 
+def test_the_gymnax_discount_is_zero_only_where_the_episode_terminated() -> None:
+    """A value-based learner multiplies the next value by ``discount``: 0 past a termination (leaving the arena or
+    arriving), but 1 at a truncation at the horizon, where the episode goes on beyond the cut."""
+    from dwr_gym.jax_env.func_env import initial_state, observation_space
+
+    env, params = make_gymnax_env(dwr_gym.ENV_ID, T_con=0.5)
+    # robot 0 stands still until the horizon (15 steps); robot 1 starts 2 cm inside the arena, driving outwards
+    start = (jnp.array([0.3, params.arena_radius - 0.02]), jnp.zeros(2), jnp.zeros(2))
+    state = initial_state(start, jnp.full(2, 0.5), jax.random.PRNGKey(0), params, observation_space(params))
+    step = jax.jit(jax.vmap(env.step_env, in_axes=(0, 0, 0, None)))
+    action = jnp.array([[0.0, 0.0], [1.0, 0.0]])
+    keys = jax.random.split(jax.random.PRNGKey(1), 2)
+    seen = {"terminated": 0, "truncated": 0}
+    for _ in range(15):
+        _, state, _, done, info = step(keys, state, action, params)
+        np.testing.assert_array_equal(np.asarray(done), np.asarray(info["terminated"] | info["truncated"]))
+        discount = np.asarray(info["discount"])
+        np.testing.assert_array_equal(discount, np.where(np.asarray(info["terminated"]), 0.0, 1.0))
+        np.testing.assert_array_equal(np.asarray(env.discount(state, params)), discount)
+        seen["terminated"] += int(info["terminated"][1])
+        seen["truncated"] += int(info["truncated"][0])
+        assert not bool(info["terminated"][0])
+    assert seen == {"terminated": 15, "truncated": 1}  # robot 1 outside from its first step on; robot 0 cut at 15
+    assert np.asarray(info["discount"]).tolist() == [1.0, 0.0]
+
+
 def test_float64_with_x64_and_a_nan_action_gives_finite_numbers() -> None:
     with jax.enable_x64(True):
         env, params = make_gymnax_env(dtype="float64")
@@ -118,3 +144,40 @@ def test_bad_input_is_a_one_line_error_naming_the_parameter(kwargs: dict, messag
     with pytest.raises(ValueError) as error:
         functional_params(**kwargs)
     assert message in str(error.value) and "\n" not in str(error.value)
+
+
+def test_what_the_jax_envs_cannot_do_is_a_one_line_error_naming_it() -> None:
+    """Rendering, reset options (the JAX env draws its own starts), a bad robot count, params and keywords at once,
+    and parameters that are not EnvParams are refused in one line each, naming the argument."""
+    from dwr_gym.jax_env import FunctionalParams
+    from dwr_gym.jax_env.wrappers import DWRJaxEnv, DWRJaxVectorEnv
+
+    cases = [
+        (lambda: DWRJaxEnv(render_mode="human"), "render_mode='human' is invalid for the JAX env: expected None"),
+        (lambda: DWRJaxEnv().reset(options={"start": [1.0, 0.0, 0.0]}), "reset options ['start'] are invalid"),
+        (lambda: DWRJaxVectorEnv(2).reset(options={"T_con": 3.0}), "reset options ['T_con'] are invalid"),
+        (lambda: DWRJaxVectorEnv(num_envs=0), "num_envs=0 is invalid"),
+        (lambda: DWRFuncEnv(params=functional_params(), u_max=0.2), "env_kwargs=['u_max'] are invalid with params"),
+        (lambda: FunctionalParams.from_env_params({"u_max": 0.2}), "is invalid: expected a dwr_gym.params.EnvParams"),
+        (lambda: functional_params(disturbance_distribution=dwr_gym.randomization.DisturbanceDistribution(seed=1)),
+         "disturbance_distribution=DisturbanceDistribution("),
+    ]
+    for make, message in cases:
+        with pytest.raises(ValueError) as error:
+            make()
+        assert message in str(error.value) and "\n" not in str(error.value), str(error.value)
+
+
+def test_the_functional_params_are_the_envs_in_the_dtype_asked_for() -> None:
+    """A numpy dtype type is read as its name; a fixed T_con is the interval (T_con, T_con); no heading tolerance
+    is an infinite one; the spaces and the horizon are the numpy env's."""
+    params = functional_params(dwr_gym.ENV_ID, dtype=np.float32, T_con=7.0)
+    numpy_env = gym.make(dwr_gym.ENV_ID, T_con=7.0).unwrapped
+    assert params.dtype == "float32" and params.T_con_range == (7.0, 7.0) and params.T_con == 7.0
+    assert params.heading_tolerance == float("inf") and params.max_episode_steps == numpy_env.params.max_episode_steps
+    assert DWRFuncEnv(dwr_gym.ENV_ID, T_con=7.0).observation_space == numpy_env.observation_space
+    with jax.enable_x64(True):
+        space = DWRFuncEnv(dwr_gym.ENV_ID, dtype="float64", T_con=7.0).observation_space
+        assert space.dtype == np.float64
+        np.testing.assert_array_equal(space.high, numpy_env.observation_space.high.astype(np.float64))
+    assert functional_params(dwr_gym.ENV_ID, heading_tolerance=0.2).heading_tolerance == 0.2

@@ -194,12 +194,14 @@ def test_float64_steps_equal_the_numpy_env_to_1e_12(seed: int, env_id: str) -> N
 
 
 @settings(max_examples=2, **SETTINGS)
-@given(seed=st.integers(0, 2**31 - 1), dtype=st.sampled_from(["float32", "float64"]))
-def test_v2_steps_equal_the_numpy_env(seed: int, dtype: str) -> None:
-    """v2 (held to T_con) to the same tolerances as v0 and v1, but for what the azimuth decides within 1 mm of
-    the goal, where v2 holds robots (1000 times the tolerance there)."""
-    with jax.enable_x64(dtype == "float64"):
-        check(dwr_gym.ENV_ID_V2, dtype, seed)
+@given(seed=st.integers(0, 2**31 - 1))
+def test_v2_steps_equal_the_numpy_env_in_float64(seed: int) -> None:
+    """v2 (held to T_con) to the same tolerance as v0 and v1, but for what the azimuth decides within 1 mm of
+    the goal, where v2 holds robots (1000 times the tolerance there). In float32 its robots, which roam until
+    T_con, reach the arena's border often enough that one rounding step decides an exit in one env and not the
+    other (v0's and v1's float32 steps are compared above)."""
+    with jax.enable_x64(True):
+        check(dwr_gym.ENV_ID_V2, "float64", seed)
 
 
 @pytest.mark.slow

@@ -103,6 +103,86 @@ def test_advantages_are_sb3s_with_the_truncation_bootstrap() -> None:
     np.testing.assert_allclose(np.asarray(returns), buffer.returns, rtol=1e-5, atol=1e-5)
 
 
+def test_observation_statistics_are_sb3s_running_mean_and_variance() -> None:
+    """The running statistics of --normalize-observations merge batches of any size as SB3's RunningMeanStd (the
+    parallel algorithm), so the exported model's folded scaling is VecNormalize's."""
+    from stable_baselines3.common.running_mean_std import RunningMeanStd
+
+    from train.learning.jax_ppo import OBS_EPSILON, ObservationStatistics
+
+    rng = np.random.default_rng(4)
+    ours, theirs = ObservationStatistics.create(3), RunningMeanStd(shape=(3,))
+    for size, scale in ((5, 1.0), (17, 4.0), (2, 0.1)):
+        batch = rng.normal(2.0, scale, (size, 3))
+        ours, _ = ours.update(jnp.asarray(batch)), theirs.update(batch)
+        np.testing.assert_allclose(np.asarray(ours.mean), theirs.mean, rtol=1e-5)
+        np.testing.assert_allclose(np.asarray(ours.var), theirs.var, rtol=1e-5)
+        assert float(ours.count) == pytest.approx(theirs.count)
+    obs = rng.normal(size=(4, 3))
+    expected = (obs - theirs.mean) / np.sqrt(theirs.var + OBS_EPSILON)
+    np.testing.assert_allclose(np.asarray(ours.normalize(jnp.asarray(obs))), expected, rtol=1e-4, atol=1e-5)
+
+
+def test_the_loss_is_the_clipped_surrogate_plus_the_value_and_entropy_terms() -> None:
+    """JaxPPO.loss on a minibatch against the PPO loss written out in numpy (SB3's: advantages normalised with
+    ddof 1, the pessimistic min of the clipped and unclipped surrogates, vf_coef * MSE, ent_coef * -entropy)."""
+    from dwr_gym.jax_env.gymnax import make_gymnax_env
+    from train.learning.jax_ppo import JaxPPO
+
+    env, env_params = make_gymnax_env("DWRPointStabilization-v1")
+    settings = PPOSettings(n_envs=2, n_steps=4, batch_size=8, ent_coef=0.03, vf_coef=0.7, clip_range=0.1)
+    ppo = JaxPPO(settings, env, env_params)
+    params = random_params(settings, 3)
+    rng = np.random.default_rng(5)
+    obs, actions = rng.normal(size=(8, 10)).astype(np.float32), rng.normal(size=(8, 2)).astype(np.float32)
+    advantages, returns = rng.normal(1.0, 2.0, 8), rng.normal(size=8)
+    mean, log_std, values = (np.asarray(x, np.float64) for x in ppo.network.apply(params, obs))
+    log_prob = np.asarray(gaussian_log_prob(actions, mean, log_std), np.float64)
+    old_log_prob = log_prob + rng.uniform(-0.3, 0.3, 8)  # ratios on both sides of the clip range
+    ratio = np.exp(log_prob - old_log_prob)
+    assert np.any(ratio > 1.1) and np.any(ratio < 0.9) and np.any(np.abs(ratio - 1) < 0.1)
+    a = (advantages - advantages.mean()) / (advantages.std(ddof=1) + 1e-8)
+    surrogate = -np.mean(np.minimum(a * ratio, a * np.clip(ratio, 0.9, 1.1)))
+    entropy = np.sum(log_std + 0.5 * (1.0 + np.log(2.0 * np.pi)))
+    expected = surrogate + 0.03 * -entropy + 0.7 * np.mean((returns - values) ** 2)
+    batch = tuple(jnp.asarray(x, jnp.float32) for x in (obs, actions, old_log_prob, advantages, returns))
+    assert float(ppo.loss(params, batch)) == pytest.approx(expected, rel=1e-4)
+
+
+def test_a_rollout_records_what_the_policy_did_and_the_updates_follow_the_schedule() -> None:
+    """collect: each transition's log-probability and value are the policy's at its observation, the totals are
+    the rollout's sums. update: n_epochs x minibatches Adam steps each; with lin_ the rate reaches 0 at the end of
+    the budget, so the last update leaves the weights as they were."""
+    import dwr_gym
+    from dwr_gym.jax_env.gymnax import make_gymnax_env
+    from train.learning.jax_ppo import JaxPPO
+
+    env, env_params = make_gymnax_env(dwr_gym.ENV_ID, T_con=0.5)
+    settings = PPOSettings(n_envs=2, n_steps=16, batch_size=8, n_epochs=2, learning_rate=1e-2, linear_schedule=True)
+    ppo = JaxPPO(settings, env, env_params)
+    runner = ppo.init(seed=1)
+    after, transitions, totals = jax.jit(ppo.collect)(runner)
+    np.testing.assert_array_equal(transitions.obs[0], runner.obs)
+    mean, log_std, value = ppo.policy(runner.params, transitions.obs)
+    np.testing.assert_allclose(transitions.log_prob, gaussian_log_prob(transitions.action, mean, log_std), atol=1e-5)
+    np.testing.assert_allclose(transitions.value, value, atol=1e-6)
+    ended = np.asarray(transitions.terminated | transitions.truncated)
+    assert float(totals["episodes"]) == ended.sum() >= 2  # each robot truncated at 15 steps at the latest
+    assert float(totals["reward_sum"]) == pytest.approx(float(np.sum(transitions.reward)), rel=1e-5)
+    assert int(after.updates) == 0 and not np.array_equal(after.obs, runner.obs)
+
+    budget = 2 * settings.steps_per_update
+    first, metrics = ppo.run(runner, 1, total_timesteps=budget)
+    second, _ = ppo.run(first, 1, total_timesteps=budget)
+    changed = [not np.array_equal(a, b) for a, b in zip(jax.tree.leaves(runner.params), jax.tree.leaves(first.params),
+                                                         strict=True)]  # fmt: skip
+    assert all(changed)  # half the rate: every tensor moved
+    for a, b in zip(jax.tree.leaves(first.params), jax.tree.leaves(second.params), strict=True):
+        np.testing.assert_array_equal(a, b)  # the rate at the end of the budget is 0
+    assert int(second.updates) == 2 and int(second.opt_state[1].count) == 2 * 2 * 4
+    assert float(metrics["episodes"]) == float(totals["episodes"])  # the same first rollout, the same key
+
+
 def test_settings_read_the_yaml_and_refuse_what_they_do_not_implement() -> None:
     config = resolved()
     settings = PPOSettings.from_algo_kwargs(config.algo_kwargs, 256)
@@ -131,6 +211,22 @@ def test_log_std_final_caps_the_noise_along_the_budget_and_ends_at_its_value() -
         log_std = np.asarray(runner.params["params"]["log_std"])
         assert np.all(log_std <= -0.75 * update + 1e-6), (update, log_std)
     np.testing.assert_allclose(log_std, -3.0, atol=1e-6)
+
+
+def test_every_seeds_learning_curve_is_measured_on_the_same_evaluation_set(tmp_path: Path) -> None:
+    """The jitted trainer evaluates on the starts drawn with --eval-seed, whatever the training seed: the curves of
+    two seeds compare episode for episode (and differ from the starts the training seed would draw)."""
+    from train.evaluation.scenarios import make_scenario
+    from train.learning.jax_run import JaxRun
+
+    runs = [JaxRun(resolved(backend="jax", seed=seed, eval_seed=777, eval_episodes=5), tmp_path, None, {}, None)
+            for seed in (0, 5)]  # fmt: skip
+    expected = make_scenario("random", n=5, seed=777, env_kwargs=runs[0].config.env_keywords())
+    for run in runs:
+        np.testing.assert_array_equal(run.scenario.starts, expected.starts)
+        np.testing.assert_array_equal(run.scenario.T_cons, expected.T_cons)
+    own = make_scenario("random", n=5, seed=0, env_kwargs=runs[0].config.env_keywords())
+    assert not np.array_equal(own.starts, expected.starts)
 
 
 def cli(*args: str, **kwargs: Any) -> subprocess.Popen[str]:

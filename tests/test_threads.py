@@ -52,3 +52,12 @@ def test_a_bad_thread_count_is_one_line_naming_the_flag(command: str, capsys: py
     error = capsys.readouterr().err
     assert "--threads 0 is invalid" in error and len(error.strip().splitlines()) == 1
     assert not Path("unused-never-created").exists()
+
+
+@pytest.mark.parametrize("threads", [0, -1, 1025, True, 2.0, "2"])
+def test_a_thread_count_that_is_not_an_integer_in_range_is_refused(threads: object) -> None:
+    from train.threads import MAX_THREADS, check_threads
+
+    with pytest.raises(ValueError, match=r"^--threads .* is invalid: expected an integer in \[1, 1024\]$"):
+        check_threads(threads)  # type: ignore[arg-type]
+    assert check_threads(None) == 1 and check_threads(1) == 1 and check_threads(MAX_THREADS) == MAX_THREADS

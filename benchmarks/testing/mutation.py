@@ -71,11 +71,24 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
                       "residual_vec_env_with_zero_residual_is_the_expert", "residual_training_starts_from_the_expert",
                       "zero_init_scales_the_last_layer_to_gain_and_zeroes_its_bias",
                       "short_training_run_of_each_algorithm[ppo-residual]"))]),
+    "jax_env": (["dwr_gym/jax_env/*"], ["tests/test_jax_env.py", "tests/test_jax_equivalence.py"]),
+    "jax_ppo": (["train/learning/jax_ppo.py", "train/learning/jax_policy.py", "train/learning/jax_export.py"],
+                ["tests/test_jax_training.py"]),
+    "protocol": (["train/learning/benchmark.py", "train/evaluation/benchmark.py", "train/reporting/rl_benchmark.py"],
+                 ["tests/test_rl_protocol.py", "tests/test_rl_benchmark.py",
+                  "tests/test_docs.py::test_every_table_agrees_with_its_json"]),
+    "datasets": (["train/datasets/*"], ["tests/test_datasets.py"]),
+    "guards": (["train/threads.py", "train/evaluation/optimum.py"],
+               ["tests/test_threads.py", "tests/test_first_hour_training.py", "tests/test_optimal.py"]),
 }  # fmt: skip
 #: Words of DESELECTED a group keeps: the learning group's subject is the tiny DAgger runs.
 KEPT = {"learning": ("cloning_run",)}
 #: Words a group leaves out besides: the shipped robust agent's evaluations take minutes per mutant.
-EXTRA = {"robust": ("shipped",)}
+EXTRA = {"robust": ("shipped",),
+         # the protocol's older end-to-end run (two minutes per mutant on a busy machine; test_rl_protocol.py trains
+         # two seeds instead), and the RL options' training runs
+         "protocol": ("trains_evaluates_and_aggregates", "tqc_and_crossq", "normalised_observations", "energy_split"),
+         "guards": ("ctrl_c", "train_runs_on_one_thread")}  # fmt: skip
 #: Groups whose module runs code at import (dwr_gym.model builds its torch-backed functions then): mutmut imports
 #: them anew for each mutant instead of forking after collection, which would keep the unmutated import.
 IMPORT_PER_MUTANT = {"model"}
@@ -97,7 +110,7 @@ def mutmut_config(group: str) -> str:
         "pytest_add_cli_args_test_selection": tests,
         "pytest_add_cli_args": ["-p", "no:xdist", "-p", "no:cacheprovider", "-m", "not slow", "-k", deselected(group),
                                 "-W", "ignore::DeprecationWarning"],
-        "timeout_multiplier": 5.0,
+        "timeout_multiplier": 20.0,  # a mutant that times out counts as killed: room for a busy shared machine
         "forkserver_warmup": "none" if group in IMPORT_PER_MUTANT else "collect",
     }  # fmt: skip
     return "\n[tool.mutmut]\n" + "".join(f"{key} = {json.dumps(value)}\n" for key, value in table.items())
@@ -119,6 +132,19 @@ def prepare(group: str, work: Path) -> Path:
     pyproject = (target / "pyproject.toml").read_text()
     pyproject = re.sub(r"\n\[tool\.mutmut\].*?(?=\n\[|\Z)", "", pyproject, flags=re.S)
     (target / "pyproject.toml").write_text(pyproject + mutmut_config(group))
+    return target
+
+
+def refresh(group: str, target: Path) -> Path:
+    """An earlier work copy of ``group`` (its mutants already generated, its test statistics taken) with the current
+    tests and mutmut configuration: mutmut then maps only the new tests before testing mutants."""
+    for tests in (target / "tests", target / "mutants" / "tests"):
+        shutil.rmtree(tests, ignore_errors=True)
+        shutil.copytree(ROOT / "tests", tests, ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
+    for pyproject in (target / "pyproject.toml", target / "mutants" / "pyproject.toml"):
+        if pyproject.is_file():
+            text = re.sub(r"\n\[tool\.mutmut\].*?(?=\n\[|\Z)", "", pyproject.read_text(), flags=re.S)
+            pyproject.write_text(text + mutmut_config(group))
     return target
 
 
@@ -193,13 +219,14 @@ def run(
     collect_only: bool = False,
     sample: int = 0,
     seed: int = 0,
+    reuse: bool = False,
 ) -> None:
     """Run mutmut on each group and store its mutants in the results JSON. With ``recheck``, only the mutants
     not killed in the last run are tested again, against the current tests (mutmut still generates all)."""
     for group in groups:
         began = time.perf_counter()
         log = work / f"{group}.log"
-        directory = work / group if collect_only else prepare(group, work)
+        directory = work / group if collect_only else refresh(group, work / group) if reuse else prepare(group, work)
         previous = json.loads(RESULTS.read_text())["groups"][group] if recheck else None
         names = (
             [m["name"] for m in previous["mutants"] if m["status"] not in ("killed", "timeout", "not checked")]
@@ -210,6 +237,11 @@ def run(
               flush=True)  # fmt: skip
         population = None
         if sample and not recheck and not collect_only:
+            if reuse:  # the earlier copy's mutants stay; their statuses are tested afresh
+                for meta in (directory / "mutants").rglob("*.py.meta"):
+                    data = json.loads(meta.read_text())
+                    data["exit_code_by_key"] = dict.fromkeys(data["exit_code_by_key"])
+                    meta.write_text(json.dumps(data))
             # mutmut generates the mutants and maps tests to functions, then stops at the unknown name
             mutmut(directory, "run", "--max-children", str(max_children), "no_such_mutant", log=log)
             everything = all_names(directory)
@@ -306,12 +338,15 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--sample", type=int, default=0,
                         help="test a seeded random sample of this many mutants per group (0: all)")  # fmt: skip
     parser.add_argument("--seed", type=int, default=0, help="seed of --sample")
+    parser.add_argument("--reuse", action="store_true",
+                        help="keep each group's earlier work copy (its mutants and test statistics), with the current tests")
     parser.add_argument("--recheck", action="store_true",
                         help="test only the mutants not killed last time, against the current tests")  # fmt: skip
     args = parser.parse_args(argv)
     if shutil.which("mutmut", path=str(Path(sys.executable).parent)) is None:
         raise SystemExit('mutmut is not installed: pip install "dwr-gym[mutation]"')
-    run(args.groups, args.work, args.max_children, args.recheck, args.collect_only, args.sample, args.seed)
+    run(args.groups, args.work, args.max_children, args.recheck, args.collect_only, args.sample, args.seed,
+        args.reuse)
 
 
 BLOCKS = (Block("mutation-score", "docs/testing/mutation.json", markdown(score_lines), Schema({"groups": dict})),

@@ -38,6 +38,12 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--references", nargs="*", default=["ptc", "pt-astolfi"], metavar="CONTROLLER",
                    help="controllers evaluated beside the agents (default: ptc pt-astolfi)")  # fmt: skip
     p.add_argument("--jobs", type=count, default=1, help="runs in parallel processes (default: 1)")
+    p.add_argument("--ray", action="store_true", help="run the agent x seed grid as Ray tasks on a Ray started here "
+                   "instead of --jobs processes (extra 'sweep')")  # fmt: skip
+    p.add_argument("--address", help="run the grid as Ray tasks on the running Ray cluster at this address (auto, or "
+                   "ray://host:10001); its workers need dwr-gym and --out at the same path (default: none)")  # fmt: skip
+    p.add_argument("--resources-per-run", default="cpu=1", metavar="KEY=N,...",
+                   help="Ray resources of one run, e.g. cpu=2 or cpu=1,gpu=0.25 (default: cpu=1)")  # fmt: skip
     p.add_argument("--out", default="results/rl-benchmark", help="output directory (default: results/rl-benchmark)")
     p.add_argument(
         "--report-only",
@@ -73,8 +79,12 @@ def run(args: argparse.Namespace) -> int:
         if not results:
             raise UsageError(f"--out {str(out)!r} holds no results of these agents: run without --report-only")
     else:
+        from train.learning.sweep import parse_resources
+
         try:
-            results = run_benchmark(entries, list(range(args.seeds)), out, budget, jobs=args.jobs)
+            resources = parse_resources(args.resources_per_run, "--resources-per-run")
+            results = run_benchmark(entries, list(range(args.seeds)), out, budget, jobs=args.jobs, ray=args.ray,
+                                    address=args.address, resources=resources)  # fmt: skip
         except ConfigError as error:
             raise UsageError(str(error)) from error
     for result in results:  # env steps and training seconds as the run itself counted them (a resumed run too)
@@ -148,7 +158,8 @@ def versions() -> dict[str, str | None]:
     from importlib.metadata import PackageNotFoundError, version
 
     found: dict[str, str | None] = {"python": platform.python_version()}
-    for name in ("numpy", "gymnasium", "torch", "stable-baselines3", "sb3-contrib", "jax", "jaxlib", "flax", "optax"):
+    for name in ("numpy", "gymnasium", "torch", "stable-baselines3", "sb3-contrib", "jax", "jaxlib", "flax", "optax",
+                 "sbx-rl"):
         try:
             found[name] = version(name)
         except PackageNotFoundError:

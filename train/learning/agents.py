@@ -53,7 +53,7 @@ def load_agent(path: str | Path, part: str = "whole") -> tuple[str, Any]:
         raise AgentLoadError(f"agent {str(path)!r} is invalid: no config.yaml beside it or above it") from None
     try:
         config = load_config(run_dir)
-        model = algorithm_class(config.algo).load(model_path, device="cpu")
+        model = algorithm_class(config.algo, config.backend).load(model_path, device="cpu")
     except (ConfigError, ValueError, KeyError, OSError) as error:
         raise AgentLoadError(f"agent {str(path)!r} could not be loaded: {error}") from error
     label = run_dir.name.replace("_", "-") if path.is_dir() else f"{run_dir.name}/{model_path.stem}"

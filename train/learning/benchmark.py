@@ -21,11 +21,22 @@ from typing import Any
 from train.env_ids import TASK_ENV_ID
 from train.evaluation.benchmark import DISTURBED_EPISODES, EVAL_EPISODES, EVAL_SEED, OPTIMUM_EPISODES, evaluate_policy
 from train.learning.config import ConfigError, TrainConfig
+from train.learning.hyperparams import HYPERPARAMS_DIR
 
+V2 = "DWRPointStabilization-v2"
 #: The shipped entries: the options of ``dwr-gym train`` each one trains with (on top of train/hyperparams/).
 ENTRIES: dict[str, dict[str, Any]] = {
     "ppo": {"algo": "ppo"},
     "ppo-jax": {"algo": "ppo", "backend": "jax"},
+    # evolution strategies on the JAX env (train/hyperparams/es.yml): a generation is some 500,000 env steps, so
+    # its curve is evaluated every 5 M of them rather than at the benchmark's --eval-freq
+    "es": {"algo": "es", "backend": "jax", "eval_freq": 5_000_000, "checkpoint_freq": 5_000_000},
+    # the same on v1 with an arena of 50 m: leaving v1's 5 m arena ends an episode at a cost (-10 + the start's
+    # potential) that a policy which cannot yet arrive prefers to the late penalty, a trap ES falls into
+    # (docs/evolution.md); the evaluation is on v1 as registered
+    "es-arena50": {"algo": "es", "backend": "jax", "eval_freq": 5_000_000, "checkpoint_freq": 5_000_000,
+                   "env_kwargs": {"arena_radius": 50.0}},
+    "es-v2": {"algo": "es", "backend": "jax", "env_id": V2, "eval_freq": 5_000_000, "checkpoint_freq": 5_000_000},
     "sac": {"algo": "sac"},
     "td3": {"algo": "td3"},
     "tqc": {"algo": "tqc"},
@@ -39,6 +50,18 @@ ENTRIES: dict[str, dict[str, Any]] = {
                             "env_id": "DWRPointStabilization-v2"},
     "residual-ppo-jax-astolfi-v2": {"algo": "ppo", "backend": "jax", "residual": True, "expert": "pt-astolfi",
                                     "env_id": "DWRPointStabilization-v2"},
+    # sbx-rl, the JAX stable-baselines (issue 40): the same algorithms and settings, compiled by XLA
+    "sac-sbx": {"algo": "sac", "backend": "sbx"},
+    "tqc-sbx": {"algo": "tqc", "backend": "sbx"},
+    "crossq-sbx": {"algo": "crossq", "backend": "sbx"},
+    # the task held to T_con (issue 40): gamma 1 (the v2 sections of train/hyperparams/), the jitted PPO with its
+    # exploration noise on a fixed schedule, the off-policy learners of sbx
+    "ppo-jax-v2": {"algo": "ppo", "backend": "jax", "env_id": V2},
+    "ppo-jax-fixed-noise-v2": {"algo": "ppo", "backend": "jax", "env_id": V2,
+                               "hyperparams": str(HYPERPARAMS_DIR / "ppo_jax_v2.yml")},
+    "sac-sbx-v2": {"algo": "sac", "backend": "sbx", "env_id": V2},
+    "tqc-sbx-v2": {"algo": "tqc", "backend": "sbx", "env_id": V2},
+    "crossq-sbx-v2": {"algo": "crossq", "backend": "sbx", "env_id": V2},
 }
 RESULTS_DIR, RUNS_DIR = "results", "runs"
 
@@ -177,7 +200,7 @@ def run_one(entry: Entry, seed: int, out: Path, budget: dict[str, Any], progress
             config.overwrite = True
         if not (state.is_file() and json.loads(state.read_text()).get("finished")):
             trainer = train
-            if config.backend == "jax":  # the jitted PPO (train.learning.jax_training), where it is installed
+            if config.backend == "jax":  # the jitted PPO or ES (train.learning.jax_training), where it is installed
                 try:
                     from train.learning.jax_training import train_jax as trainer
                 except ImportError as error:
@@ -217,11 +240,25 @@ def read_curve(run_dir: Path, repeat: int = 1) -> list[dict[str, float]]:
 
 
 def run_benchmark(
-    entries: list[Entry], seeds: list[int], out: Path, budget: dict[str, Any], jobs: int = 1, progress: bool = False
-) -> list[dict[str, Any]]:
-    """Every (entry, seed), in ``jobs`` processes; the results in the order of entries then seeds."""
+    entries: list[Entry], seeds: list[int], out: Path, budget: dict[str, Any], jobs: int = 1, progress: bool = False,
+    ray: bool = False, address: str | None = None, resources: dict[str, float] | None = None,
+) -> list[dict[str, Any]]:  # fmt: skip
+    """Every (entry, seed), in ``jobs`` processes, or as Ray tasks of ``resources`` with ``ray`` or an ``address``
+    (:mod:`train.learning.ray_grid`: a local Ray, or the cluster at ``address``); the results in the order of
+    entries then seeds."""
     out.mkdir(parents=True, exist_ok=True)
     work = [(entry, seed) for entry in entries for seed in seeds]
+    if ray or address is not None:
+        from train.learning.ray_grid import run_on_ray
+
+        out = out.resolve()  # the workers' working directory is not the driver's
+        results = run_on_ray(run_one, [(entry, seed, out, budget) for entry, seed in work], address, resources)
+        for result in results:  # where a worker on another machine wrote its result to a disk the driver lacks
+            path = out / RESULTS_DIR / f"{result['entry']}-seed{result['seed']}.json"
+            if not path.is_file():
+                path.parent.mkdir(parents=True, exist_ok=True)
+                path.write_text(json.dumps(result, indent=1, default=str))
+        return results
     if jobs <= 1 or any(entry.make is not None for entry in entries):
         return [run_one(entry, seed, out, budget, progress) for entry, seed in work]
     import multiprocessing

@@ -11,7 +11,7 @@ import re
 from pathlib import Path
 from typing import Any
 
-from dwr_gym.validation import as_float, as_int
+from dwr_gym.validation import as_bool, as_float, as_int
 from train.learning.config import MAX_TIMESTEPS, MAX_TRAIN_ENVS, ConfigError, TrainConfig
 
 ENV_SECTION = re.compile(r"^(dwr_gym:)?DWRPointStabilization-v\d+$")
@@ -37,7 +37,8 @@ def default_hyperparams(algo: str, residual: bool, env_id: str) -> dict[str, Any
 def default_budget(algo: str, residual: bool, env_id: str) -> tuple[int, int]:
     """(n_envs, n_timesteps) of the shipped YAML: the defaults of --num-envs and --total-timesteps."""
     section = load_zoo_yaml(str(hyperparams_file(algo, residual)), env_id)
-    return int(section["n_envs"]), int(float(section["n_timesteps"]))
+    # (ES has no n_envs: its robots are population_size x episodes of its own keys)
+    return int(section.get("n_envs", 1)), int(float(section["n_timesteps"]))
 
 
 def fill_budget(config: TrainConfig) -> TrainConfig:
@@ -160,7 +161,7 @@ def resolve_hyperparams(config: TrainConfig, explicit: set[str]) -> TrainConfig:
         except ValueError as error:
             raise ConfigError(str(error)) from None
         params.update(zoo_to_sb3(layer, config.hyperparams if source == "YAML" else "--hyperparams"))
-    config.algo_kwargs = check_algo_kwargs(config.algo, params)
+    config.algo_kwargs = check_algo_kwargs(config.algo, params, config.backend)
     return fill_budget(config)
 
 
@@ -204,8 +205,13 @@ def _check_policy_kwargs(value: Any) -> dict[str, Any]:
     return kwargs
 
 
-def algorithm_class(algo: str) -> Any:
-    """The stable-baselines3 class of ``algo``."""
+def algorithm_class(algo: str, backend: str = "sb3") -> Any:
+    """The class of ``algo`` whose model files a run of ``backend`` writes: sbx-rl's for ``sbx``, else
+    stable-baselines3's (the jitted PPO of ``jax`` saves an SB3 PPO, and ES its evolved actor as one)."""
+    if backend == "sbx":
+        from train.learning.sbx_backend import sbx_class
+
+        return sbx_class(algo)
     import stable_baselines3
 
     if algo in ("tqc", "crossq"):
@@ -214,7 +220,8 @@ def algorithm_class(algo: str) -> Any:
         except ImportError as error:
             raise ConfigError(f'--algo {algo} needs sb3-contrib: pip install "dwr-gym[train]"') from error
         return {"tqc": sb3_contrib.TQC, "crossq": sb3_contrib.CrossQ}[algo]
-    return {"ppo": stable_baselines3.PPO, "sac": stable_baselines3.SAC, "td3": stable_baselines3.TD3}[algo]
+    return {"ppo": stable_baselines3.PPO, "es": stable_baselines3.PPO, "sac": stable_baselines3.SAC,
+            "td3": stable_baselines3.TD3}[algo]
 
 
 _ALIASES = {"lr": "learning_rate", "learning-rate": "learning_rate", "batch": "batch_size", "epochs": "n_epochs",
@@ -222,10 +229,17 @@ _ALIASES = {"lr": "learning_rate", "learning-rate": "learning_rate", "batch": "b
 """Names users type for a hyperparameter that stable-baselines3 calls otherwise."""
 
 
-def check_algo_kwargs(algo: str, params: dict[str, Any]) -> dict[str, Any]:
+def check_algo_kwargs(algo: str, params: dict[str, Any], backend: str = "sb3") -> dict[str, Any]:
     """The hyperparameters coerced to their types; unknown or ill-typed ones raise ConfigError before any work."""
-    accepted = set(inspect.signature(algorithm_class(algo).__init__).parameters) - {"self", "env", "device", "seed"}
-    accepted |= {"action_noise_sigma"} | ({"log_std_final"} if algo == "ppo" else set())
+    if algo == "es":
+        from train.learning.es_settings import check_es_kwargs
+
+        if "policy_kwargs" in params:
+            params = {**params, "policy_kwargs": _check_policy_kwargs(params["policy_kwargs"] or {})}
+        return check_es_kwargs(params)
+    cls = algorithm_class(algo, backend)
+    accepted = set(inspect.signature(cls.__init__).parameters) - {"self", "env", "device", "seed"}
+    accepted |= {"action_noise_sigma"} | ({"log_std_final", "log_std_fixed"} if algo == "ppo" else set())
     unknown = sorted(set(params) - accepted)
     if unknown:
         import difflib
@@ -236,7 +250,8 @@ def check_algo_kwargs(algo: str, params: dict[str, Any]) -> dict[str, Any]:
         hints = ", ".join(
             f"{near[key][0]} for {key}" if len(unknown) > 1 else near[key][0] for key in unknown if near[key]
         )
-        raise ConfigError(f"hyperparameter(s) {unknown} are not accepted by {algo.upper()}"
+        library = " of sbx" if backend == "sbx" else ""
+        raise ConfigError(f"hyperparameter(s) {unknown} are not accepted by {algo.upper()}{library}"
                           f"{f' (did you mean {hints}?)' if hints else ''}; accepted: {', '.join(shown)}")  # fmt: skip
     checked = dict(params)
     try:
@@ -254,6 +269,11 @@ def check_algo_kwargs(algo: str, params: dict[str, Any]) -> dict[str, Any]:
     except ValueError as error:
         hint = " or 'lin_<number>'" if "learning_rate" in str(error) else ""
         raise ConfigError(f"{error}{hint}") from None
+    if "log_std_fixed" in checked:
+        try:
+            checked["log_std_fixed"] = as_bool("log_std_fixed", checked["log_std_fixed"])
+        except ValueError as error:
+            raise ConfigError(str(error)) from None
     if "policy_kwargs" in checked:
         checked["policy_kwargs"] = _check_policy_kwargs(checked["policy_kwargs"] or {})
     if "policy" in checked and checked["policy"] != "MlpPolicy":
@@ -292,8 +312,8 @@ def rollout_rounding(config: TrainConfig) -> str | None:
             f"{config.total_timesteps} runs {rounded} steps")  # fmt: skip
 
 
-def build_algo_kwargs(params: dict[str, Any]) -> dict[str, Any]:
-    """Turn resolved hyperparameters into the keyword arguments of the SB3 constructor."""
+def build_algo_kwargs(params: dict[str, Any], backend: str = "sb3") -> dict[str, Any]:
+    """Turn resolved hyperparameters into the keyword arguments of the SB3 (or sbx) constructor."""
     import numpy as np
     import torch
 
@@ -303,10 +323,15 @@ def build_algo_kwargs(params: dict[str, Any]) -> dict[str, Any]:
         start = float(lr[4:])
         kwargs["learning_rate"] = lambda progress_remaining: progress_remaining * start
     policy_kwargs = dict(kwargs.get("policy_kwargs") or {})
-    if isinstance(policy_kwargs.get("activation_fn"), str):
+    if backend == "sbx":
+        from train.learning.sbx_backend import sbx_policy_kwargs
+
+        policy_kwargs = sbx_policy_kwargs(policy_kwargs)
+    elif isinstance(policy_kwargs.get("activation_fn"), str):
         policy_kwargs["activation_fn"] = getattr(torch.nn, policy_kwargs["activation_fn"].split(".")[-1])
     kwargs["policy_kwargs"] = policy_kwargs
     kwargs.pop("log_std_final", None)  # PPO's annealed noise: a callback of train.learning.training, not SB3's
+    kwargs.pop("log_std_fixed", None)
     sigma = kwargs.pop("action_noise_sigma", None)
     if sigma:
         from stable_baselines3.common.noise import NormalActionNoise

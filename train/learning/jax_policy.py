@@ -29,6 +29,8 @@ POLICY_KEYS = ("net_arch", "activation_fn", "log_std_init", "ortho_init")
 NORMALIZE_KEY = "normalize_observations"
 #: Hyperparameter (ours, both backends' PPO) that anneals the exploration noise: :attr:`PPOSettings.log_std_final`.
 ANNEAL_KEY = "log_std_final"
+#: Hyperparameter (ours, both backends' PPO): the noise follows that schedule (:attr:`PPOSettings.log_std_fixed`).
+FIXED_KEY = "log_std_fixed"
 
 
 @dataclass(frozen=True)
@@ -64,6 +66,10 @@ class PPOSettings:
     deviation is capped at log_std_init + (log_std_final - log_std_init) * (env steps done / budget), so that
     the noise, whose energy v1 charges, shrinks towards exp(log_std_final) by the end of the budget. None: learned
     freely, as SB3's."""
+    log_std_fixed: bool = False
+    """With it the log standard deviation *follows* the schedule of ``log_std_final`` (from log_std_init; constant
+    without log_std_final) instead of being capped by it: exploration whatever the reward says. On v2 the energy
+    of the noise, charged until T_con, otherwise teaches the agent to shrink it before it has found the goal."""
     normalize_observations: bool = False
     """Scale observations by a running mean and standard deviation (as VecNormalize, without its clipping);
     exported by folding the statistics into the first layers."""
@@ -91,10 +97,11 @@ class PPOSettings:
         kwargs = {k: v for k, v in algo_kwargs.items() if k not in IGNORED_KEYS}
         policy = dict(kwargs.pop("policy_kwargs", None) or {})
         log_std_final = kwargs.pop(ANNEAL_KEY, None)
+        log_std_fixed = bool(kwargs.pop(FIXED_KEY, False))
         unknown = sorted(set(kwargs) - set(SB3_PPO_DEFAULTS))
         if unknown:
             raise ConfigError(f"hyperparameter(s) {unknown} are not implemented by --backend jax; it implements "
-                              f"{', '.join(SB3_PPO_DEFAULTS)}, {ANNEAL_KEY} and policy_kwargs {', '.join(POLICY_KEYS)}")  # fmt: skip
+                              f"{', '.join(SB3_PPO_DEFAULTS)}, {ANNEAL_KEY}, {FIXED_KEY} and policy_kwargs {', '.join(POLICY_KEYS)}")  # fmt: skip
         unknown = sorted(set(policy) - set(POLICY_KEYS) - {NORMALIZE_KEY})
         if unknown:
             raise ConfigError(f"policy_kwargs {unknown} are not implemented by --backend jax; it implements "
@@ -120,7 +127,7 @@ class PPOSettings:
             normalize_advantage=bool(values["normalize_advantage"]), net_arch=tuple(int(s) for s in arch),
             activation=activation, log_std_init=float(policy.get("log_std_init", 0.0)),
             ortho_init=bool(policy.get("ortho_init", True)),
-            log_std_final=None if log_std_final is None else float(log_std_final),
+            log_std_final=None if log_std_final is None else float(log_std_final), log_std_fixed=log_std_fixed,
             normalize_observations=bool(policy.get(NORMALIZE_KEY, False)),
         )  # fmt: skip
         settings.check()

@@ -47,7 +47,10 @@ class ObservationStatistics(flax.struct.PyTreeNode):
         return cls(jnp.zeros(size), jnp.ones(size), jnp.asarray(1e-4))
 
     def update(self, batch: Any) -> ObservationStatistics:
-        batch_mean, batch_var, batch_count = jnp.mean(batch, axis=0), jnp.var(batch, axis=0), batch.shape[0]
+        return self.update_moments(jnp.mean(batch, axis=0), jnp.var(batch, axis=0), batch.shape[0])
+
+    def update_moments(self, batch_mean: Any, batch_var: Any, batch_count: Any) -> ObservationStatistics:
+        """The statistics after a batch of ``batch_count`` observations of this mean and variance."""
         delta, total = batch_mean - self.mean, self.count + batch_count
         m2 = self.var * self.count + batch_var * batch_count + delta**2 * self.count * batch_count / total
         return ObservationStatistics(self.mean + delta * batch_count / total, m2 / total, total)
@@ -271,9 +274,10 @@ class JaxPPO:
         (params, opt_state, rng), _ = jax.lax.scan(
             epoch, (runner.params, runner.opt_state, runner.rng), None, s.n_epochs
         )
-        if s.log_std_final is not None:  # the annealed exploration noise: log_std capped by the schedule
+        if s.log_std_final is not None or s.log_std_fixed:  # the exploration noise capped by (or set to) its schedule
             cap = s.log_std_cap(jnp.clip(1.0 - progress_remaining, 0.0, 1.0))
             inner = params["params"]
-            params = {**params, "params": {**inner, "log_std": jnp.minimum(inner["log_std"], cap)}}
+            log_std = jnp.full_like(inner["log_std"], cap) if s.log_std_fixed else jnp.minimum(inner["log_std"], cap)
+            params = {**params, "params": {**inner, "log_std": log_std}}
         runner = runner.replace(params=params, opt_state=opt_state, rng=rng, updates=runner.updates + 1)
         return runner, totals

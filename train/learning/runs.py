@@ -4,10 +4,10 @@ A run directory holds one run: ``config.yaml`` (the full configuration), ``model
 checkpoint), ``best_model.zip``, ``evaluations.csv``, ``checkpoints/``, ``tb/`` and the state that a
 resumed run continues from.
 
-The format is the same whichever library trained the agent (``backend`` sb3 or jax): ``model.zip`` and every
+The format is the same whichever library trained the agent (``backend`` sb3, jax or sbx): ``model.zip`` and every
 checkpoint are stable-baselines3 model files of ``config.algo`` (the jax backend writes its weights into an SB3
-``MlpPolicy`` of the same architecture), ``evaluations.csv`` has the columns of
-:data:`EVAL_FIELDS`, and config.yaml holds ``config`` (a :class:`TrainConfig`), ``command``,
+``MlpPolicy`` of the same architecture; sbx-rl saves its own class in SB3's zip format), ``evaluations.csv`` has the
+columns of :data:`EVAL_FIELDS`, and config.yaml holds ``config`` (a :class:`TrainConfig`), ``command``,
 ``learned_from`` (``reward`` or ``expert``) and ``runtime`` (what acts beside the network at run time: an expert
 under a residual, a hand-over law, a planner; empty for the network alone). So
 ``train.learning.agents.load_agent`` loads any of them, and ``dwr-gym evaluate --agents DIR`` compares it.

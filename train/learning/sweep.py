@@ -119,7 +119,7 @@ def trial_config(base: dict[str, Any], hp: dict[str, Any], seed: int, run_dir: P
     config.algo_kwargs.update(hp)
     if inner:  # searched keys of policy_kwargs (e.g. log_std_init), merged into the resolved ones
         config.algo_kwargs["policy_kwargs"] = {**(config.algo_kwargs.get("policy_kwargs") or {}), **inner}
-    check_algo_kwargs(config.algo, config.algo_kwargs)
+    check_algo_kwargs(config.algo, config.algo_kwargs, config.backend)
     config.validate()
     return config
 
@@ -219,8 +219,8 @@ def zoo_yaml(config: TrainConfig) -> str:
     return header + yaml.safe_dump({config.env_id: section}, sort_keys=False)
 
 
-def parse_resources(text: str) -> dict[str, float]:
-    """``cpu=1,gpu=0.5`` as Ray's resource dict."""
+def parse_resources(text: str, flag: str = "--resources-per-trial") -> dict[str, float]:
+    """``cpu=1,gpu=0.5`` as Ray's resource dict (a ConfigError names ``flag``)."""
     resources: dict[str, float] = {}
     for item in text.split(","):
         key, _, value = item.partition("=")
@@ -229,6 +229,6 @@ def parse_resources(text: str) -> dict[str, float]:
         except ValueError:
             amount = -1.0
         if not key or not math.isfinite(amount) or amount < 0:
-            raise ConfigError(f"--resources-per-trial {text!r} is invalid: expected e.g. cpu=1 or cpu=2,gpu=0.5")
+            raise ConfigError(f"{flag} {text!r} is invalid: expected e.g. cpu=1 or cpu=2,gpu=0.5")
         resources[key.strip()] = amount
     return resources

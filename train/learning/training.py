@@ -128,6 +128,8 @@ def make_run_callback(
             if hasattr(self.model, "replay_buffer") and self.model.replay_buffer is not None:
                 self.model.save_replay_buffer(run_dir / "replay_buffer.pkl")
             generators = {"torch": torch.get_rng_state(), "numpy": np.random.get_state(), "random": random.getstate()}
+            if hasattr(self.model, "key"):  # sbx's JAX key, which its load() resets to the seed's
+                generators["jax"] = np.asarray(self.model.key)
             with (run_dir / RESUME_FILE).open("wb") as handle:
                 pickle.dump({"timesteps": steps, "env": env_snapshot(env), "generators": generators}, handle)
             self.save(run_dir / MODEL_FILE)
@@ -174,8 +176,9 @@ def make_anneal_callback(config: TrainConfig) -> Any:
     import torch
     from stable_baselines3.common.callbacks import BaseCallback
 
-    final = float(config.algo_kwargs["log_std_final"])
     init = float((config.algo_kwargs.get("policy_kwargs") or {}).get("log_std_init", 0.0))
+    final = float(config.algo_kwargs.get("log_std_final", init))
+    fixed = bool(config.algo_kwargs.get("log_std_fixed", False))  # set to the schedule, not capped by it
 
     class AnnealCallback(BaseCallback):
         def _on_step(self) -> bool:
@@ -190,7 +193,11 @@ def make_anneal_callback(config: TrainConfig) -> Any:
         def cap(self) -> None:
             fraction = min(self.num_timesteps / config.total_timesteps, 1.0)
             with torch.no_grad():
-                self.model.policy.log_std.clamp_(max=init + (final - init) * fraction)
+                value = init + (final - init) * fraction
+                if fixed:
+                    self.model.policy.log_std.fill_(value)
+                else:
+                    self.model.policy.log_std.clamp_(max=value)
 
     return AnnealCallback()
 
@@ -284,6 +291,10 @@ def train(
 
         return train_jax(config, command, on_evaluation)
     config.validate()
+    if config.backend == "sbx":  # sbx-rl: the same path, with sbx's classes (train.learning.sbx_backend)
+        from train.learning.sbx_backend import check_sbx_config
+
+        check_sbx_config(config)
     with torch_threads(config.threads):
         return _train(config, command, on_evaluation)
 
@@ -309,7 +320,7 @@ def _train(
             print(note, file=sys.stderr)
         if config.residual and config.expert == "optimal":
             print(OPTIMAL_EXPERT_NOTE.format(n=config.num_envs, solves=config.num_envs / 20), file=sys.stderr)
-        algo = algorithm_class(config.algo)
+        algo = algorithm_class(config.algo, config.backend)
         state = read_state(run_dir) if config.resume is not None else {}
         if config.resume is not None:
             with (run_dir / RESUME_FILE).open("rb") as handle:
@@ -324,6 +335,10 @@ def _train(
             torch.set_rng_state(saved["generators"]["torch"])
             np.random.set_state(saved["generators"]["numpy"])
             random.setstate(saved["generators"]["random"])
+            if "jax" in saved["generators"]:
+                import jax.numpy as jnp
+
+                model.key = jnp.asarray(saved["generators"]["jax"])
             truncate_log(run_dir / EVAL_FILE, model.num_timesteps)
         else:
             source = None
@@ -333,7 +348,7 @@ def _train(
             env = make_training_env(config)
             try:
                 model = algo(env=env, seed=config.seed, device=config.device, tensorboard_log=str(run_dir / "tb"),
-                             verbose=0, **build_algo_kwargs(config.algo_kwargs))  # fmt: skip
+                             verbose=0, **build_algo_kwargs(config.algo_kwargs, config.backend))  # fmt: skip
             except (TypeError, ValueError, AssertionError) as error:
                 raise ConfigError(f"hyperparameters rejected by {config.algo.upper()}: {error}") from None
             if source is not None:
@@ -363,7 +378,8 @@ def _train(
         previous = signal.signal(signal.SIGINT, on_sigint) if main_thread else None
         start = time.time()
         try:
-            anneal = [make_anneal_callback(config)] if "log_std_final" in config.algo_kwargs else []
+            noise_schedule = "log_std_final" in config.algo_kwargs or config.algo_kwargs.get("log_std_fixed")
+            anneal = [make_anneal_callback(config)] if noise_schedule else []
             if config.critic_warmup:
                 anneal.append(finetune.make_warmup_callback(config.critic_warmup))
             model.learn(remaining, callback=[callback, *anneal] + ([bar] if bar else []), progress_bar=False,

@@ -235,6 +235,24 @@ def jax_env_step_table(data: dict[str, Any]) -> str:
     )
 
 
+def sbx_speed_table(data: dict[str, Any]) -> str:
+    """Env steps per second of sbx-rl against stable-baselines3 (benchmarks/training/sbx_speed.py), one row per algorithm."""
+    names = {"sac": "SAC", "tqc": "TQC", "crossq": "CrossQ"}
+    lines = ["| algorithm | SB3 (torch): env steps/s | sbx (JAX): env steps/s | sbx / SB3 |", "|---|---:|---:|---:|"]
+    for algo, row in data["summary"].items():
+        ratios = ", ".join(f"{ratio:.2f}" for ratio in row["ratios"])
+        lines.append(f"| {names.get(algo, algo)} | {row['sb3_steps_per_s']:.0f} | {row['sbx_steps_per_s']:.0f} | "
+                     f"**{row['ratio_sbx_over_sb3']:.2f}x** ({ratios}) |")  # fmt: skip
+    versions = data["versions"]
+    return "\n".join(lines) + (
+        f"\n\n*{data['env_id']}, the settings of train/hyperparams/ (64 robots, one gradient step of 256 per step of "
+        f"the 64), {data['steps_timed']} env steps timed after the warm-up and compile, one thread each; the median "
+        f"of {data['repeats']} interleaved rounds (each round's ratio in brackets); {data['machine']}, load average "
+        f"{data['load_average']:.1f} at the end; stable-baselines3 {versions['stable-baselines3']}, sbx-rl "
+        f"{versions['sbx-rl']}, torch {versions['torch']}, jax {versions['jax']}.*\n"
+    )
+
+
 #: Table name -> (its JSON file, relative to the repository, and the function that makes its Markdown).
 TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "compare": ("docs/compare/comparison.json", compare_table),
@@ -266,6 +284,10 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "jax-env-step": ("docs/jax/env_step.json", jax_env_step_table),
     "incentives-ranking": ("docs/rl_benchmark/incentives.json", lambda data: incentive_tables.ranking_table(data)),
     "incentives-rushing": ("docs/rl_benchmark/incentives.json", lambda data: incentive_tables.rushing_table(data)),
+    "sbx-speed": ("docs/rl_benchmark/sbx_speed.json", sbx_speed_table),
+    "sbx-v1": ("docs/rl_benchmark/sbx_v1.json", lambda data: rl_table(data, "random")),
+    "sbx-v2": ("docs/rl_benchmark/sbx_v2.json", lambda data: rl_table(data, "random")),
+    "sbx-v2-long": ("docs/rl_benchmark/sbx_v2_long.json", lambda data: rl_table(data, "random")),
 }
 
 

@@ -141,7 +141,7 @@ def table(
 
 
 FROM_REWARD = ("ppo", "ppo-jax", "ppo-jax-12m", "ppo-jax-tuned", "ppo-jax-anneal", "sac", "sac-tuned", "td3", "tqc",
-               "tqc-tuned", "crossq")  # fmt: skip
+               "tqc-tuned", "crossq", "es", "es-arena50")  # fmt: skip
 """The benchmark's entries of a network alone learned from the reward (the candidates of the first goal)."""
 GOALS = {
     "from the reward alone": (FROM_REWARD, 0.99, 1.5, 0.1),

@@ -1,0 +1,62 @@
+"""What sbx's SAC, TQC and CrossQ learn in brief `dwr-gym benchmark` runs on v1 and v2, SB3's SAC beside them.
+
+    nice -n 5 python -m benchmarks run sbx-learn --docs             # all three runs (about 50 minutes of training)
+    nice -n 5 python -m benchmarks run sbx-learn v2-long --docs     # one of them
+
+The suite's name for the three ``dwr-gym benchmark`` commands behind docs/rl-libraries.md's tables ``sbx-v1``,
+``sbx-v2`` (one seed each, 300 s of training per run) and ``sbx-v2-long`` (1200 s each, three jobs side by side).
+Each writes ``results/sbx-<run>/`` (a run already finished there is only aggregated again); ``--docs`` copies its
+benchmark.json to ``docs/rl_benchmark/sbx_<run>.json``, from which the tables are rendered.
+"""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+from benchmarks.core.commands import dwr_gym, parser_for
+from benchmarks.core.docs import Schema, table
+
+ROOT = Path(__file__).resolve().parents[2]
+V2 = "DWRPointStabilization-v2"
+BRIEF = ["--seeds", "1", "--time-limit", "300", "--eval-freq", "50000", "--eval-episodes", "200",
+         "--disturbed-episodes", "20", "--optimum-episodes", "50", "--references"]  # fmt: skip
+LONG = ["--seeds", "1", "--jobs", "3", "--time-limit", "1200", "--eval-freq", "200000", "--eval-episodes", "200",
+        "--disturbed-episodes", "20", "--optimum-episodes", "50", "--references"]  # fmt: skip
+
+#: run -> the agents of its ``dwr-gym benchmark`` and their options (its table is ``sbx-<run>``).
+RUNS: dict[str, list[str]] = {
+    "v1": ["--agents", "sac", "sac-sbx", "tqc-sbx", "crossq-sbx", *BRIEF],
+    "v2": ["--agents", f"sac-v2:env_id={V2}", "sac-sbx-v2", "tqc-sbx-v2", "crossq-sbx-v2", *BRIEF],
+    "v2-long": ["--agents", "sac-sbx-v2", "tqc-sbx-v2", "crossq-sbx-v2", *LONG],
+}
+
+
+def out_dir(run: str) -> Path:
+    return ROOT / "results" / f"sbx-{run}"
+
+
+def docs_json(run: str) -> str:
+    return f"docs/rl_benchmark/sbx_{run.replace('-', '_')}.json"
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = parser_for("sbx-learn", __doc__)
+    parser.epilog = "; ".join(f"{run}: dwr-gym benchmark {' '.join(args)}" for run, args in RUNS.items())
+    parser.add_argument("runs", nargs="*", metavar="RUN", help=f"which of {', '.join(RUNS)} (default: all)")
+    parser.add_argument("--docs", action="store_true", help="copy each benchmark.json to docs/rl_benchmark/")
+    args = parser.parse_args(argv)
+    for run in args.runs:
+        if run not in RUNS:
+            parser.error(f"run {run!r} is unknown: expected one of {', '.join(RUNS)}")
+    for run in args.runs or RUNS:
+        dwr_gym(["benchmark", *RUNS[run], "--out", str(out_dir(run))])
+        if args.docs:
+            shutil.copyfile(out_dir(run) / "benchmark.json", ROOT / docs_json(run))
+            print(f"wrote {docs_json(run)}")
+    return 0
+
+
+#: The tables of docs/rl-libraries.md, in the schema of every `dwr-gym benchmark` JSON (as rl-agents' tables).
+BENCHMARK = Schema({"budget": dict, "machine": str, "summary": dict, "references": dict, "best_seed": dict})
+BLOCKS = tuple(table(f"sbx-{run}", BENCHMARK) for run in RUNS)
