@@ -240,3 +240,16 @@ def test_critic_warmup_is_an_option_of_residual_agents_too() -> None:
     config.validate()
     with pytest.raises(ConfigError, match=r"^--critic-warmup 1000 is invalid: it needs --init-from or --residual, and"):
         TrainConfig(critic_warmup=1000).validate()
+
+
+def test_the_jitted_trainer_of_a_residual_run_steps_the_residual_env() -> None:
+    from train.learning.jax_residual import ResidualGymnaxEnv
+    from train.learning.jax_training import make_jax_env
+
+    config = TrainConfig(backend="jax", residual=True, expert="pt-astolfi", residual_scale=0.3)
+    config.validate()
+    env, _ = make_jax_env(config)
+    assert isinstance(env, ResidualGymnaxEnv) and env.scale == 0.3 and env.controller.name == "pt-astolfi"
+    plain = TrainConfig(backend="jax")
+    plain.validate()
+    assert not isinstance(make_jax_env(plain)[0], ResidualGymnaxEnv)

@@ -80,9 +80,14 @@ def make_jax_env(config: TrainConfig) -> tuple[Any, Any]:
         missing = getattr(error, "name", None) or "jax"
         raise ConfigError(f"--backend jax needs jax, flax and optax ({missing} is missing): {JAX_EXTRA}") from None
     try:
-        return make_gymnax_env(config.env_id, **config.env_keywords())
+        env, env_params = make_gymnax_env(config.env_id, **config.env_keywords())
     except (TypeError, ValueError, NotImplementedError) as error:
         raise ConfigError(f"--backend jax cannot run this env: {error}") from None
+    if config.residual:  # the env's action is the residual on the expert (train.learning.jax_residual)
+        from train.learning.jax_residual import residual_env
+
+        env = residual_env(config, env)
+    return env, env_params
 
 
 def export_runner(exporter: Any, ppo: Any, runner: Any, timesteps: int) -> Any:
