@@ -116,7 +116,9 @@ def test_the_protocol_trains_evaluates_and_aggregates_any_policy_over_seeds(tmp_
     budget = {"env_steps": 128, "eval_freq": 128, "eval_episodes": 4, "disturbed_episodes": 2}
     results = run_benchmark(entries[:1], [0, 1], tmp_path, budget) + run_benchmark(entries[1:], [0], tmp_path, budget)
     assert [(r["entry"], r["seed"]) for r in results] == [("my-ptc", 0), ("my-ptc", 1), ("tiny", 0)]
-    assert set(results[0]["sets"]) == {"random", "disturbed", "fault", "delay", "noise"}
+    assert set(results[0]["sets"]) == {"random", "disturbed", "fault", "delay", "noise", "T_con=10", "T_con=20",
+                                       "T_con=40", "T_con=60"}  # fmt: skip
+    assert results[0]["sets"]["T_con=10"]["in_time"] == 1.0  # PTC at the shortest deadline, apart from the range
     assert results[0]["sets"]["random"]["in_time"] == 1.0 and results[0]["sets"]["random"]["energy_ratio"] > 1.0
     assert [row["env_steps"] for row in results[2]["curve"]] == [0, 128] and results[2]["env_steps"] == 128
     summary = aggregate(results)

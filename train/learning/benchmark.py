@@ -19,7 +19,14 @@ from pathlib import Path
 from typing import Any
 
 from train.env_ids import TASK_ENV_ID
-from train.evaluation.benchmark import DISTURBED_EPISODES, EVAL_EPISODES, EVAL_SEED, OPTIMUM_EPISODES, evaluate_policy
+from train.evaluation.benchmark import (
+    DISTURBED_EPISODES,
+    EVAL_EPISODES,
+    EVAL_SEED,
+    OPTIMUM_EPISODES,
+    PER_T_CON_EPISODES,
+    evaluate_policy,
+)
 from train.learning.config import ConfigError, TrainConfig
 from train.learning.hyperparams import HYPERPARAMS_DIR
 
@@ -210,7 +217,8 @@ def run_one(entry: Entry, seed: int, out: Path, budget: dict[str, Any], progress
         repeat, config_dict = config.action_repeat, config.to_dict()
     train_seconds = time.time() - start
     env_id = config_dict.get("env_id", TASK_ENV_ID)  # each agent on its own env id: v1's or v2's episode end
-    sets = evaluate_policy(policy, env_id, n=int(budget.get("eval_episodes", EVAL_EPISODES)),
+    n_eval = int(budget.get("eval_episodes", EVAL_EPISODES))
+    sets = evaluate_policy(policy, env_id, n=n_eval, n_per_T_con=min(PER_T_CON_EPISODES, n_eval),
                            n_disturbed=int(budget.get("disturbed_episodes", DISTURBED_EPISODES)),
                            n_optimum=budget.get("optimum_episodes", OPTIMUM_EPISODES) or None, progress=progress)  # fmt: skip
     state_path = run_dir / "run_state.json"
