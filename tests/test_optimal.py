@@ -293,3 +293,24 @@ def test_the_initial_guess_is_a_straight_line_at_constant_speed_turning_uniforml
     np.testing.assert_allclose(commands, np.tile([1.0 / 2.0, -1.0 / 2.0], (4, 1)))  # 1 m and -1 rad in 2 s
     backwards = initial_guess((-0.6, 0.8, 1.0), 4, 0.5, 0.0, reverse=True)
     np.testing.assert_allclose(backwards[15::2], -0.5)
+
+
+@pytest.mark.parametrize("start", [(-1.2, 0.7, 2.5), (0.9, -0.4, -0.3)])
+def test_the_cache_solves_padded_problems_to_the_same_energy_to_1e_6(start: tuple[float, float, float]) -> None:
+    """The optimum cache pads every problem to a multiple of PAD_TO intervals (fewer solvers to build): the energy is
+    the unpadded problem's to 1e-6 relative, the goal benchmarks/optimum_speed.py measures on compare's episodes."""
+    plain = solve_minimum_energy(start, 10.37, **LIMITS)  # type: ignore[arg-type]
+    padded = solve_minimum_energy(start, 10.37, **LIMITS, pad_to=optimum_module.PAD_TO)  # type: ignore[arg-type]
+    assert plain.intervals == padded.intervals == 207  # padded to 220 and cut back
+    assert padded.energy == pytest.approx(plain.energy, rel=1e-6)
+
+
+@pytest.mark.skipif(not ca.has_nlpsol("fatrop"), reason="this CasADi ships no fatrop")
+def test_fatrop_finds_ipopts_plan_in_the_callers_layout() -> None:
+    """fatrop sees the unknowns in stage order; the plan it returns is IPOPT's, in the states-then-commands layout."""
+    start = (-1.2, 0.7, 2.5)
+    ipopt = solve_minimum_energy(start, 10.0, **LIMITS)  # type: ignore[arg-type]
+    fatrop = solve_minimum_energy(start, 10.0, **LIMITS, solver="fatrop")  # type: ignore[arg-type]
+    assert fatrop.energy == pytest.approx(ipopt.energy, rel=1e-8)
+    np.testing.assert_allclose(fatrop.states, ipopt.states, atol=1e-5)
+    np.testing.assert_allclose(fatrop.commands, ipopt.commands, atol=1e-5)
