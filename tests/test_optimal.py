@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import itertools
+import json
 import math
 import re
 import sys
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -314,3 +316,23 @@ def test_fatrop_finds_ipopts_plan_in_the_callers_layout() -> None:
     assert fatrop.energy == pytest.approx(ipopt.energy, rel=1e-8)
     np.testing.assert_allclose(fatrop.states, ipopt.states, atol=1e-5)
     np.testing.assert_allclose(fatrop.commands, ipopt.commands, atol=1e-5)
+
+
+@pytest.mark.slow
+def test_the_optima_solved_as_ray_tasks_on_a_local_cluster_are_the_local_processes(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    """``--address`` solves the optima as Ray tasks (here a cluster started for the test): the same energies, cached."""
+    pytest.importorskip("ray")
+    from dwr_gym.params import EnvParams
+
+    monkeypatch.setenv("RAY_raylet_start_wait_time_s", "300")  # a loaded machine starts Ray slowly
+    scenario = make_scenario("random", n=4, seed=11, env_kwargs={"T_con": 10.0})
+    params = EnvParams(T_con=10.0)
+    monkeypatch.setenv("DWR_GYM_CACHE", str(tmp_path / "ray"))
+    on_ray, _ = optimum_module.optimal_energies(params, scenario.starts, scenario.goals, address="local")
+    monkeypatch.setenv("DWR_GYM_CACHE", str(tmp_path / "local"))
+    local, _ = optimum_module.optimal_energies(params, scenario.starts, scenario.goals, workers=1)
+    np.testing.assert_array_equal(on_ray, local)
+    (cached,) = (tmp_path / "ray").glob("optimal-energy-*.json")
+    assert len(json.loads(cached.read_text())) == 4

@@ -76,7 +76,7 @@ def _run(args: argparse.Namespace) -> int:
         rows, recorded, labels = compare(agents, controllers, args.scenarios, args.n, args.seed, env_kwargs,
                                          progress=not args.no_progress, optimum=checked_optimum(args),
                                          T_cons=args.T_con, n_optimal=args.n_optimal, on_rows=keep,
-                                         clock=clock)  # fmt: skip
+                                         clock=clock, address=args.address)  # fmt: skip
     except KeyboardInterrupt:
         clock.close()
         return interrupted(done, env_id, args.out, "comparison")

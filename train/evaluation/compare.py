@@ -27,12 +27,14 @@ def compare(
     n_optimal: int | None = None,
     on_rows: Callable[[list[dict[str, Any]]], None] | None = None,
     clock: StageClock | None = None,
+    address: str | None = None,
 ) -> tuple[list[dict[str, Any]], dict[str, RolloutResult], tuple[str, ...]]:
     """Evaluate agents and controllers on each scenario set (at each T_con).
 
     Returns the rows, every policy's recorded rollouts from Figure 5's starts, and those starts' labels;
     ``on_rows`` receives the rows so far after each scenario set (:func:`evaluate_sets`); ``clock`` times the stages
-    and shows one bar across them (:class:`StageClock`; default: one of its own, closed at the end).
+    and shows one bar across them (:class:`StageClock`; default: one of its own, closed at the end); with ``address``
+    the optima are solved as Ray tasks on that cluster.
     """
     policies: dict[str, Any] = {**agents, **{name: name for name in controllers}}
     own = clock is None
@@ -42,7 +44,7 @@ def compare(
     clock.plan(sum(estimated_seconds(label, trajectory_scenario.size) for label in policies))
     try:
         rows = evaluate_sets(policies, scenarios, n, seed, env_kwargs or {}, progress, optimum=optimum,
-                             T_cons=T_cons, n_optimal=n_optimal, on_rows=on_rows, clock=clock)  # fmt: skip
+                             T_cons=T_cons, n_optimal=n_optimal, on_rows=on_rows, clock=clock, address=address)  # fmt: skip
         recorded = evaluate(policies, trajectory_scenario, record=True, clock=clock, stage_scenario=FIGURES)
     finally:
         if own:

@@ -24,13 +24,15 @@ def evaluate(
     optimum: str = "none",
     clock: StageClock | None = None,
     stage_scenario: str | None = None,
+    address: str | None = None,
 ) -> dict[str, RolloutResult]:
     """Run each policy on the scenario; a string value names a controller of :mod:`baselines`.
 
     ``optimum`` "pose" (or "position") also solves, or reads from the cache, the minimum energy of
     each episode to the goal pose (or position) by T_con, for the energy / optimal ratios. With ``clock`` each
     stage (the optimum, each policy) is timed and advances its one bar (:mod:`train.evaluation.stages`); then
-    ``progress`` is ignored; the stages are timed under the scenario's name, or ``stage_scenario``.
+    ``progress`` is ignored; the stages are timed under the scenario's name, or ``stage_scenario``. With ``address``
+    the optima are solved as Ray tasks on that cluster (:func:`optimal_energies`).
     """
     if optimum not in OPTIMA:
         raise ValueError(f"optimum={optimum!r} is invalid: expected one of {', '.join(OPTIMA)}")
@@ -44,7 +46,7 @@ def evaluate(
             optimal_energy, optimum_failures = optimal_energies(
                 params, scenario.starts, scenario.goals, scenario.T_cons, heading=optimum == "pose",
                 progress=progress and not clock.shown, description=f"{scenario.name}: optimum",
-                on_solved=lambda done: advance(done / max(todo, 1)),
+                on_solved=lambda done: advance(done / max(todo, 1)), address=address,
             )  # fmt: skip
     results = {}
     for label, policy in policies.items():
@@ -77,6 +79,7 @@ def evaluate_sets(
     n_optimal: int | None = None,
     on_rows: Callable[[list[dict[str, Any]]], None] | None = None,
     clock: StageClock | None = None,
+    address: str | None = None,
 ) -> list[dict[str, Any]]:
     """Evaluate policies on named scenario sets, at each prescribed time of ``T_cons`` (default: the set's own).
 
@@ -87,7 +90,8 @@ def evaluate_sets(
     of :meth:`RolloutResult.summary`, ``optimum_note``, why the first episode without an optimum has none,
     ``seconds``, the wall time of the policy on the set, and ``optimum_seconds``, that of the set's optima (0 when
     cached). ``on_rows`` receives the rows so far after each (scenario, T_con): what an interrupted command still
-    reports. With ``clock`` the stages advance its one bar (:class:`StageClock`), planned here before the first.
+    reports. With ``clock`` the stages advance its one bar (:class:`StageClock`), planned here before the first; with
+    ``address`` the optima are solved as Ray tasks on that cluster.
     """
     own = clock is None
     clock = clock or StageClock(progress=progress)
@@ -102,7 +106,7 @@ def evaluate_sets(
     try:
         for scenario in chosen:
             before = {stage: clock.seconds(scenario.name, stage) for stage in ("optimum", *policies)}
-            results = evaluate_subset(policies, scenario, seed, progress, optimum, n_optimal, clock)
+            results = evaluate_subset(policies, scenario, seed, progress, optimum, n_optimal, clock, address)
             took = {stage: round(clock.seconds(scenario.name, stage) - seconds, 2) for stage, seconds in before.items()}
             for label, result in results.items():
                 note = result.optimum_failures[0] if result.optimum_failures else ""
@@ -149,6 +153,7 @@ def evaluate_subset(
     optimum: str,
     n_optimal: int | None,
     clock: StageClock | None = None,
+    address: str | None = None,
 ) -> dict[str, RolloutResult]:
     """:func:`evaluate`, with ``optimal`` on the first ``n_optimal`` episodes where the set is a disturbed one."""
     from dataclasses import replace
@@ -161,12 +166,12 @@ def evaluate_subset(
         or scenario.name not in ROBUSTNESS_SETS
         or scenario.size <= n_optimal
     ):
-        return evaluate(policies, scenario, seed=seed, progress=progress, optimum=optimum, clock=clock)
+        return evaluate(policies, scenario, seed=seed, progress=progress, optimum=optimum, clock=clock, address=address)
     head = replace(scenario, starts=scenario.starts[:n_optimal], goals=scenario.goals[:n_optimal],
                    labels=scenario.labels[:n_optimal],
                    T_cons=None if scenario.T_cons is None else scenario.T_cons[:n_optimal])  # fmt: skip
     others = evaluate({k: v for k, v in policies.items() if k != "optimal"}, scenario, seed=seed, progress=progress,
-                      optimum=optimum, clock=clock)  # fmt: skip
+                      optimum=optimum, clock=clock, address=address)  # fmt: skip
     optimal = evaluate({"optimal": policies["optimal"]}, head, seed=seed, progress=progress, optimum=optimum,
                        clock=clock)  # fmt: skip
     return {label: optimal["optimal"] if label == "optimal" else others[label] for label in policies}

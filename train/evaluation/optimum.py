@@ -101,6 +101,7 @@ def optimal_energies(
     progress: bool = False,
     description: str = "optimum",
     on_solved: Callable[[int], None] | None = None,
+    address: str | None = None,
 ) -> tuple[NDArray[np.float64], list[str]]:
     """Minimum energy to reach each goal (the pose, or the position when ``heading`` is False) by T_con
     (each episode's ``T_cons``, default ``params.T_con``).
@@ -108,7 +109,9 @@ def optimal_energies(
     Returns the energies (N,) and the messages of the episodes without an optimum (infeasible T_con
     or an IPOPT failure), whose energy is NaN. Solved in ``workers`` processes (0: every core, at
     most 8) and cached on disk as they are solved, a few at a time; two processes may share the cache.
-    ``on_solved`` receives the number of optima solved (or found solved by another process) so far.
+    ``on_solved`` receives the number of optima solved (or found solved by another process) so far. With ``address``
+    (``auto``, ``local``, a Ray cluster's address) they are solved as Ray tasks on that cluster
+    (:class:`train.evaluation.ray_pool.RayPool`) instead.
     """
     local, T_cons, keys = _keys(params, starts, goals, T_cons)
     path = _cache_file(params, heading)
@@ -119,7 +122,7 @@ def optimal_energies(
         missing.sort(key=lambda i: -T_cons[i])
         jobs = {keys[i]: (tuple(map(float, local[i])), float(T_cons[i]), params.dt, params.u_max, params.omega_max,
                           heading) for i in missing}  # fmt: skip
-        cache.update(_solve_and_cache(jobs, path, workers, progress, description, on_solved))
+        cache.update(_solve_and_cache(jobs, path, workers, progress, description, on_solved, address))
     values = [cache[k] for k in keys]
     energies = np.array([v if isinstance(v, float) else math.nan for v in values])
     failures = [f"episode {i}: {v}" for i, v in enumerate(values) if not isinstance(v, float)]
@@ -234,6 +237,7 @@ def _solve_and_cache(
     progress: bool,
     description: str,
     on_solved: Callable[[int], None] | None = None,
+    address: str | None = None,
 ) -> dict[str, float | str]:
     """Solve ``jobs`` (by cache key) in batches of a few seconds' work, merging each batch into the cache file as it
     ends. Each batch is claimed first, so that two processes solving the same episodes share the work: each skips
@@ -247,7 +251,7 @@ def _solve_and_cache(
         bar = Progress(total=len(jobs), desc=description, unit="plan", leave=False)
     found: dict[str, float | str] = {}
     pending: dict[str, float | str] = {}
-    pool: ProcessPoolExecutor | None = None
+    pool: Any = None
     shared = True  # False once the cache cannot be written: the optima are still returned, just not kept
     waiting_noted = False
 
@@ -280,7 +284,12 @@ def _solve_and_cache(
 
     todo = list(jobs)
     try:
-        if workers > 1 and len(jobs) >= 4:
+        if address is not None:
+            from train.evaluation.ray_pool import RayPool
+
+            pool = RayPool(address)
+            workers = pool.workers
+        elif workers > 1 and len(jobs) >= 4:
             # fork is fast, but forking a process that runs JAX's threads can deadlock the child: spawn then
             method = "fork" if sys.platform.startswith("linux") and "jax" not in sys.modules else "spawn"
             pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(method),
