@@ -121,7 +121,7 @@ def _shared_executor(workers: int, method: str) -> ProcessPoolExecutor:
 
 def _stop_executors() -> None:
     for executor in _EXECUTORS.values():
-        executor.shutdown(wait=False, cancel_futures=True)
+        executor.shutdown(cancel_futures=True)
     _EXECUTORS.clear()
 
 
