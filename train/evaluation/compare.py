@@ -6,7 +6,9 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-from train.evaluation.evaluate import evaluate, evaluate_sets
+from dwr_gym.disturbances import split_env_kwargs
+from dwr_gym.params import EnvParams
+from train.evaluation.evaluate import evaluate, evaluate_sets, max_steps
 from train.evaluation.rollout import RolloutResult
 from train.evaluation.scenarios import make_scenario
 from train.evaluation.stages import FIGURES, StageClock, estimated_seconds
@@ -41,7 +43,8 @@ def compare(
     clock = clock or StageClock(progress=progress)
     trajectory_scenario = make_scenario(TRAJECTORY_SCENARIO, env_kwargs=env_kwargs)
     # the recorded rollouts of the figures, the last stages: planned now, so that the time left counts them
-    clock.plan(sum(estimated_seconds(label, trajectory_scenario.size) for label in policies))
+    steps = max_steps(trajectory_scenario, EnvParams.from_kwargs(**split_env_kwargs(trajectory_scenario.env_kwargs)[0]))
+    clock.plan(sum(estimated_seconds(label, trajectory_scenario.size, steps) for label in policies))
     try:
         rows = evaluate_sets(policies, scenarios, n, seed, env_kwargs or {}, progress, optimum=optimum,
                              T_cons=T_cons, n_optimal=n_optimal, on_rows=on_rows, clock=clock, address=address)  # fmt: skip

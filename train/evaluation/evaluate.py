@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from typing import Any
 
@@ -52,7 +53,8 @@ def evaluate(
     for label, policy in policies.items():
         if isinstance(policy, str):
             policy = ExpertPolicy(controller_for(policy, scenario, params), params.u_max, params.omega_max)
-        with clock.stage(stage_scenario, label, estimated_seconds(label, scenario.size), scenario.size) as advance:
+        weight = estimated_seconds(label, scenario.size, max_steps(scenario, params))
+        with clock.stage(stage_scenario, label, weight, scenario.size) as advance:
             result = rollout(
                 policy, params, scenario.starts, scenario.goals, record=record, seed=seed,
                 progress=progress and not clock.shown, description=f"{scenario.name}: {label}", T_con=scenario.T_cons,
@@ -136,13 +138,20 @@ def planned_seconds(
     todo: set[tuple[str, str]] = set()
     total = 0.0
     for scenario in scenarios:
+        params = EnvParams.from_kwargs(**split_env_kwargs(scenario.env_kwargs)[0])
         if optimum != "none":
-            params = EnvParams.from_kwargs(**split_env_kwargs(scenario.env_kwargs)[0])
             todo |= missing_optima(params, scenario.starts, scenario.goals, scenario.T_cons, heading=optimum == "pose")
         for label in policies:
             limited = label == "optimal" and n_optimal is not None and scenario.name in ROBUSTNESS_SETS
-            total += estimated_seconds(label, min(scenario.size, n_optimal) if limited else scenario.size)  # type: ignore[type-var]
+            episodes = min(scenario.size, n_optimal) if limited else scenario.size  # type: ignore[type-var]
+            total += estimated_seconds(label, episodes, max_steps(scenario, params))
     return total + len(todo) * PLAN_SECONDS
+
+
+def max_steps(scenario: Scenario, params: EnvParams) -> int:
+    """The most steps a rollout of ``scenario`` takes: to the horizon of its longest T_con."""
+    T_con = params.T_con if scenario.T_cons is None else float(max(scenario.T_cons))
+    return math.ceil(params.horizon_factor * T_con / params.dt)
 
 
 def evaluate_subset(

@@ -337,4 +337,12 @@ def _ignore_interrupts() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
-__all__ = ["OPTIMA", "PAD_TO", "cache_dir", "casadi_available", "goal_frame_starts", "missing_optima", "optimal_energies"]
+__all__ = [
+    "OPTIMA",
+    "PAD_TO",
+    "cache_dir",
+    "casadi_available",
+    "goal_frame_starts",
+    "missing_optima",
+    "optimal_energies",
+]

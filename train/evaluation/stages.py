@@ -20,17 +20,20 @@ from typing import Any, TextIO
 #: Estimated wall seconds of one optimum solved on the two cores of a quiet machine (only the time left uses it).
 PLAN_SECONDS = 0.25
 #: Estimated wall seconds per episode of each policy (the planners re-plan with CasADi); others: DEFAULT_EPISODE_SECONDS.
-EPISODE_SECONDS = {"optimal": 0.6, "robust-pt": 0.08, "robust": 0.02, "nmpc": 0.6}
+EPISODE_SECONDS = {"optimal": 0.6, "robust-pt": 0.08, "robust": 0.02}
 DEFAULT_EPISODE_SECONDS = 0.004
+#: Estimated wall seconds of one step of a batch, whatever its size (a policy's call, the env's transition).
+STEP_SECONDS = 5e-4
 #: A redirected log gets a line each time this fraction of the work is done.
 LOG_STEP = 0.1
 #: The scenario name under which the recorded rollouts of the figures are timed (not a policy's evaluation).
 FIGURES = "figures"
 
 
-def estimated_seconds(policy: str, episodes: int) -> float:
-    """The share of the bar of ``policy`` run on ``episodes`` episodes: an estimate of its wall seconds."""
-    return EPISODE_SECONDS.get(policy, DEFAULT_EPISODE_SECONDS) * episodes
+def estimated_seconds(policy: str, episodes: int, steps: int) -> float:
+    """The share of the bar of ``policy`` run on ``episodes`` episodes of at most ``steps`` steps: an estimate of its
+    wall seconds (a cost per step of the batch, and one per episode)."""
+    return STEP_SECONDS * steps + EPISODE_SECONDS.get(policy, DEFAULT_EPISODE_SECONDS) * episodes
 
 
 @dataclass(frozen=True)
