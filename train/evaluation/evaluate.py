@@ -143,7 +143,7 @@ def planned_seconds(
             todo |= missing_optima(params, scenario.starts, scenario.goals, scenario.T_cons, heading=optimum == "pose")
         for label in policies:
             limited = label == "optimal" and n_optimal is not None and scenario.name in ROBUSTNESS_SETS
-            episodes = min(scenario.size, n_optimal) if limited else scenario.size  # type: ignore[type-var]
+            episodes = min(scenario.size, n_optimal or scenario.size) if limited else scenario.size
             total += estimated_seconds(label, episodes, max_steps(scenario, params))
     return total + len(todo) * PLAN_SECONDS
 
