@@ -211,7 +211,7 @@ def test_the_time_left_is_unknown_after_a_slow_first_item_then_measured_from_its
     from train.progress import Progress
 
     clock = [0.0]
-    bar = Progress(total=600, desc="random: optimal", file=io.StringIO(), mininterval=0, disable=False)
+    bar = Progress(total=600, desc="random: optimal", file=io.StringIO(), mininterval=0)
     bar._time = lambda: clock[0]
     bar.start_t = bar.last_print_t = 0.0
     clock[0] = 18.0

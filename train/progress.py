@@ -4,8 +4,7 @@ The first item of most of dwr-gym's work pays a start-up cost the others do not:
 controller plans every robot at its first step, a process pool starts, torch is imported. tqdm's
 estimate from that first item alone predicts hours for work that ends in seconds. :class:`Progress`
 shows the time left as unknown until a second item is done, then measures the rate from the end of
-the first item on; the elapsed time stays the true one. Where its output is not a terminal (a redirected log) a bar
-is off unless asked for (``disable=False``): tqdm would fill the log with one line of carriage returns.
+the first item on; the elapsed time stays the true one.
 """
 
 from __future__ import annotations
@@ -20,7 +19,6 @@ class Progress(tqdm):  # type: ignore[misc]
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         self._after_first: tuple[float, float] | None = None  # (n, time) when the first item was done
-        kwargs.setdefault("disable", None)  # tqdm's None: off where the output is not a terminal
         super().__init__(*args, **kwargs)
 
     def update(self, n: float | None = 1) -> bool | None:
