@@ -12,11 +12,12 @@ Needs CasADi: ``pip install "dwr-gym[optimal]"``.
 
 from __future__ import annotations
 
+import atexit
 import math
 import multiprocessing
 import os
 import sys
-from concurrent.futures import Executor, ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from typing import Any
 
@@ -101,33 +102,48 @@ def _solve(job: dict[str, Any]) -> Plan | Exception:
         return error
 
 
+#: The worker processes of every :class:`PlanPool`, by (workers, start method): kept from one controller to the next,
+#: so that the solvers each process built (one per problem size, :func:`baselines.optimal.minimum_energy_solver`) are
+#: built once per command, not once per scenario set; stopped at exit.
+_EXECUTORS: dict[tuple[int, str], ProcessPoolExecutor] = {}
+
+
+def _shared_executor(workers: int, method: str) -> ProcessPoolExecutor:
+    executor = _EXECUTORS.get((workers, method))
+    if executor is None or getattr(executor, "_broken", False):  # a broken pool (a worker killed) is replaced
+        if not _EXECUTORS:
+            atexit.register(_stop_executors)
+        executor = _EXECUTORS[(workers, method)] = ProcessPoolExecutor(
+            workers, mp_context=multiprocessing.get_context(method)
+        )
+    return executor
+
+
+def _stop_executors() -> None:
+    for executor in _EXECUTORS.values():
+        executor.shutdown(cancel_futures=True)
+    _EXECUTORS.clear()
+
+
 class PlanPool:
-    """Solves batches of plans, in worker processes when a batch is large enough; errors are returned, not raised."""
+    """Solves batches of plans, in worker processes when a batch is large enough; errors are returned, not raised.
+    The processes are shared by every pool of the same size in this process and outlive it (see ``_EXECUTORS``)."""
 
     def __init__(self, workers: int = 0) -> None:
         self.workers = workers or min(os.cpu_count() or 1, 8)
-        self._executor: Executor | None = None
 
     def map(self, jobs: list[dict[str, Any]]) -> list[Plan | Exception]:
         """:func:`baselines.optimal.solve_minimum_energy` of each job's keywords, in order."""
         if self.workers <= 1 or len(jobs) < PARALLEL_THRESHOLD:
             return [_solve(job) for job in jobs]
-        if self._executor is None:
-            # fork on Linux: works from any script (spawn re-imports __main__, which needs an `if __name__` guard)
-            # fork is fast, but forking a process that runs JAX's threads can deadlock the child: spawn then
-            method = "fork" if sys.platform.startswith("linux") and "jax" not in sys.modules else "spawn"
-            self._executor = ProcessPoolExecutor(self.workers, mp_context=multiprocessing.get_context(method))
+        # fork on Linux: works from any script (spawn re-imports __main__, which needs an `if __name__` guard)
+        # fork is fast, but forking a process that runs JAX's threads can deadlock the child: spawn then
+        method = "fork" if sys.platform.startswith("linux") and "jax" not in sys.modules else "spawn"
         chunk = max(1, len(jobs) // (4 * self.workers))
-        return list(self._executor.map(_solve, jobs, chunksize=chunk))
+        return list(_shared_executor(self.workers, method).map(_solve, jobs, chunksize=chunk))
 
     def close(self) -> None:
-        """Stop the worker processes."""
-        if self._executor is not None:
-            self._executor.shutdown(cancel_futures=True)
-            self._executor = None
-
-    def __del__(self) -> None:
-        self.close()
+        """Nothing to stop: the processes are shared (stopped at exit)."""
 
 
 class OptimalController(Controller):

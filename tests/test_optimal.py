@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import itertools
+import json
 import math
 import re
 import sys
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -132,7 +134,8 @@ def test_a_failed_replan_keeps_the_previous_plan(monkeypatch: pytest.MonkeyPatch
 
     monkeypatch.setattr(nmpc, "solve_minimum_energy", cold_only)
     scenario = make_scenario("paper-fig5", env_kwargs={"actuation_noise": 0.02})  # noise: re-plans are attempted
-    policy = ExpertPolicy(make_controller("optimal"), 0.5, 2.0)
+    # solved in this process: the shared worker processes of PlanPool were forked before the monkeypatch
+    policy = ExpertPolicy(make_controller("optimal", workers=1), 0.5, 2.0)
     result = evaluate({"optimal": policy}, scenario)["optimal"]
     assert result.planner_failures == 0
     assert result.final_distance.max() < 0.1  # it went on open loop on its first plan (from 0.8 m), not stopped
@@ -293,3 +296,44 @@ def test_the_initial_guess_is_a_straight_line_at_constant_speed_turning_uniforml
     np.testing.assert_allclose(commands, np.tile([1.0 / 2.0, -1.0 / 2.0], (4, 1)))  # 1 m and -1 rad in 2 s
     backwards = initial_guess((-0.6, 0.8, 1.0), 4, 0.5, 0.0, reverse=True)
     np.testing.assert_allclose(backwards[15::2], -0.5)
+
+
+@pytest.mark.parametrize("start", [(-1.2, 0.7, 2.5), (0.9, -0.4, -0.3)])
+def test_the_cache_solves_padded_problems_to_the_same_energy_to_1e_6(start: tuple[float, float, float]) -> None:
+    """The optimum cache pads every problem to a multiple of PAD_TO intervals (fewer solvers to build): the energy is
+    the unpadded problem's to 1e-6 relative, the goal python -m benchmarks run optimum-speed measures on compare's episodes."""
+    plain = solve_minimum_energy(start, 10.37, **LIMITS)  # type: ignore[arg-type]
+    padded = solve_minimum_energy(start, 10.37, **LIMITS, pad_to=optimum_module.PAD_TO)  # type: ignore[arg-type]
+    assert plain.intervals == padded.intervals == 207  # padded to 220 and cut back
+    assert padded.energy == pytest.approx(plain.energy, rel=1e-6)
+
+
+@pytest.mark.skipif(not ca.has_nlpsol("fatrop"), reason="this CasADi ships no fatrop")
+def test_fatrop_finds_ipopts_plan_in_the_callers_layout() -> None:
+    """fatrop sees the unknowns in stage order; the plan it returns is IPOPT's, in the states-then-commands layout."""
+    start = (-1.2, 0.7, 2.5)
+    ipopt = solve_minimum_energy(start, 10.0, **LIMITS)  # type: ignore[arg-type]
+    fatrop = solve_minimum_energy(start, 10.0, **LIMITS, solver="fatrop")  # type: ignore[arg-type]
+    assert fatrop.energy == pytest.approx(ipopt.energy, rel=1e-8)
+    np.testing.assert_allclose(fatrop.states, ipopt.states, atol=1e-5)
+    np.testing.assert_allclose(fatrop.commands, ipopt.commands, atol=1e-5)
+
+
+@pytest.mark.slow
+def test_the_optima_solved_as_ray_tasks_on_a_local_cluster_are_the_local_processes(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    """``--address`` solves the optima as Ray tasks (here a cluster started for the test): the same energies, cached."""
+    pytest.importorskip("ray")
+    from dwr_gym.params import EnvParams
+
+    monkeypatch.setenv("RAY_raylet_start_wait_time_s", "300")  # a loaded machine starts Ray slowly
+    scenario = make_scenario("random", n=4, seed=11, env_kwargs={"T_con": 10.0})
+    params = EnvParams(T_con=10.0)
+    monkeypatch.setenv("DWR_GYM_CACHE", str(tmp_path / "ray"))
+    on_ray, _ = optimum_module.optimal_energies(params, scenario.starts, scenario.goals, address="local")
+    monkeypatch.setenv("DWR_GYM_CACHE", str(tmp_path / "local"))
+    local, _ = optimum_module.optimal_energies(params, scenario.starts, scenario.goals, workers=1)
+    np.testing.assert_array_equal(on_ray, local)
+    (cached,) = (tmp_path / "ray").glob("optimal-energy-*.json")
+    assert len(json.loads(cached.read_text())) == 4

@@ -4,7 +4,8 @@
 
 Runs ``COMMAND`` (a fresh `dwr-gym train` process, in a temporary directory), times it (wall clock, and the CPU time
 of the process and its children: on an idle machine the wall time of a run on one thread), then evaluates the
-run's best_model.zip and the PTC expert with `dwr-gym evaluate` on 200 random starts of the task (seed 0, not the
+run's final model (``model.zip``, what ``--agents runs/ppo-v1`` loads; ``best_model.zip`` is the evaluation with the
+most episodes in time) and the PTC expert with `dwr-gym evaluate` on 200 random starts of the task (seed 0, not the
 training's evaluation set). The README quotes both times, the load average and the share that arrives in time.
 """
 
@@ -40,7 +41,7 @@ def cli(args: list[str], cwd: str) -> subprocess.CompletedProcess[str]:
 
 
 def measure() -> dict[str, Any]:
-    """Train as the README says, then evaluate the best model and PTC; the times and the rows."""
+    """Train as the README says, then evaluate the final model and PTC; the times and the rows."""
     with tempfile.TemporaryDirectory() as tmp:
         before = resource.getrusage(resource.RUSAGE_CHILDREN)
         began = time.perf_counter()
@@ -77,8 +78,9 @@ def render(results: dict[str, Any]) -> str:
     return (
         f"\n```bash\n{results['command']}     # {steps:,} env steps\n{results['evaluate']}\n```\n\n"
         f"Measured ({results['machine']}): {results['cpu_seconds'] / 60:.1f} min of CPU time, about its wall time on "
-        f"an idle machine (it runs on one core); {results['wall_seconds'] / 60:.1f} min of wall time on the shared "
-        f"machine it ran on (load average {results['load_average_1min_at_end']:g}). Its best model arrives in time on "
+        f"an idle machine (it runs on one core; the wall time where it was measured, {results['wall_seconds'] / 60:.1f} "
+        f"min at a load average of {results['load_average_1min_at_end']:g}, says more of that machine than of the "
+        "command). Its final model (`model.zip`, what `--agents runs/ppo-v1` loads) arrives in time on "
         f"{agent['success_rate']:.0%} of the 200 random starts of the task, with a mean energy of {agent['energy_mean']:.2f} "
         f"(PTC: {ptc['success_rate']:.0%}, {ptc['energy_mean']:.2f}); final heading error "
         f"{agent['final_heading_error_mean']:.2f} rad on average (PTC: {ptc['final_heading_error_mean']:.2f}). "

@@ -49,6 +49,7 @@ def _run(args: argparse.Namespace) -> int:
     except ImportError as error:
         raise UsageError(f'{error.name} is not installed: pip install "dwr-gym[train,plots]"') from error
     from train.evaluation.compare import compare
+    from train.evaluation.stages import StageClock
     from train.learning.agents import AgentLoadError, find_run_dir, pretrained_paths
     from train.reporting.compare_figures import plot_learning_curves, plot_time_series, plot_trajectories
     from train.reporting.results import write_results
@@ -70,12 +71,16 @@ def _run(args: argparse.Namespace) -> int:
     def keep(found: list[dict[str, Any]]) -> None:
         done[:] = found
 
+    clock = StageClock(progress=not args.no_progress)
     try:
         rows, recorded, labels = compare(agents, controllers, args.scenarios, args.n, args.seed, env_kwargs,
                                          progress=not args.no_progress, optimum=checked_optimum(args),
-                                         T_cons=args.T_con, n_optimal=args.n_optimal, on_rows=keep)  # fmt: skip
+                                         T_cons=args.T_con, n_optimal=args.n_optimal, on_rows=keep,
+                                         clock=clock, address=args.address)  # fmt: skip
     except KeyboardInterrupt:
+        clock.close()
         return interrupted(done, env_id, args.out, "comparison")
+    clock.close()
     rows = [{**row, "env_id": env_id} for row in rows]
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -98,4 +103,5 @@ def _run(args: argparse.Namespace) -> int:
         print(f"wrote {path}")
     for figure in figures:
         print(f"wrote {figure}")
+    print(clock.summary())
     return 0

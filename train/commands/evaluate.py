@@ -37,6 +37,7 @@ def _run(args: argparse.Namespace) -> int:
     policies: dict[str, Any] = {name: name for name in names}
     policies.update(load_agents(args.agents, env_id))
     from train.evaluation.evaluate import evaluate_sets
+    from train.evaluation.stages import StageClock
     from train.reporting.results import write_results
     from train.reporting.tables import EVAL_COLUMNS, print_blocks, table_notes
 
@@ -45,12 +46,15 @@ def _run(args: argparse.Namespace) -> int:
     def keep(found: list[dict[str, Any]]) -> None:
         done[:] = found
 
+    clock = StageClock(progress=not args.no_progress, description="evaluate")
     try:
         rows = evaluate_sets(policies, args.scenarios, args.n, args.seed, env_kwargs, progress=not args.no_progress,
                              optimum=checked_optimum(args), T_cons=args.T_con, n_optimal=args.n_optimal,
-                             on_rows=keep)  # fmt: skip
+                             on_rows=keep, clock=clock, address=args.address)  # fmt: skip
     except KeyboardInterrupt:
+        clock.close()
         return interrupted(done, env_id, args.out, "evaluation")
+    clock.close()
     rows = [{**row, "env_id": env_id} for row in rows]
     print(f"env: {env_id}")
     print_blocks(rows, EVAL_COLUMNS)
@@ -58,4 +62,5 @@ def _run(args: argparse.Namespace) -> int:
         print(table_notes(rows))
     for path in write_results(rows, args.out, "evaluation"):
         print(f"wrote {path}")
+    print(clock.summary())
     return 0

@@ -6,9 +6,12 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-from train.evaluation.evaluate import evaluate, evaluate_sets
+from dwr_gym.disturbances import split_env_kwargs
+from dwr_gym.params import EnvParams
+from train.evaluation.evaluate import evaluate, evaluate_sets, max_steps
 from train.evaluation.rollout import RolloutResult
 from train.evaluation.scenarios import make_scenario
+from train.evaluation.stages import FIGURES, StageClock, estimated_seconds
 
 TRAJECTORY_SCENARIO = "paper-fig5"
 
@@ -25,25 +28,28 @@ def compare(
     T_cons: list[float] | None = None,
     n_optimal: int | None = None,
     on_rows: Callable[[list[dict[str, Any]]], None] | None = None,
+    clock: StageClock | None = None,
+    address: str | None = None,
 ) -> tuple[list[dict[str, Any]], dict[str, RolloutResult], tuple[str, ...]]:
     """Evaluate agents and controllers on each scenario set (at each T_con).
 
     Returns the rows, every policy's recorded rollouts from Figure 5's starts, and those starts' labels;
-    ``on_rows`` receives the rows so far after each scenario set (:func:`evaluate_sets`).
+    ``on_rows`` receives the rows so far after each scenario set (:func:`evaluate_sets`); ``clock`` times the stages
+    and shows one bar across them (:class:`StageClock`; default: one of its own, closed at the end); with ``address``
+    the optima are solved as Ray tasks on that cluster.
     """
     policies: dict[str, Any] = {**agents, **{name: name for name in controllers}}
-    rows = evaluate_sets(
-        policies,
-        scenarios,
-        n,
-        seed,
-        env_kwargs or {},
-        progress,
-        optimum=optimum,
-        T_cons=T_cons,
-        n_optimal=n_optimal,
-        on_rows=on_rows,
-    )
+    own = clock is None
+    clock = clock or StageClock(progress=progress)
     trajectory_scenario = make_scenario(TRAJECTORY_SCENARIO, env_kwargs=env_kwargs)
-    recorded = evaluate(policies, trajectory_scenario, record=True)
+    # the recorded rollouts of the figures, the last stages: planned now, so that the time left counts them
+    steps = max_steps(trajectory_scenario, EnvParams.from_kwargs(**split_env_kwargs(trajectory_scenario.env_kwargs)[0]))
+    clock.plan(sum(estimated_seconds(label, trajectory_scenario.size, steps) for label in policies))
+    try:
+        rows = evaluate_sets(policies, scenarios, n, seed, env_kwargs or {}, progress, optimum=optimum,
+                             T_cons=T_cons, n_optimal=n_optimal, on_rows=on_rows, clock=clock, address=address)  # fmt: skip
+        recorded = evaluate(policies, trajectory_scenario, record=True, clock=clock, stage_scenario=FIGURES)
+    finally:
+        if own:
+            clock.close()
     return rows, recorded, trajectory_scenario.labels

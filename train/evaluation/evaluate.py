@@ -2,15 +2,17 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from typing import Any
 
 from baselines.expert import ExpertPolicy
 from dwr_gym.disturbances import split_env_kwargs
 from dwr_gym.params import EnvParams
-from train.evaluation.optimum import OPTIMA, optimal_energies
+from train.evaluation.optimum import OPTIMA, missing_optima, optimal_energies
 from train.evaluation.rollout import Policy, RolloutResult, rollout
 from train.evaluation.scenarios import Scenario, controller_for, make_scenario
+from train.evaluation.stages import PLAN_SECONDS, StageClock, estimated_seconds
 
 
 def evaluate(
@@ -21,28 +23,43 @@ def evaluate(
     seed: int = 0,
     progress: bool = False,
     optimum: str = "none",
+    clock: StageClock | None = None,
+    stage_scenario: str | None = None,
+    address: str | None = None,
 ) -> dict[str, RolloutResult]:
     """Run each policy on the scenario; a string value names a controller of :mod:`baselines`.
 
     ``optimum`` "pose" (or "position") also solves, or reads from the cache, the minimum energy of
-    each episode to the goal pose (or position) by T_con, for the energy / optimal ratios.
+    each episode to the goal pose (or position) by T_con, for the energy / optimal ratios. With ``clock`` each
+    stage (the optimum, each policy) is timed and advances its one bar (:mod:`train.evaluation.stages`); then
+    ``progress`` is ignored; the stages are timed under the scenario's name, or ``stage_scenario``. With ``address``
+    the optima are solved as Ray tasks on that cluster (:func:`optimal_energies`).
     """
     if optimum not in OPTIMA:
         raise ValueError(f"optimum={optimum!r} is invalid: expected one of {', '.join(OPTIMA)}")
+    clock = clock or StageClock(progress=False)
+    stage_scenario = stage_scenario or scenario.name
     params = EnvParams.from_kwargs(**split_env_kwargs(scenario.env_kwargs)[0])
     optimal_energy, optimum_failures = None, []
     if optimum != "none":
-        optimal_energy, optimum_failures = optimal_energies(params, scenario.starts, scenario.goals, scenario.T_cons,
-                                                             heading=optimum == "pose",
-                                             progress=progress, description=f"{scenario.name}: optimum")  # fmt: skip
+        todo = len(missing_optima(params, scenario.starts, scenario.goals, scenario.T_cons, heading=optimum == "pose"))
+        with clock.stage(stage_scenario, "optimum", todo * PLAN_SECONDS, todo) as advance:
+            optimal_energy, optimum_failures = optimal_energies(
+                params, scenario.starts, scenario.goals, scenario.T_cons, heading=optimum == "pose",
+                progress=progress and not clock.shown, description=f"{scenario.name}: optimum",
+                on_solved=lambda done: advance(done / max(todo, 1)), address=address,
+            )  # fmt: skip
     results = {}
     for label, policy in policies.items():
         if isinstance(policy, str):
             policy = ExpertPolicy(controller_for(policy, scenario, params), params.u_max, params.omega_max)
-        result = rollout(
-            policy, params, scenario.starts, scenario.goals, record=record, seed=seed, progress=progress,
-            description=f"{scenario.name}: {label}", T_con=scenario.T_cons, env_kwargs=scenario.env_kwargs,
-        )  # fmt: skip
+        weight = estimated_seconds(label, scenario.size, max_steps(scenario, params))
+        with clock.stage(stage_scenario, label, weight, scenario.size) as advance:
+            result = rollout(
+                policy, params, scenario.starts, scenario.goals, record=record, seed=seed,
+                progress=progress and not clock.shown, description=f"{scenario.name}: {label}", T_con=scenario.T_cons,
+                env_kwargs=scenario.env_kwargs, on_step=advance,
+            )  # fmt: skip
         result.optimal_energy, result.optimum_failures = optimal_energy, optimum_failures
         controller = getattr(policy, "controller", None)
         result.planner_failures = len(getattr(controller, "failures", ()))
@@ -63,6 +80,8 @@ def evaluate_sets(
     T_cons: list[float] | None = None,
     n_optimal: int | None = None,
     on_rows: Callable[[list[dict[str, Any]]], None] | None = None,
+    clock: StageClock | None = None,
+    address: str | None = None,
 ) -> list[dict[str, Any]]:
     """Evaluate policies on named scenario sets, at each prescribed time of ``T_cons`` (default: the set's own).
 
@@ -70,16 +89,27 @@ def evaluate_sets(
     the robot off its plan, a CasADi solve each time) runs on the disturbed sets' first ``n_optimal`` episodes only.
 
     Returns one row per (scenario, T_con, policy): the keys ``scenario``, ``T_con``, ``policy``, those
-    of :meth:`RolloutResult.summary`, and ``optimum_note``, why the first episode without an optimum has none.
-    ``on_rows`` receives the rows so far after each (scenario, T_con): what an interrupted command still reports.
+    of :meth:`RolloutResult.summary`, ``optimum_note``, why the first episode without an optimum has none,
+    ``seconds``, the wall time of the policy on the set, and ``optimum_seconds``, that of the set's optima (0 when
+    cached). ``on_rows`` receives the rows so far after each (scenario, T_con): what an interrupted command still
+    reports. With ``clock`` the stages advance its one bar (:class:`StageClock`), planned here before the first; with
+    ``address`` the optima are solved as Ray tasks on that cluster.
     """
-    rows = []
+    own = clock is None
+    clock = clock or StageClock(progress=progress)
+    chosen = []
     for name in scenarios:
         for T_con in T_cons or [None]:
             # a prescribed time asked for replaces the env's range of them (v1 draws T_con per episode)
             kwargs = env_kwargs if T_con is None else {**env_kwargs, "T_con": T_con, "T_con_range": None}
-            scenario = make_scenario(name, n=n, seed=seed, env_kwargs=kwargs)
-            results = evaluate_subset(policies, scenario, seed, progress, optimum, n_optimal)
+            chosen.append(make_scenario(name, n=n, seed=seed, env_kwargs=kwargs))
+    clock.plan(planned_seconds(policies, chosen, optimum, n_optimal))
+    rows = []
+    try:
+        for scenario in chosen:
+            before = {stage: clock.seconds(scenario.name, stage) for stage in ("optimum", *policies)}
+            results = evaluate_subset(policies, scenario, seed, progress, optimum, n_optimal, clock, address)
+            took = {stage: round(clock.seconds(scenario.name, stage) - seconds, 2) for stage, seconds in before.items()}
             for label, result in results.items():
                 note = result.optimum_failures[0] if result.optimum_failures else ""
                 drawn = scenario.T_cons is not None
@@ -87,11 +117,41 @@ def evaluate_sets(
                 T_range = (
                     list(result.params.T_con_range or (min(scenario.T_cons), max(scenario.T_cons))) if drawn else None
                 )
-                rows.append({"scenario": name, "T_con": T_row, "policy": label, **result.summary(),
-                             "optimum_note": note, "T_con_range": T_range})  # fmt: skip
+                rows.append({"scenario": scenario.name, "T_con": T_row, "policy": label, **result.summary(),
+                             "optimum_note": note, "T_con_range": T_range, "seconds": took[label],
+                             "optimum_seconds": took["optimum"]})  # fmt: skip
             if on_rows is not None:
                 on_rows(list(rows))
+    finally:
+        if own:
+            clock.close()
     return rows
+
+
+def planned_seconds(
+    policies: dict[str, Policy | str], scenarios: list[Scenario], optimum: str, n_optimal: int | None
+) -> float:
+    """The estimated wall seconds of evaluating ``policies`` on ``scenarios`` (the optima not cached yet, then each
+    policy on each set): the bar's total, so that its time left spans every stage."""
+    from train.evaluation.disturbance_sets import ROBUSTNESS_SETS
+
+    todo: set[tuple[str, str]] = set()
+    total = 0.0
+    for scenario in scenarios:
+        params = EnvParams.from_kwargs(**split_env_kwargs(scenario.env_kwargs)[0])
+        if optimum != "none":
+            todo |= missing_optima(params, scenario.starts, scenario.goals, scenario.T_cons, heading=optimum == "pose")
+        for label in policies:
+            limited = label == "optimal" and n_optimal is not None and scenario.name in ROBUSTNESS_SETS
+            episodes = min(scenario.size, n_optimal or scenario.size) if limited else scenario.size
+            total += estimated_seconds(label, episodes, max_steps(scenario, params))
+    return total + len(todo) * PLAN_SECONDS
+
+
+def max_steps(scenario: Scenario, params: EnvParams) -> int:
+    """The most steps a rollout of ``scenario`` takes: to the horizon of its longest T_con."""
+    T_con = params.T_con if scenario.T_cons is None else float(max(scenario.T_cons))
+    return math.ceil(params.horizon_factor * T_con / params.dt)
 
 
 def evaluate_subset(
@@ -101,6 +161,8 @@ def evaluate_subset(
     progress: bool,
     optimum: str,
     n_optimal: int | None,
+    clock: StageClock | None = None,
+    address: str | None = None,
 ) -> dict[str, RolloutResult]:
     """:func:`evaluate`, with ``optimal`` on the first ``n_optimal`` episodes where the set is a disturbed one."""
     from dataclasses import replace
@@ -113,11 +175,12 @@ def evaluate_subset(
         or scenario.name not in ROBUSTNESS_SETS
         or scenario.size <= n_optimal
     ):
-        return evaluate(policies, scenario, seed=seed, progress=progress, optimum=optimum)
+        return evaluate(policies, scenario, seed=seed, progress=progress, optimum=optimum, clock=clock, address=address)
     head = replace(scenario, starts=scenario.starts[:n_optimal], goals=scenario.goals[:n_optimal],
                    labels=scenario.labels[:n_optimal],
                    T_cons=None if scenario.T_cons is None else scenario.T_cons[:n_optimal])  # fmt: skip
     others = evaluate({k: v for k, v in policies.items() if k != "optimal"}, scenario, seed=seed, progress=progress,
-                      optimum=optimum)  # fmt: skip
-    optimal = evaluate({"optimal": policies["optimal"]}, head, seed=seed, progress=progress, optimum=optimum)
+                      optimum=optimum, clock=clock, address=address)  # fmt: skip
+    optimal = evaluate({"optimal": policies["optimal"]}, head, seed=seed, progress=progress, optimum=optimum,
+                       clock=clock)  # fmt: skip
     return {label: optimal["optimal"] if label == "optimal" else others[label] for label in policies}

@@ -20,7 +20,7 @@ import multiprocessing
 import os
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
 from pathlib import Path
@@ -39,6 +39,10 @@ from dwr_gym.params import EnvParams
 
 #: Bump when the problem or the solver settings change, so that stale optima are not reused.
 CACHE_VERSION = 2
+#: Each optimum is solved on a problem of the next multiple of this many intervals, the last ones holding the robot still
+#: at the goal (:func:`baselines.optimal.solve_minimum_energy`'s ``pad_to``): the same energy to 1e-9 (the solver's
+#: tolerance), from some 50 solvers to build for the default sets instead of one per episode.
+PAD_TO = 20
 OPTIMA = ("pose", "position", "none")
 BATCH_PER_WORKER = 8
 """Plans per solver process between two writes of the cache: a few seconds of work, so an interruption loses little."""
@@ -75,7 +79,7 @@ def _solve_energy(job: tuple[tuple[float, float, float], float, float, float, fl
 
     start, T_con, dt, u_max, omega_max, heading = job
     try:
-        return solve_minimum_energy(start, T_con, dt, u_max, omega_max, heading=heading).energy
+        return solve_minimum_energy(start, T_con, dt, u_max, omega_max, heading=heading, pad_to=PAD_TO).energy
     except (OptimalControlError, InfeasibleArrivalTimeError) as error:
         return str(error)
 
@@ -96,6 +100,8 @@ def optimal_energies(
     workers: int = 0,
     progress: bool = False,
     description: str = "optimum",
+    on_solved: Callable[[int], None] | None = None,
+    address: str | None = None,
 ) -> tuple[NDArray[np.float64], list[str]]:
     """Minimum energy to reach each goal (the pose, or the position when ``heading`` is False) by T_con
     (each episode's ``T_cons``, default ``params.T_con``).
@@ -103,21 +109,48 @@ def optimal_energies(
     Returns the energies (N,) and the messages of the episodes without an optimum (infeasible T_con
     or an IPOPT failure), whose energy is NaN. Solved in ``workers`` processes (0: every core, at
     most 8) and cached on disk as they are solved, a few at a time; two processes may share the cache.
+    ``on_solved`` receives the number of optima solved (or found solved by another process) so far. With ``address``
+    (``auto``, ``local``, a Ray cluster's address) they are solved as Ray tasks on that cluster
+    (:class:`train.evaluation.ray_pool.RayPool`) instead.
     """
-    local = goal_frame_starts(starts, goals)
+    local, T_cons, keys = _keys(params, starts, goals, T_cons)
     path = _cache_file(params, heading)
     cache = _read_cache(path)
-    T_cons = np.full(len(local), params.T_con) if T_cons is None else np.asarray(T_cons, dtype=np.float64)
-    keys = [_start_key(s, T) for s, T in zip(local, T_cons, strict=True)]
     missing = sorted({k: i for i, k in enumerate(keys) if k not in cache}.values())
     if missing:
+        # the longest problems first, neighbours together: each process builds few solvers, none waits at the end
+        missing.sort(key=lambda i: -T_cons[i])
         jobs = {keys[i]: (tuple(map(float, local[i])), float(T_cons[i]), params.dt, params.u_max, params.omega_max,
                           heading) for i in missing}  # fmt: skip
-        cache.update(_solve_and_cache(jobs, path, workers, progress, description))
+        cache.update(_solve_and_cache(jobs, path, workers, progress, description, on_solved, address))
     values = [cache[k] for k in keys]
     energies = np.array([v if isinstance(v, float) else math.nan for v in values])
     failures = [f"episode {i}: {v}" for i, v in enumerate(values) if not isinstance(v, float)]
     return energies, failures
+
+
+def _keys(
+    params: EnvParams, starts: NDArray[np.float64], goals: NDArray[np.float64], T_cons: NDArray[np.float64] | None
+) -> tuple[NDArray[np.float64], NDArray[np.float64], list[str]]:
+    """The starts in their goals' frames, each episode's T_con and the cache keys."""
+    local = goal_frame_starts(starts, goals)
+    T_cons = np.full(len(local), params.T_con) if T_cons is None else np.asarray(T_cons, dtype=np.float64)
+    return local, T_cons, [_start_key(s, T) for s, T in zip(local, T_cons, strict=True)]
+
+
+def missing_optima(
+    params: EnvParams,
+    starts: NDArray[np.float64],
+    goals: NDArray[np.float64],
+    T_cons: NDArray[np.float64] | None = None,
+    *,
+    heading: bool = True,
+) -> set[tuple[str, str]]:
+    """The optima :func:`optimal_energies` would solve (not cached yet), as (cache file, key) pairs: what a command
+    will solve is the union of its sets' (the disturbed sets share the random set's starts)."""
+    path = _cache_file(params, heading)
+    cache = _read_cache(path)
+    return {(path.name, k) for k in _keys(params, starts, goals, T_cons)[2] if k not in cache}
 
 
 def _read_cache(path: Path) -> dict[str, float | str]:
@@ -198,7 +231,13 @@ def _merge_into_cache(path: Path, found: dict[str, float | str], release: bool =
 
 
 def _solve_and_cache(
-    jobs: dict[str, Any], path: Path, workers: int, progress: bool, description: str
+    jobs: dict[str, Any],
+    path: Path,
+    workers: int,
+    progress: bool,
+    description: str,
+    on_solved: Callable[[int], None] | None = None,
+    address: str | None = None,
 ) -> dict[str, float | str]:
     """Solve ``jobs`` (by cache key) in batches of a few seconds' work, merging each batch into the cache file as it
     ends. Each batch is claimed first, so that two processes solving the same episodes share the work: each skips
@@ -212,16 +251,25 @@ def _solve_and_cache(
         bar = Progress(total=len(jobs), desc=description, unit="plan", leave=False)
     found: dict[str, float | str] = {}
     pending: dict[str, float | str] = {}
-    pool: ProcessPoolExecutor | None = None
+    pool: Any = None
     shared = True  # False once the cache cannot be written: the optima are still returned, just not kept
     waiting_noted = False
+
+    solved_count = 0
+
+    def tick() -> None:
+        nonlocal solved_count
+        solved_count += 1
+        if bar is not None:
+            bar.update()
+        if on_solved is not None:
+            on_solved(solved_count)
 
     def take(known: dict[str, float | str]) -> None:
         for key in [key for key in todo if key in known]:  # solved by another process
             found[key] = known[key]
             todo.remove(key)
-            if bar is not None:
-                bar.update()
+            tick()
 
     def flush(release: bool = False) -> None:
         nonlocal shared
@@ -236,7 +284,12 @@ def _solve_and_cache(
 
     todo = list(jobs)
     try:
-        if workers > 1 and len(jobs) >= 4:
+        if address is not None:
+            from train.evaluation.ray_pool import RayPool
+
+            pool = RayPool(address)
+            workers = pool.workers
+        elif workers > 1 and len(jobs) >= 4:
             # fork is fast, but forking a process that runs JAX's threads can deadlock the child: spawn then
             method = "fork" if sys.platform.startswith("linux") and "jax" not in sys.modules else "spawn"
             pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(method),
@@ -261,12 +314,12 @@ def _solve_and_cache(
                 continue
             for key in batch:
                 todo.remove(key)
+            # each process a run of neighbours (the same padded problem size): it builds their solver once
             solved = map(_solve_energy, (jobs[k] for k in batch)) if pool is None else pool.map(
-                _solve_energy, (jobs[k] for k in batch))  # fmt: skip
+                _solve_energy, (jobs[k] for k in batch), chunksize=-(-len(batch) // workers))  # fmt: skip
             for key, result in zip(batch, solved, strict=True):
                 pending[key] = result
-                if bar is not None:
-                    bar.update()
+                tick()
             flush()
     finally:
         flush(release=True)  # also on Ctrl-C: what was solved is kept, this process's claims go
@@ -284,4 +337,12 @@ def _ignore_interrupts() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
-__all__ = ["OPTIMA", "cache_dir", "casadi_available", "goal_frame_starts", "optimal_energies"]
+__all__ = [
+    "OPTIMA",
+    "PAD_TO",
+    "cache_dir",
+    "casadi_available",
+    "goal_frame_starts",
+    "missing_optima",
+    "optimal_energies",
+]

@@ -117,6 +117,7 @@ def rollout(
     T_con: NDArray[np.float64] | None = None,
     env_kwargs: dict[str, Any] | None = None,
     discount: float = 1.0,
+    on_step: Callable[[float], None] | None = None,
 ) -> RolloutResult:
     """Run ``policy`` from N start poses to N goals (world frame, (N, 3)) until every episode ends.
 
@@ -124,7 +125,8 @@ def rollout(
     have terminated are held still with zero actions and no longer counted. The ``robot`` and
     ``disturbances`` of ``env_kwargs`` act as in the envs (robot i's random disturbances seeded with
     (seed, i)); its other keywords are those of ``params``. ``episode_return`` sums the rewards discounted by
-    ``discount`` per step (1: the undiscounted return).
+    ``discount`` per step (1: the undiscounted return). ``on_step`` receives the fraction of the steps done after each
+    step.
     """
     starts, goals = np.asarray(starts, dtype=np.float64), np.asarray(goals, dtype=np.float64)
     if starts.ndim != 2 or starts.shape[1] != 3 or goals.shape != starts.shape:
@@ -170,7 +172,9 @@ def rollout(
         steps = Progress(steps, desc=description, unit="step", leave=False)
     episode_start = np.ones(n, dtype=bool)
     weight = 1.0  # discount ** steps: every episode starts at step 0
-    for _ in steps:
+    for index in steps:
+        if on_step is not None:
+            on_step(index / len(steps))
         actions, _ = policy.predict(obs, episode_start=episode_start, deterministic=True)
         episode_start = np.zeros(n, dtype=bool)
         actions = np.where(active[:, None], np.asarray(actions, dtype=np.float64).reshape(n, 2), 0.0)

@@ -42,25 +42,26 @@ MARKER = re.compile(
 #: this alone; the convention quoted inside a line of prose is not a block.
 OPENING = re.compile(r"^<!-- (?:generated\b[^>]*|table: [\w-]+|[\w-]+:begin) -->", re.MULTILINE)
 
-#: How the tables name the policies: the controllers of baselines and the agents shipped in train/pretrained.
+#: How the tables name the policies: the controllers of baselines and the agents shipped in train/pretrained, each by
+#: the name the command line prints (an agent's label: its directory's name with hyphens).
 POLICY_NAMES = {
-    "optimal": "**optimum**",
+    "optimal": "**optimum** (`optimal`)",
     "ptc": "PTC (16)-(19)",
     "conventional-ptc": "conventional PTC",
     "fabregas": "Fabregas [9] (1)",
     "fixed-time": "fixed-time [23]",
     "astolfi": "Astolfi",
     "pt-astolfi": "`pt-astolfi` (2)",
-    "residual-ppo": "`residual_ppo` (v0)",
+    "residual-ppo": "`residual-ppo` (v0)",
     "ppo": "`ppo` (v0)",
     "dagger": "`dagger` (v1)",
     "dagger-handover": "`dagger-handover` (v1)",
     "robust-pt": "`robust-pt` (3)",
     "robust": "`robust` agent (v1)",
-    "ppo-v1": "`ppo_v1` (v1, reward)",
-    "ppo-jax-v1": "`ppo_jax_v1` (v1, reward, JAX)",
-    "residual-ppo-v1": "`residual_ppo_v1` (v1, reward, on PTC)",
-    "residual-ppo-astolfi-v1": "`residual_ppo_astolfi_v1` (v1, reward, on `pt-astolfi`)",
+    "ppo-v1": "`ppo-v1` (v1, reward)",
+    "ppo-jax-v1": "`ppo-jax-v1` (v1, reward, JAX)",
+    "residual-ppo-v1": "`residual-ppo-v1` (v1, reward, on PTC)",
+    "residual-ppo-astolfi-v1": "`residual-ppo-astolfi-v1` (v1, reward, on `pt-astolfi`)",
 }
 
 

@@ -1,0 +1,59 @@
+"""The one progress bar of compare and evaluate: its time left spans the stages, a redirected log gets plain lines,
+and every stage's time reaches the rows and the closing line."""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from train.evaluation.stages import StageClock, format_seconds
+
+
+def test_a_redirected_log_gets_a_plain_line_every_tenth_of_the_work_never_a_carriage_return() -> None:
+    log = io.StringIO()  # not a terminal
+    clock = StageClock(progress=True, description="compare", file=log)
+    clock.plan(30.0)
+    for name in ("ptc", "astolfi", "optimal"):
+        with clock.stage("random", name, 10.0, 100) as advance:
+            for step in range(1, 101):
+                advance(step / 100)
+    clock.close()
+    text = log.getvalue()
+    assert "\r" not in text
+    lines = text.splitlines()
+    assert len(lines) == 10 and lines[-1].startswith("compare: 100% after")
+    assert all(line.startswith("compare: ") for line in lines)
+
+
+def test_stages_are_timed_even_when_interrupted_and_the_summary_names_the_slowest() -> None:
+    clock = StageClock(progress=False)
+    clock.plan(3.0)
+    with clock.stage("random", "optimum", 1.0, 12):
+        pass
+    with pytest.raises(KeyboardInterrupt), clock.stage("random", "robust-pt", 1.0, 50):
+        raise KeyboardInterrupt
+    assert [(t.scenario, t.stage, t.size) for t in clock.times] == [("random", "optimum", 12), ("random", "robust-pt", 50)]
+    line = clock.summary()
+    assert line.startswith("time: ") and "optimum" in line and "12 plans" in line and "robust-pt" in line
+
+
+def test_seconds_read_as_a_person_would_say_them() -> None:
+    assert [format_seconds(s) for s in (42.0, 210.0, 7200.0, float("nan"))] == ["42 s", "3.5 min", "2.0 h", "?"]
+
+
+def test_evaluate_rows_carry_each_stage_time_and_the_command_ends_with_one_time_line(tmp_path: Path) -> None:
+    env = {**os.environ, "MPLBACKEND": "Agg"}
+    result = subprocess.run([sys.executable, "-m", "train.cli", "evaluate", "--controllers", "ptc", "--scenarios",
+                             "paper-fig5", "--optimum", "none", "--out", str(tmp_path)],
+                            capture_output=True, text=True, env=env, timeout=600)  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.strip().splitlines()[-1].startswith("time: ")
+    assert "\r" not in result.stderr  # output captured, not a terminal: lines, not a bar
+    (row,) = json.loads((tmp_path / "evaluation.json").read_text())
+    assert row["seconds"] >= 0.0 and row["optimum_seconds"] >= 0.0
