@@ -168,6 +168,10 @@ def train_jax(
     with torch_threads(config.threads):
         check_jax_config(config)
         if config.algo == "es":
+            try:
+                import evosax  # noqa: F401
+            except ImportError:
+                raise ConfigError('--algo es needs evosax: pip install "dwr-gym[es]"') from None
             from train.learning.es_training import ESTrainer
 
             trainer: Any = ESTrainer(config)
