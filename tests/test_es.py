@@ -63,6 +63,16 @@ def test_the_yaml_is_read_and_es_needs_the_jax_backend() -> None:
         resolved(hyperparam_overrides={"sigmaa": 0.02})
 
 
+def test_without_evosax_es_names_the_extra_to_install(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    from train.learning.jax_training import train_jax
+
+    monkeypatch.setitem(sys.modules, "evosax", None)  # import evosax raises ImportError
+    config = resolved(run_dir=str(tmp_path / "run"))
+    with pytest.raises(ConfigError, match=r'^--algo es needs evosax: pip install "dwr-gym\[es\]"$'):
+        train_jax(config)
+    assert not (tmp_path / "run").exists()  # refused before any run directory is made
+
+
 jax = pytest.importorskip("jax")
 pytest.importorskip("evosax")
 
