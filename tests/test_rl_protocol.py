@@ -285,3 +285,6 @@ def test_the_table_shows_every_entry_evaluated_on_the_set_asked_for() -> None:
     assert [row.split(" | ")[0] for row in rows[2:]] == ["| b"]
     rows = table(summary).splitlines()
     assert [row.split(" | ")[0] for row in rows[2:]] == ["| a", "| c"]
+    metrics = result("x", 0, 1.0, 2.0)["sets"]["random"]
+    references = {"pt-astolfi": {"delay": metrics}, "ptc": {"random": metrics}}  # the first without the set
+    assert table(summary, references).splitlines()[-1].startswith("| ptc (controller) | - | - | - | 1.000 | 2.00 |")

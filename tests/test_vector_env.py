@@ -344,3 +344,12 @@ def test_new_states_keep_integer_counters() -> None:
         assert getattr(state, name).dtype == np.int64, name
     np.testing.assert_array_equal(state.prescribed_steps, [200, 400])
     np.testing.assert_array_equal(state.max_steps, [300, 600])
+
+
+@pytest.mark.parametrize("goal", [(0.8, 0.0, 0.0), (0.0, -0.5, 0.0), (0.0, 0.0, 1.2)])
+def test_the_pose_in_the_info_is_the_world_pose_whatever_the_goal(goal: tuple[float, float, float]) -> None:
+    """info["pose"] is the robot's pose in the world frame, also for a goal off the origin along one axis only."""
+    env = DWRPointStabilizationVectorEnv(num_envs=2)
+    starts = np.array([[0.3, 0.2, 0.1], [-0.4, 0.5, -2.0]])
+    _, info = env.reset(seed=0, options={"start": starts, "goal": np.tile(goal, (2, 1))})
+    np.testing.assert_allclose(info["pose"], starts, atol=1e-12)
