@@ -28,7 +28,9 @@ SUITE: dict[str, str] = {
     "retrain-pretrained": "benchmarks.training.retrain_pretrained",
     "jax-training": "benchmarks.training.jax_training",
     "jax-residual": "benchmarks.training.jax_residual",
+    "es-speed": "benchmarks.training.es_speed",
     # learning: what the learned agents reach, and why
+    "es-learn": "benchmarks.learning.es_learn",
     "rl-levers": "benchmarks.learning.rl_levers",
     "rl-sweep": "benchmarks.learning.rl_sweep",
     "rl-diagnosis": "benchmarks.learning.rl_diagnosis",

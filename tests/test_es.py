@@ -188,17 +188,3 @@ def test_cli_trains_resumes_bit_for_bit_and_evaluates(tmp_path: Path) -> None:
                "--optimum", "none", "--no-progress", "--out", str(tmp_path / "evaluate"))  # fmt: skip
     assert done.returncode == 0, done.stderr
     assert "split" in done.stdout and "ptc" in done.stdout
-
-
-@pytest.mark.parametrize("script", ["es_speed", "es_learn"])
-def test_each_docs_block_is_what_the_benchmark_renders_from_its_json(script: str) -> None:
-    import importlib.util
-    import json
-
-    spec = importlib.util.spec_from_file_location(f"{script}_benchmark", ROOT / "benchmarks" / f"{script}.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    written = [(name, module.OUT / file) for name, (file, _) in module.BLOCKS.items() if (module.OUT / file).is_file()]
-    for name, path in written:
-        assert module.docs_block(name) == module.rendered_block(name, json.loads(path.read_text())), name

@@ -1,8 +1,8 @@
 """What `dwr-gym train --algo es --backend jax` learns on DWRPointStabilization-v1 within a wall-clock budget (issue 41).
 
-    nice -n 5 python benchmarks/es_learn.py --seeds 0 --time-limit 900 --docs     # docs/jax/es_learn.json
-    nice -n 5 python benchmarks/es_learn.py --name es-arena50 --seeds 0 --time-limit 900 --env-kwargs arena_radius=50 --docs
-    python benchmarks/es_learn.py --render                                        # docs/evolution.md's block
+    nice -n 5 python -m benchmarks run es-learn --seeds 0 --time-limit 900 --docs     # docs/jax/es_learn.json
+    nice -n 5 python -m benchmarks run es-learn --name es-arena50 --seeds 0 --time-limit 900 \
+        --env-kwargs arena_radius=50 --docs
 
 Each seed trains in ``<out>/<name>-seed<k>`` with the shipped settings (train/hyperparams/es.yml) and the overrides
 given (and the training env's keywords ``--env-kwargs``; the evaluation is on v1 as registered), for
@@ -24,10 +24,11 @@ import sys
 from pathlib import Path
 from typing import Any
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+from benchmarks.core.commands import parser_for
+from benchmarks.core.docs import Schema, fenced
+
+ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "docs" / "jax"
-DOCS = ROOT / "docs" / "evolution.md"
 T_CONS = (10.0, 20.0, 40.0, 60.0)
 CRITERIA = {"in_time": 0.99, "energy_ratio": 1.5, "final_heading": 0.1}
 
@@ -49,7 +50,7 @@ def train_seed(name: str, seed: int, out: Path, overrides: dict[str, Any], env_k
         config.total_timesteps = args.env_steps
     config.validate()
     config = resolve_hyperparams(config, {"total_timesteps"} if args.env_steps else set())
-    train_jax(config, command=["benchmarks/es_learn.py", *sys.argv[1:]])
+    train_jax(config, command=["python", "-m", "benchmarks", "run", "es-learn", *sys.argv[1:]])
     return run_dir
 
 
@@ -102,32 +103,12 @@ def render(data: dict[str, Any]) -> list[str]:
     return lines
 
 
-BLOCKS = {"es-learn": ("es_learn.json", render)}
+#: The block of docs/evolution.md.
+BLOCKS = (fenced("es-learn", "docs/jax/es_learn.json", render, Schema({"machine": str, "n": int, "runs": dict})),)
 
 
-def rendered_block(name: str, data: dict[str, Any]) -> str:
-    return "\n```\n" + "\n".join(BLOCKS[name][1](data)) + "\n```\n"
-
-
-def docs_block(name: str) -> str:
-    from train.reporting.doc_tables import block
-
-    return block(DOCS.read_text(), name)
-
-
-def write_docs() -> None:
-    from train.reporting.doc_tables import with_block
-
-    text = DOCS.read_text()
-    for name, (file, _) in BLOCKS.items():
-        if (OUT / file).is_file():
-            text = with_block(text, name, rendered_block(name, json.loads((OUT / file).read_text())))
-    DOCS.write_text(text)
-    print(f"wrote {DOCS}")
-
-
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def main(argv: list[str] | None = None) -> None:
+    parser = parser_for("es-learn", __doc__)
     parser.add_argument("--name", default="es", help="the runs' name (default: es)")
     parser.add_argument("--seeds", type=int, nargs="+", default=[0], help="seeds (default: 0)")
     parser.add_argument("--time-limit", type=float, default=900.0, help="seconds per seed (default: 900)")
@@ -137,30 +118,26 @@ def main() -> None:
     parser.add_argument("--env-kwargs", nargs="*", default=[], metavar="KEY=VALUE", help="training env keywords")
     parser.add_argument("--n", type=int, default=200, help="evaluation starts (default: 200)")
     parser.add_argument("--out", default="results/es", help="run directories (default: results/es)")
-    parser.add_argument("--docs", action="store_true", help="add to docs/jax/es_learn.json, render the docs block")
-    parser.add_argument("--render", action="store_true", help="only render docs/evolution.md's block from the JSON")
-    args = parser.parse_args()
-    if not args.render:
-        from train.commands.shared import parse_env_kwargs
-        from train.learning.hyperparams import parse_overrides
+    parser.add_argument("--docs", action="store_true", help="add to docs/jax/es_learn.json (its block rendered)")
+    args = parser.parse_args(argv)
+    from train.commands.shared import parse_env_kwargs
+    from train.learning.hyperparams import parse_overrides
 
-        overrides, env_kwargs = parse_overrides(args.hyperparams), parse_env_kwargs(args.env_kwargs)
-        path = OUT / "es_learn.json"
-        data = json.loads(path.read_text()) if path.is_file() else {"runs": {}}
-        data.update({"machine": f"{platform.machine()}, {os.cpu_count()} cores", "n": args.n})
-        for seed in args.seeds:
-            run_dir = train_seed(args.name, seed, Path(args.out), overrides, env_kwargs, args)
-            data["runs"][f"{args.name}-seed{seed}"] = {"overrides": args.hyperparams, "env_kwargs": args.env_kwargs,
-                                                       **evaluate_seed(run_dir, args.n)}  # fmt: skip
-            data["load_average_1min_at_end"] = round(os.getloadavg()[0], 2)
-            print("\n".join(render(data)))
-            if args.docs:  # read again: another call may have added its runs meanwhile
-                OUT.mkdir(parents=True, exist_ok=True)
-                saved = json.loads(path.read_text()) if path.is_file() else {"runs": {}}
-                data["runs"] = {**saved["runs"], **data["runs"]}
-                path.write_text(json.dumps(data, indent=1) + "\n")
-    if args.docs or args.render:
-        write_docs()
+    overrides, env_kwargs = parse_overrides(args.hyperparams), parse_env_kwargs(args.env_kwargs)
+    path = OUT / "es_learn.json"
+    data = json.loads(path.read_text()) if path.is_file() else {"runs": {}}
+    data.update({"machine": f"{platform.machine()}, {os.cpu_count()} cores", "n": args.n})
+    for seed in args.seeds:
+        run_dir = train_seed(args.name, seed, Path(args.out), overrides, env_kwargs, args)
+        data["runs"][f"{args.name}-seed{seed}"] = {"overrides": args.hyperparams, "env_kwargs": args.env_kwargs,
+                                                   **evaluate_seed(run_dir, args.n)}  # fmt: skip
+        data["load_average_1min_at_end"] = round(os.getloadavg()[0], 2)
+        print("\n".join(render(data)))
+        if args.docs:  # read again: another call may have added its runs meanwhile
+            OUT.mkdir(parents=True, exist_ok=True)
+            saved = json.loads(path.read_text()) if path.is_file() else {"runs": {}}
+            data["runs"] = {**saved["runs"], **data["runs"]}
+            path.write_text(json.dumps(data, indent=1) + "\n")
 
 
 if __name__ == "__main__":

@@ -1,8 +1,6 @@
-"""Env steps per second of an ES generation (`dwr-gym train --algo es --backend jax`) against the jitted PPO's, and
-on two cores against one (issue 41).
+"""ES generation (`dwr-gym train --algo es --backend jax`): env steps/s against the jitted PPO's, 2 cores against 1.
 
-    nice -n 5 python benchmarks/es_speed.py --docs      # docs/jax/es_speed.json and docs/evolution.md's block
-    python benchmarks/es_speed.py --render              # only the block, from the JSON
+    nice -n 5 python -m benchmarks run es-speed --docs     # docs/jax/es_speed.json and docs/evolution.md's block
 
 In one process with two XLA CPU devices (``--xla_force_host_platform_device_count=2``, what `dwr-gym train --algo
 es` asks for on this 2-core machine), alternating rounds so that the ratios hold on a busy machine: a generation of
@@ -17,24 +15,17 @@ beside wall time shows the cores used. Compilation is timed apart.
 from __future__ import annotations
 
 import os
+import platform
+import statistics
 import sys
+import time
+from typing import Any
+
+from benchmarks.core.commands import add_json_output, parser_for
+from benchmarks.core.docs import NUMBER, Schema, fenced
+from benchmarks.core.record import write_json
 
 DEVICES = 2
-if __name__ == "__main__":
-    os.environ["XLA_FLAGS"] = f"{os.environ.get('XLA_FLAGS', '')} --xla_force_host_platform_device_count={DEVICES}"
-
-import argparse  # noqa: E402
-import json  # noqa: E402
-import platform  # noqa: E402
-import statistics  # noqa: E402
-import time  # noqa: E402
-from pathlib import Path  # noqa: E402
-from typing import Any  # noqa: E402
-
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-OUT = ROOT / "docs" / "jax"
-DOCS = ROOT / "docs" / "evolution.md"
 GOALS = {"es_over_ppo": 2.0, "two_cores_over_one": 1.6}
 
 
@@ -125,47 +116,26 @@ def render(data: dict[str, Any]) -> list[str]:
     return lines
 
 
-BLOCKS = {"es-speed": ("es_speed.json", render)}
+SCHEMA = Schema({"machine": str, "load_average_1min_at_end": NUMBER, "es_settings": dict, "ppo_steps_per_round": int,
+                 "es_steps_per_generation": int, "compile_seconds": dict, "rounds": list, "median_steps_per_s": dict,
+                 "median_cpu_per_wall": dict, "ratios": dict, "goals": dict, "met": dict})
+#: The block of docs/evolution.md.
+BLOCKS = (fenced("es-speed", "docs/jax/es_speed.json", render, SCHEMA),)
 
 
-def rendered_block(name: str, data: dict[str, Any]) -> str:
-    """The docs block ``name`` rendered from its JSON ``data``."""
-    return "\n```\n" + "\n".join(BLOCKS[name][1](data)) + "\n```\n"
-
-
-def docs_block(name: str) -> str:
-    """The text between the markers of block ``name`` in the docs page."""
-    from train.reporting.doc_tables import block
-
-    return block(DOCS.read_text(), name)
-
-
-def write_docs() -> None:
-    from train.reporting.doc_tables import with_block
-
-    text = DOCS.read_text()
-    for name, (file, _) in BLOCKS.items():
-        if (OUT / file).is_file():
-            text = with_block(text, name, rendered_block(name, json.loads((OUT / file).read_text())))
-    DOCS.write_text(text)
-    print(f"wrote {DOCS}")
-
-
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def main(argv: list[str] | None = None) -> None:
+    parser = parser_for("es-speed", __doc__)
     parser.add_argument("--repeats", type=int, default=5, help="alternating rounds (default: 5)")
     parser.add_argument("--updates", type=int, default=8, help="PPO updates per round (default: 8)")
-    parser.add_argument("--docs", action="store_true", help="write docs/jax/es_speed.json and docs/evolution.md's block")
-    parser.add_argument("--render", action="store_true", help="only render docs/evolution.md's block from the JSON")
-    args = parser.parse_args()
-    if not args.render:
-        data = measure(args.repeats, args.updates)
-        print("\n".join(render(data)))
-        if args.docs:
-            OUT.mkdir(parents=True, exist_ok=True)
-            (OUT / "es_speed.json").write_text(json.dumps(data, indent=1) + "\n")
-    if args.docs or args.render:
-        write_docs()
+    add_json_output(parser, "docs/jax/es_speed.json")
+    args = parser.parse_args(argv)
+    if "jax" in sys.modules:  # the devices are fixed when jax is imported
+        parser.error("es-speed must run before jax is imported (it asks XLA for 2 CPU devices)")
+    os.environ["XLA_FLAGS"] = f"{os.environ.get('XLA_FLAGS', '')} --xla_force_host_platform_device_count={DEVICES}"
+    data = measure(args.repeats, args.updates)
+    print("\n".join(render(data)))
+    if args.json is not None:
+        write_json(args.json, data)
 
 
 if __name__ == "__main__":
