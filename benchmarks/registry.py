@@ -32,6 +32,7 @@ SUITE: dict[str, str] = {
     "es-speed": "benchmarks.training.es_speed",
     "sbx-speed": "benchmarks.training.sbx_speed",
     # learning: what the learned agents reach, and why
+    "es-learn": "benchmarks.learning.es_learn",
     "rl-levers": "benchmarks.learning.rl_levers",
     "rl-sweep": "benchmarks.learning.rl_sweep",
     "rl-diagnosis": "benchmarks.learning.rl_diagnosis",
@@ -40,7 +41,6 @@ SUITE: dict[str, str] = {
     "incentives": "benchmarks.learning.incentives",
     "ship-rl-agents": "benchmarks.learning.ship_rl_agents",
     "prescribed-time-goal": "benchmarks.learning.prescribed_time_goal",
-    "es-learn": "benchmarks.learning.es_learn",
     "sbx-learn": "benchmarks.learning.sbx_learn",
     # robustness: the deadline under disturbances
     "robustness": "benchmarks.robustness.robustness",
