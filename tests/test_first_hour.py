@@ -440,13 +440,16 @@ def test_fabregas_is_explained_once(tmp_path: Path) -> None:
 # 18. The test run warns only where a warning is what a test tests: here, v0's.
 
 
-def test_v0_warns_that_it_is_out_of_date_and_v1_does_not() -> None:
+def test_v0_and_v1_warn_that_they_are_out_of_date_and_v2_does_not() -> None:
+    """Gymnasium's versioning: an id with a newer version warns (v0 and v1 since v2 exists); the newest does not."""
     import warnings
 
     import gymnasium as gym
 
     with pytest.warns(DeprecationWarning, match="DWRPointStabilization-v0 is out of date"):
         gym.make(PAPER_ENV_ID)
+    with pytest.warns(DeprecationWarning, match="DWRPointStabilization-v1 is out of date"):
+        gym.make(TASK_ENV_ID)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        gym.make(TASK_ENV_ID)
+        gym.make("DWRPointStabilization-v2")

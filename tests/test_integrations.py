@@ -60,12 +60,14 @@ def test_spec_max_episode_steps_is_the_step_the_env_truncates_at(kwargs: dict[st
 @pytest.mark.parametrize("env_id", DWR_IDS)
 def test_time_aware_observation_works_on_every_registered_id(env_id: str) -> None:
     env = wrappers.TimeAwareObservation(gym.make(env_id, T_con=3.0, T_con_range=None, dt=0.1))
-    assert env.observation_space.shape == (11,) and env.observation_space.high[-1] == 45
+    held = env.unwrapped.params.hold_to_T_con  # v2 ends at T_con (terminated), the others truncate at 1.5 T_con
+    steps = 30 if held else 45
+    assert env.observation_space.shape == (11,) and env.observation_space.high[-1] == steps
     obs, _ = env.reset(seed=0, options={"start": (1.0, 0.0, 0.0)})
     assert obs[-1] == 0
-    for step in range(1, 46):
-        obs, _, _, truncated, _ = env.step(np.zeros(2, dtype=np.float32))
-        assert obs[-1] == step and truncated == (step == 45)
+    for step in range(1, steps + 1):
+        obs, _, terminated, truncated, _ = env.step(np.zeros(2, dtype=np.float32))
+        assert obs[-1] == step and (terminated if held else truncated) == (step == steps)
         assert env.observation_space.contains(obs)
 
 

@@ -218,7 +218,7 @@ def run_one(entry: Entry, seed: int, out: Path, budget: dict[str, Any], progress
     train_seconds = time.time() - start
     env_id = config_dict.get("env_id", TASK_ENV_ID)  # each agent on its own env id: v1's or v2's episode end
     n_eval = int(budget.get("eval_episodes", EVAL_EPISODES))
-    sets = evaluate_policy(policy, env_id, n=n_eval, n_per_T_con=min(PER_T_CON_EPISODES, n_eval),
+    sets = evaluate_policy(policy, env_id=env_id, n=n_eval, n_per_T_con=min(PER_T_CON_EPISODES, n_eval),
                            n_disturbed=int(budget.get("disturbed_episodes", DISTURBED_EPISODES)),
                            n_optimum=budget.get("optimum_episodes", OPTIMUM_EPISODES) or None, progress=progress)  # fmt: skip
     state_path = run_dir / "run_state.json"
