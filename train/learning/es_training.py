@@ -53,7 +53,7 @@ class ESTrainer:
     before any run directory is made."""
 
     def __init__(self, config: TrainConfig) -> None:
-        from train.learning.jax_training import configure_threads, make_jax_env, use_compilation_cache
+        from train.learning.jax_setup import configure_threads, make_jax_env, use_compilation_cache
 
         devices = host_devices(config.threads)
         force_host_devices(devices)

@@ -11,15 +11,12 @@ updates, so the same weights, as the uninterrupted run; tests/test_jax_training.
 from __future__ import annotations
 
 import dataclasses
-import os
-import sys
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 from train.learning.config import ConfigError, TrainConfig
-
-JAX_EXTRA = 'pip install "dwr-gym[jax]"'
+from train.learning.jax_setup import configure_threads, make_jax_env, use_compilation_cache
 
 
 def check_jax_config(config: TrainConfig) -> None:
@@ -45,49 +42,6 @@ def check_jax_config(config: TrainConfig) -> None:
         if getattr(config, name, inactive) != inactive:
             flag = "--" + name.replace("_", "-")
             raise ConfigError(f"{flag} is invalid with --backend jax: it is an option of --backend sb3 only")
-
-
-def configure_threads(threads: int | None) -> None:
-    """``--threads 1``: XLA's CPU backend on one thread (no Eigen thread pool), if jax is not yet imported; other
-    counts leave XLA its default pool (one thread per core), which XLA offers no flag to size."""
-    if threads != 1 or "jax" in sys.modules:
-        return
-    flags = os.environ.get("XLA_FLAGS", "")
-    os.environ["XLA_FLAGS"] = f"{flags} --xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1".strip()
-
-
-def use_compilation_cache() -> None:
-    """Keep XLA's compiled programs in ``<dwr-gym cache>/xla`` (``$DWR_GYM_CACHE``, else ~/.cache/dwr-gym), so a
-    second run of the same configuration starts in seconds instead of compiling again."""
-    import jax
-
-    from train.evaluation.optimum import cache_dir
-
-    if jax.config.jax_compilation_cache_dir is None:
-        jax.config.update("jax_compilation_cache_dir", str(cache_dir() / "xla"))
-
-
-def make_jax_env(config: TrainConfig) -> tuple[Any, Any]:
-    """The functional env of ``config.env_id`` and its params, gymnax-style (``dwr_gym.jax_env``); a ConfigError
-    naming the extra when jax, flax or optax is missing."""
-    try:
-        import flax  # noqa: F401
-        import jax  # noqa: F401
-        import optax  # noqa: F401
-
-        from dwr_gym.jax_env import make_gymnax_env
-    except ImportError as error:
-        missing = getattr(error, "name", None) or "jax"
-        raise ConfigError(f"--backend jax needs jax, flax and optax ({missing} is missing): {JAX_EXTRA}") from None
-    try:
-        env, env_params = make_gymnax_env(config.env_id, **config.env_keywords())
-    except (TypeError, ValueError, NotImplementedError) as error:
-        raise ConfigError(f"--backend jax cannot run this env: {error}") from None
-    if config.residual:  # the env's action is the residual on the expert (train.learning.jax_residual)
-        from train.learning.jax_residual import residual_env
-
-        env = residual_env(config, env)
-    return env, env_params
 
 
 def export_runner(exporter: Any, ppo: Any, runner: Any, timesteps: int) -> Any:
