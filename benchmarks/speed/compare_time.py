@@ -1,12 +1,16 @@
 """How long the main job, `dwr-gym compare` with its defaults, takes: wall clock and CPU time, the cache's state.
 
-    nice -n 10 python -m benchmarks run compare-time --docs      # writes docs/compare/timing.json, renders the block
+    nice -n 10 python -m benchmarks run compare-time --cache cold --busy 0 --docs   # a fresh clone, a quiet machine
+    nice -n 10 python -m benchmarks run compare-time --cache warm --busy 2 --docs   # the optima cached, 2 busy processes
+
+Each run adds (or replaces) its measurement, keyed by the cache's state and the busy processes, in
+docs/compare/timing.json; the block renders every measurement there, one row each.
 
 A page shows the block where it holds the pair ``<!-- generated: compare-time by compare-time (python -m benchmarks
 run compare-time --docs) -->`` and ``<!-- /generated -->`` (on one line each).
 
-Runs `dwr-gym compare --out <tmp>` as a user would (a fresh process, the shared optimum cache of
-``$DWR_GYM_CACHE`` or ``~/.cache/dwr-gym``), with ``--busy`` busy processes beside it, and records the wall time,
+Runs `dwr-gym compare --out <tmp>` as a user would (a fresh process; ``--cache warm``: the shared optimum cache of
+``$DWR_GYM_CACHE`` or ``~/.cache/dwr-gym``, ``--cache cold``: an empty one in a temporary directory), with ``--busy`` busy processes beside it, and records the wall time,
 the CPU time of the command and its solver processes, the load average, and how many optima the cache held before
 and after (a warm cache: none solved; a fresh clone: every episode's).
 """
@@ -21,8 +25,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-from benchmarks.core.commands import dwr_gym, parser_for
-from benchmarks.core.docs import NUMBER, Block, Schema
+from benchmarks.core.commands import checkout_env, dwr_gym, parser_for
+from benchmarks.core.docs import Block, Schema
 from benchmarks.core.record import load_average, torch_machine, write_json
 from benchmarks.core.timing import background_load
 
@@ -30,12 +34,11 @@ ROOT = Path(__file__).resolve().parents[2]
 JSON_PATH = ROOT / "docs" / "compare" / "timing.json"
 
 
-def cached_optima() -> int:
-    """Optima in the cache now."""
-    from train.evaluation.optimum import cache_dir
-
+def cached_optima(env: dict[str, str]) -> int:
+    """Optima in the cache the environment ``env`` names now."""
+    directory = Path(env.get("DWR_GYM_CACHE") or Path.home() / ".cache" / "dwr-gym")
     total = 0
-    for path in cache_dir().glob("optimal-energy-*.json"):
+    for path in directory.glob("optimal-energy-*.json"):
         try:
             total += len(json.loads(path.read_text()))
         except (OSError, ValueError):
@@ -43,16 +46,17 @@ def cached_optima() -> int:
     return total
 
 
-def measure(busy: int) -> dict[str, Any]:
-    with background_load(busy, 6 * 3600.0):
-        before_cache = cached_optima()
-        with tempfile.TemporaryDirectory() as tmp:
-            before = resource.getrusage(resource.RUSAGE_CHILDREN)
-            began = time.perf_counter()
-            dwr_gym(["compare", "--out", f"{tmp}/out", "--no-progress"], cwd=tmp, stdout=subprocess.DEVNULL)
-            wall = time.perf_counter() - began
-            after = resource.getrusage(resource.RUSAGE_CHILDREN)
+def measure(busy: int, cache: str) -> dict[str, Any]:
+    with background_load(busy, 6 * 3600.0), tempfile.TemporaryDirectory() as tmp:
+        env = checkout_env(DWR_GYM_CACHE=f"{tmp}/cache") if cache == "cold" else checkout_env()
+        before_cache = cached_optima(env)
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        began = time.perf_counter()
+        dwr_gym(["compare", "--out", f"{tmp}/out", "--no-progress"], cwd=tmp, stdout=subprocess.DEVNULL, env=env)
+        wall = time.perf_counter() - began
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
         load = load_average()
+        solved = cached_optima(env) - before_cache
     return {
         "machine": torch_machine(),
         "command": "dwr-gym compare",
@@ -60,38 +64,60 @@ def measure(busy: int) -> dict[str, Any]:
         "wall_seconds": round(wall, 1),
         "cpu_seconds": round((after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime), 1),
         "load_average_1min_at_end": load,
+        "cache": cache,
         "optima_cached_before": before_cache,
-        "optima_solved": cached_optima() - before_cache,
+        "optima_solved": solved,
     }
 
 
-def render(results: dict[str, Any]) -> str:
-    cache = "a warm optimum cache (none solved)" if results["optima_solved"] == 0 else (
-        f"{results['optima_solved']:,} optima solved and cached")  # fmt: skip
+def render_one(result: dict[str, Any]) -> str:
+    cache = "a warm optimum cache (none solved)" if result["optima_solved"] == 0 else (
+        f"an empty optimum cache ({result['optima_solved']:,} optima solved and cached)")  # fmt: skip
     return (
-        f"\n`{results['command']}` with its defaults, {cache}, {results['busy_processes']} busy processes beside it: "
-        f"{results['wall_seconds'] / 60:.1f} min of wall time at a load average of "
-        f"{results['load_average_1min_at_end']:g} (1 min, at the end), {results['cpu_seconds'] / 60:.1f} min of CPU "
-        f"time over its processes ({results['machine']}; `python -m benchmarks run compare-time`, `docs/compare/timing.json`).\n"
+        f"| {cache} | {result['busy_processes']} | {result['wall_seconds'] / 60:.1f} | "
+        f"{result['cpu_seconds'] / 60:.1f} | {result['load_average_1min_at_end']:g} |"
     )
+
+
+def render(results: dict[str, Any]) -> str:
+    runs = sorted(results["runs"], key=lambda r: (r["cache"] != "cold", r["busy_processes"]))
+    machine = runs[0]["machine"] if runs else "no run"
+    return "\n".join([
+        "",
+        "| `dwr-gym compare`, defaults | busy processes beside it | wall time (min) | CPU time (min) | load (1 min, at the end) |",
+        "|---|---:|---:|---:|---:|",
+        *(render_one(r) for r in runs),
+        "",
+        f"*{machine}; `python -m benchmarks run compare-time --cache cold|warm --busy N --docs`, `docs/compare/timing.json`.*",
+        "",
+    ])  # fmt: skip
+
+
+def merged(previous: dict[str, Any] | None, result: dict[str, Any]) -> dict[str, Any]:
+    """``previous``'s runs with ``result`` added, replacing the run of the same cache state and busy processes."""
+    runs = [r for r in (previous or {}).get("runs", [])
+            if (r.get("cache"), r.get("busy_processes")) != (result["cache"], result["busy_processes"])]  # fmt: skip
+    return {"runs": [*runs, result]}
 
 
 def main(argv: list[str] | None = None) -> None:
     parser = parser_for("compare-time", __doc__)
     parser.add_argument("--busy", type=int, default=2, help="busy background processes (default: 2)")
+    parser.add_argument("--cache", choices=("cold", "warm"), default="warm",
+                        help="cold: an empty optimum cache (a fresh clone); warm: the shared one (default)")  # fmt: skip
     parser.add_argument(
         "--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} (and render the block)"
     )
     args = parser.parse_args(argv)
     if args.busy < 0:
         parser.error(f"--busy={args.busy} is invalid: expected an integer >= 0")
-    results = measure(args.busy)
-    print(render(results))
+    result = measure(args.busy, args.cache)
+    previous = json.loads(JSON_PATH.read_text()) if JSON_PATH.exists() else None
+    results = merged(previous if previous and "runs" in previous else None, result)
+    print(render({"runs": [result]}))
     if args.docs:
         write_json(JSON_PATH, results)
 
 
-#: A sentence of docs/results.md.
-BLOCKS = (Block("compare-time", "docs/compare/timing.json", render,
-                Schema({"command": str, "busy_processes": int, "wall_seconds": NUMBER, "cpu_seconds": NUMBER,
-                        "load_average_1min_at_end": NUMBER, "optima_solved": int, "machine": str})),)  # fmt: skip
+#: A table of docs/results.md, a row per measurement.
+BLOCKS = (Block("compare-time", "docs/compare/timing.json", render, Schema({"runs": list})),)
