@@ -66,6 +66,7 @@ SUITE: dict[str, str] = {
     "prescribed-time-agents": "benchmarks.recipes.prescribed_time_agents",
     "rl-agents": "benchmarks.recipes.rl_agents",
     "rl-anneal": "benchmarks.recipes.rl_anneal",
+    "rl-v2": "benchmarks.recipes.rl_v2",
     "robust-rl": "benchmarks.recipes.robust_rl",
 }
 

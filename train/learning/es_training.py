@@ -66,7 +66,7 @@ class ESTrainer:
         from train.learning.jax_export import SB3Exporter
         from train.learning.training_env import make_training_env
 
-        self.es = JaxES(self.settings, env, env_params, devices)
+        self.es = JaxES(self.settings, env, env_params, devices, residual=bool(config.residual))
         venv = make_training_env(config)
         self.exporter = SB3Exporter(venv, {"policy_kwargs": es_policy_kwargs(self.settings)}, config.seed)
         venv.close()

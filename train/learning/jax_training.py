@@ -24,8 +24,6 @@ def check_jax_config(config: TrainConfig) -> None:
     if config.algo not in ("ppo", "es"):
         raise ConfigError(f"--algo {config.algo!r} is invalid with --backend jax: the jitted trainers are PPO and ES; "
                           "use --algo ppo or es, or --backend sb3 for the others")  # fmt: skip
-    if config.residual and config.algo == "es":
-        raise ConfigError("--residual is invalid with --algo es: the jitted residual trains with --algo ppo")
     if config.residual:  # the expert must run inside the compiled loop
         from train.learning.jax_residual import check_residual_expert
 

@@ -186,8 +186,11 @@ def disturbed_table(summary: dict[str, Any], references: dict[str, Any] | None =
     return "\n".join(lines)
 
 
-def per_T_con_table(summary: dict[str, Any], references: dict[str, Any] | None = None) -> str:
-    """In time and E/opt (IQM over seeds) of each entry at each prescribed time of PER_T_CON."""
+def per_T_con_table(
+    summary: dict[str, Any], references: dict[str, Any] | None = None, references_env: str | None = None
+) -> str:
+    """In time and E/opt (IQM over seeds) of each entry at each prescribed time of PER_T_CON; the references were
+    evaluated on ``references_env`` (v1 when not recorded)."""
     names = [per_T_con_set(T_con) for T_con in PER_T_CON]
     head = " | ".join(f"{name.replace('T_con=', 'T_con ')} s: in time, E/opt" for name in names)
     lines = [f"| agent | env | {head} |", "|---" * (len(names) + 2) + "|"]
@@ -201,7 +204,8 @@ def per_T_con_table(summary: dict[str, Any], references: dict[str, Any] | None =
     for ref_name, sets in (references or {}).items():
         cells = [f"{sets[n]['in_time']:.2f}, {'-' if sets[n]['energy_ratio'] is None else format(sets[n]['energy_ratio'], '.2f')}"
                  if n in sets else "-" for n in names]  # fmt: skip
-        lines.append(f"| {ref_name} (controller) | v1 | " + " | ".join(cells) + " |")
+        env = (references_env or "DWRPointStabilization-v1").rsplit("-", 1)[-1]
+        lines.append(f"| {ref_name} (controller) | {env} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
 
