@@ -281,6 +281,7 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "rl-diagnosis": ("docs/rl_benchmark/diagnosis.json", lambda data: rl_table(data, "diagnosis")),
     "rl-levers": ("docs/rl_benchmark/levers.json", lambda data: rl_table(data, "levers")),
     "rl-rushing": ("docs/rl_benchmark/rushing.json", lambda data: rl_table(data, "rushing")),
+    "rl-rushing-v2": ("docs/rl_benchmark/rushing_v2.json", lambda data: rl_table(data, "rushing")),
     "datasets-suite": ("docs/datasets/suite.json", lambda data: dataset_tables.suite_table(data)),
     "datasets-baselines": ("docs/datasets/suite.json", lambda data: dataset_tables.baselines_table(data)),
     "datasets-speed": ("docs/datasets/speed.json", lambda data: dataset_tables.speed_table(data)),

@@ -303,8 +303,9 @@ def rushing_table(data: dict[str, Any]) -> str:
         lines.append(f"| {name} | {r['episodes']} | {r['arrival_share']:.2f} | {r['energy_ratio']:.2f} | "
                      f"{r['timing']:.2f} | {r['motion']:.2f} |")  # fmt: skip
     return "\n".join(lines) + (
-        f"\n\n*The episodes of the benchmark's nominal set (first {data['n']}, seed {data['seed']}) that arrive in "
-        "time; geometric means over them, so that E/opt = timing x motion; optima by CasADi (the goal pose).*\n"
+        f"\n\n*{data.get('env_id', 'DWRPointStabilization-v1')}: the episodes of the benchmark's nominal set (first "
+        f"{data['n']}, seed {data['seed']}) that arrive in time; geometric means over them, so that E/opt = timing x "
+        "motion; optima by CasADi (the goal pose).*\n"
     )
 
 
