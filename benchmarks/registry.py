@@ -40,6 +40,7 @@ SUITE: dict[str, str] = {
     "rl-rushing": "benchmarks.learning.rl_rushing",
     "incentives": "benchmarks.learning.incentives",
     "ship-rl-agents": "benchmarks.learning.ship_rl_agents",
+    "per-t-con": "benchmarks.learning.per_t_con",
     "prescribed-time-goal": "benchmarks.learning.prescribed_time_goal",
     "sbx-learn": "benchmarks.learning.sbx_learn",
     # robustness: the deadline under disturbances
