@@ -13,10 +13,13 @@ Needs CasADi: ``pip install "dwr-gym[optimal]"``.
 from __future__ import annotations
 
 import atexit
+import hashlib
 import math
 import multiprocessing
 import os
+import pickle
 import sys
+from collections import OrderedDict
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from typing import Any
@@ -40,6 +43,8 @@ from dwr_gym.params import check_range
 PARALLEL_THRESHOLD = 8
 #: A re-plan on the episode's grid needs at least this many intervals left (fewer: the plan is kept).
 MIN_REPLAN_INTERVALS = 4
+#: Plans (or their errors) kept by :class:`PlanPool`, by job, least recently used out: some 10 kB each.
+MEMO_SIZE = 8192
 
 
 def check_count(name: str, value: Any, low: int, high: int) -> int:
@@ -125,15 +130,62 @@ def _stop_executors() -> None:
     _EXECUTORS.clear()
 
 
+#: The plans solved in this process, by :func:`job_key`: a planner that meets a problem again takes the plan solved
+#: before. A solve is a pure function of its job (the same plan to the last bit in any process, whatever was solved
+#: before it), so this changes no result: it saves the plans that ``dwr-gym compare`` meets on several scenario sets
+#: (``robust-pt``'s and ``optimal``'s first plans from the same starts on the random set and the imperfect robots'
+#: sets, every plan of the figures' replay of paper-fig5).
+_MEMO: OrderedDict[bytes, Plan | Exception] = OrderedDict()
+
+
+def job_key(job: dict[str, Any]) -> bytes:
+    """A digest of every keyword of a :func:`baselines.optimal.solve_minimum_energy` job, bit for bit (0.0 and -0.0,
+    a float and a numpy float are different jobs here)."""
+    return hashlib.sha256(pickle.dumps(sorted(job.items()), protocol=5)).digest()
+
+
+def problem_size(job: dict[str, Any]) -> int:
+    """The number of intervals of the problem a job solves (its solver's size, :func:`minimum_energy_solver`)."""
+    intervals = job.get("intervals")
+    if intervals is None:
+        intervals = max(1, math.floor(job["arrival_time"] / (job["dt"] * job.get("hold_steps", 1)) + 1e-9))
+    pad_to = job.get("pad_to", 1)
+    return int(-(-intervals // pad_to) * pad_to)
+
+
+def clear_memo() -> None:
+    """Forget the plans solved so far (:data:`_MEMO`)."""
+    _MEMO.clear()
+
+
 class PlanPool:
     """Solves batches of plans, in worker processes when a batch is large enough; errors are returned, not raised.
-    The processes are shared by every pool of the same size in this process and outlive it (see ``_EXECUTORS``)."""
+    The processes are shared by every pool of the same size in this process and outlive it (see ``_EXECUTORS``);
+    a plan solved before in this process is not solved again (:data:`_MEMO`)."""
 
     def __init__(self, workers: int = 0) -> None:
         self.workers = workers or min(os.cpu_count() or 1, 8)
 
     def map(self, jobs: list[dict[str, Any]]) -> list[Plan | Exception]:
         """:func:`baselines.optimal.solve_minimum_energy` of each job's keywords, in order."""
+        keys = [job_key(job) for job in jobs]
+        todo: dict[bytes, dict[str, Any]] = {}
+        for key, job in zip(keys, jobs, strict=True):
+            if key in _MEMO:
+                _MEMO.move_to_end(key)
+            else:
+                todo[key] = job
+        # the largest problems first, neighbours together: a worker process builds fewer solvers (one per size)
+        order = sorted(todo, key=lambda key: -problem_size(todo[key]))
+        solved = dict(zip(order, self._solve([todo[key] for key in order]), strict=True))
+        results = [solved[key] if key in solved else _MEMO[key] for key in keys]
+        for key, result in solved.items():
+            _MEMO[key] = result
+        while len(_MEMO) > MEMO_SIZE:
+            _MEMO.popitem(last=False)
+        return results
+
+    def _solve(self, jobs: list[dict[str, Any]]) -> list[Plan | Exception]:
         if self.workers <= 1 or len(jobs) < PARALLEL_THRESHOLD:
             return [_solve(job) for job in jobs]
         # fork on Linux: works from any script (spawn re-imports __main__, which needs an `if __name__` guard)
@@ -319,4 +371,4 @@ class OptimalController(Controller):
         self.close()
 
 
-__all__ = ["OptimalController", "OptimalParams"]
+__all__ = ["OptimalController", "OptimalParams", "PlanPool", "clear_memo", "job_key", "problem_size"]

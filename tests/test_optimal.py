@@ -7,6 +7,7 @@ import json
 import math
 import re
 import sys
+from collections import OrderedDict
 from pathlib import Path
 
 import gymnasium as gym
@@ -112,6 +113,7 @@ def test_a_failed_scenario_is_a_failure_in_the_table_not_a_crash(monkeypatch: py
         return real(**job)  # type: ignore[arg-type]
 
     monkeypatch.setattr(nmpc, "solve_minimum_energy", failing_for_robot_one)
+    monkeypatch.setattr(nmpc, "_MEMO", OrderedDict())  # no plan solved before, none injected kept after
     starts = np.array([[-0.8, 0.0, 0.0], [-0.5, -0.3, 0.0], [-4.0, 0.0, 0.0]])  # the third is infeasible in 5 s
     scenario = Scenario("mixed", starts, np.zeros((3, 3)), {"T_con": 5.0})
     result = evaluate({"optimal": "optimal"}, scenario, optimum="pose")["optimal"]
@@ -133,12 +135,43 @@ def test_a_failed_replan_keeps_the_previous_plan(monkeypatch: pytest.MonkeyPatch
         return real(**job)  # type: ignore[arg-type]
 
     monkeypatch.setattr(nmpc, "solve_minimum_energy", cold_only)
+    monkeypatch.setattr(nmpc, "_MEMO", OrderedDict())
     scenario = make_scenario("paper-fig5", env_kwargs={"actuation_noise": 0.02})  # noise: re-plans are attempted
     # solved in this process: the shared worker processes of PlanPool were forked before the monkeypatch
     policy = ExpertPolicy(make_controller("optimal", workers=1), 0.5, 2.0)
     result = evaluate({"optimal": policy}, scenario)["optimal"]
     assert result.planner_failures == 0
     assert result.final_distance.max() < 0.1  # it went on open loop on its first plan (from 0.8 m), not stopped
+
+
+def test_a_plan_met_again_is_the_plan_solved_before_and_the_rollout_the_same(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The planners' plans are kept by job (compare meets the same first plans on several sets): a rollout run again
+    solves nothing and equals the first to the last bit; a job that differs in one bit is solved."""
+    import baselines.nmpc as nmpc
+
+    monkeypatch.setattr(nmpc, "_MEMO", OrderedDict())
+    solved: list[dict[str, object]] = []
+    real = nmpc.solve_minimum_energy
+    monkeypatch.setattr(nmpc, "solve_minimum_energy", lambda **job: solved.append(job) or real(**job))  # type: ignore[func-returns-value]
+    scenario = Scenario("two", np.array([[-0.8, 0.2, 0.5], [-1.5, -0.4, 3.0]]), np.zeros((2, 3)), {"T_con": 10.0,
+                        "actuation_noise": 0.05})  # fmt: skip
+    runs = []
+    for _ in range(2):
+        policy = ExpertPolicy(make_controller("optimal", T_con=10.0, workers=1), 0.5, 2.0)
+        runs.append((evaluate({"optimal": policy}, scenario, seed=3)["optimal"], len(solved)))
+        solved.clear()
+    (first, solves), (second, again) = runs
+    assert solves > 2 and again == 0  # noise: re-plans, all of them met again
+    for name in ("energy", "final_distance", "final_heading_error", "episode_return", "command_rate_rms"):
+        assert getattr(first, name).tobytes() == getattr(second, name).tobytes()
+    pool = nmpc.PlanPool(workers=1)
+    job = {"start": (-0.8, 0.0, 0.0), "arrival_time": 5.0, "dt": 0.05, "u_max": 0.5, "omega_max": 2.0, "hold_steps": 5}
+    short = {**job, "arrival_time": 2.5}
+    plans = pool.map([short, job, short])
+    assert [j["arrival_time"] for j in solved] == [5.0, 2.5]  # each once, the largest first
+    assert plans[0] is plans[2] and plans[0].intervals == 10 and plans[1].intervals == 20  # type: ignore[union-attr]
+    pool.map([{**job, "start": (-0.8, -0.0, 0.0)}])
+    assert len(solved) == 3
 
 
 def test_optimal_controller_on_paper_fig5_reaches_the_pose_with_less_energy_than_ptc() -> None:
