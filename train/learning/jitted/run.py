@@ -1,5 +1,5 @@
-"""The run of a jitted trainer (``dwr-gym train --backend jax``: the PPO of :mod:`train.learning.jax_training`, the
-ES of :mod:`train.learning.es_training`) in the run directory of :mod:`train.learning.runs`, the same as the
+"""The run of a jitted trainer (``dwr-gym train --backend jax``: the PPO of :mod:`train.learning.jitted.trainer`, the
+ES of :mod:`train.learning.evolution.trainer`) in the run directory of :mod:`train.learning.runs`, the same as the
 stable-baselines3 path writes.
 
 A trainer (:class:`JitTrainer`) advances its state, a pytree, by jitted chunks up to the next evaluation or
