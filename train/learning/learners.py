@@ -9,8 +9,9 @@ does not implement (``--residual``, ``--init-from``) are refused here in one lin
 against the model class's constructor, or by the entry's own ``hyperparams`` function.
 
 Trainers by kind (:data:`KINDS`), each a package of :mod:`train.learning`: ``sb3`` (stable-baselines3 on torch, and
-sbx-rl, which keeps its API on JAX), ``jitted`` (the PPO compiled whole on the functional JAX env, and the loop every
-jitted trainer shares), ``evolution`` (evolution strategies on that loop). The imitation learners of
+sbx-rl, which keeps its API on JAX), ``jitted`` (the PPO compiled whole with the functional JAX env, and the loop
+every jitted trainer shares: :func:`train.learning.jitted.run.train_jitted`), ``evolution`` (evolution strategies on
+that loop). The imitation learners of
 :mod:`train.learning.imitation` (``dwr-gym imitate``, DAgger) are commands of their own, with their own options,
 that write the same run directory and agent format. This module imports nothing of the project, so that the
 configuration can read it.
@@ -24,8 +25,8 @@ from typing import Any
 
 KINDS: dict[str, str] = {
     "sb3": "stable-baselines3's API on the native vector env: SB3 on torch, or sbx-rl on JAX (train.learning.sb3)",
-    "jax-gradient": "a gradient learner compiled whole with the functional JAX env (train.learning.jitted)",
-    "jax-evolution": "evolution strategies on the functional JAX env (train.learning.evolution)",
+    "jitted": "a gradient learner compiled whole with the functional JAX env (train.learning.jitted)",
+    "evolution": "evolution strategies, on the loop of the jitted trainers (train.learning.evolution)",
 }
 
 SB3 = ("stable_baselines3",)
@@ -105,9 +106,9 @@ LEARNERS: tuple[Learner, ...] = (
     Learner("td3", "sbx", "sb3", _SB3, "sbx:TD3", "sbx", SBX),
     Learner("tqc", "sbx", "sb3", _SB3, "sbx:TQC", "sbx", SBX),
     Learner("crossq", "sbx", "sb3", _SB3, "sbx:CrossQ", "sbx", SBX),
-    Learner("ppo", "jax", "jax-gradient", "train.learning.jitted.trainer", "stable_baselines3:PPO", "jax", JAX,
+    Learner("ppo", "jax", "jitted", "train.learning.jitted.trainer", "stable_baselines3:PPO", "jax", JAX,
             residual=True),
-    Learner("es", "jax", "jax-evolution", "train.learning.evolution.trainer", "stable_baselines3:PPO", "es", EVOSAX,
+    Learner("es", "jax", "evolution", "train.learning.evolution.trainer", "stable_baselines3:PPO", "es", EVOSAX,
             hyperparams="train.learning.evolution.settings:check_es_kwargs"),
 )
 # fmt: on

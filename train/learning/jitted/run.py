@@ -130,7 +130,7 @@ class JaxRun:
         self.last_checkpoint = steps
         write_state(self.run_dir, {"timesteps": steps, "wall_time": self.wall_time(), "best": self.best_row,
                                    "best_score": self.best[2], "last_eval": self.last_eval, "finished": finished,
-                                   "backend": "jax"})  # fmt: skip
+                                   "backend": self.config.backend})  # fmt: skip
 
 
 def train_jitted(
