@@ -1,4 +1,5 @@
-"""DAgger on minimum-energy plans and the hand-over agents (train/learning/imitation/dagger.py, train/learning/imitation/handover.py)."""
+"""DAgger on minimum-energy plans and the hand-over agents (train/learning/imitation/dagger.py,
+train/learning/imitation/handover.py)."""
 
 from __future__ import annotations
 

@@ -57,7 +57,8 @@ def test_the_yaml_is_read_and_es_needs_the_jax_backend() -> None:
     config = resolved(hyperparam_overrides={"sigma": 0.02})
     assert config.algo_kwargs["sigma"] == 0.02 and config.algo_kwargs["strategy"] == "open_es"
     assert config.num_envs == 1 and config.total_timesteps > 0
-    with pytest.raises(ConfigError, match=r"^--algo 'es' is invalid with --backend sb3: .*; es trains with --backend jax$"):
+    refused = r"^--algo 'es' is invalid with --backend sb3: .*; es trains with --backend jax$"
+    with pytest.raises(ConfigError, match=refused):
         TrainConfig(algo="es").validate()
     with pytest.raises(ConfigError, match=r"^hyperparameter"):
         resolved(hyperparam_overrides={"sigmaa": 0.02})

@@ -64,7 +64,8 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
     "evaluation": (["train/evaluation/rollout.py", "train/evaluation/scenarios.py", "train/evaluation/evaluate.py"],
                    ["tests/test_controllers.py", "tests/test_optimal.py", "tests/test_prescribed_time.py",
                     "tests/test_robustness.py"]),
-    "learning": (["train/learning/imitation/dagger.py", "train/learning/imitation/robust_dagger.py", "train/learning/residual.py"],
+    "learning": (["train/learning/imitation/dagger.py", "train/learning/imitation/robust_dagger.py",
+                  "train/learning/residual.py"],
                  ["tests/test_dagger.py", "tests/test_robust_dagger.py", "tests/test_residual.py",
                   *(f"tests/test_train.py::test_{name}" for name in (
                       "residual_action_arithmetic_and_clipping", "residual_wrapper_logs_expert_and_residual_parts",

@@ -9,9 +9,9 @@ step recorded as ``"then: <command>"`` runs after it in the same run directory).
 was typed, with only ``--seed`` and ``--run-dir`` replaced, so a new agent directory needs no change here.
 Two things are added where the recorded command relied on what were defaults then: ``--env <env_id of the
 config>`` to a ``dwr-gym train`` command that names no env (the default env was v0 before it became v1),
-and a module that moved since (``train.dagger``, ``train.learning.dagger``) is read as its new place. Everything else a command leaves
-unset takes today's defaults: the `dwr-gym train` recipes train with the batch-sized defaults of issue 23
-(docs/training.md), not the 16 robots the shipped agents were trained with.
+and a module that moved since (``train.dagger``, ``train.learning.dagger``) is read as its new place. Everything
+else a command leaves unset takes today's defaults: the `dwr-gym train` recipes train with the batch-sized defaults
+of issue 23 (docs/training.md), not the 16 robots the shipped agents were trained with.
 
 ``--budget F`` multiplies the budget flags of every recipe (``--total-timesteps``, ``--episodes``,
 ``--dagger-episodes``) by F when the full budgets do not fit; the JSON and the docs block say so.

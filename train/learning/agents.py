@@ -69,7 +69,7 @@ def load_agent(path: str | Path, part: str = "whole") -> tuple[str, Any]:
     if part == "network":
         return f"{label} (network alone)", policy
     handover = load_extra(run_dir).get("handover")
-    if handover:  # a network that hands over to an analytic law for the finish (train.learning.imitation.handover.HandoverPolicy)
+    if handover:  # a network that hands over to an analytic law for the finish (imitation.handover.HandoverPolicy)
         from train.learning.imitation.handover import make_handover_policy
 
         try:

@@ -107,7 +107,8 @@ def train(
     on_evaluation: Callable[[dict[str, Any]], None] | None = None,
 ) -> Path:
     """Train as configured with ES; returns the run directory (the learner of ``--algo es --backend jax``, called by
-    :func:`train.learning.training.train`, whose contract it keeps through :func:`train.learning.jitted.run.train_jitted`)."""
+    :func:`train.learning.training.train`, whose contract it keeps through
+    :func:`train.learning.jitted.run.train_jitted`)."""
     from train.learning.jitted.run import train_jitted
     from train.learning.jitted.setup import check_env_options
     from train.threads import torch_threads

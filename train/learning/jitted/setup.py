@@ -1,5 +1,6 @@
 """What every jitted trainer (the PPO of :mod:`train.learning.jitted.trainer`, the ES of
-:mod:`train.learning.evolution.trainer`) sets up before it runs: XLA's threads, its compilation cache, the functional env."""
+:mod:`train.learning.evolution.trainer`) sets up before it runs: XLA's threads, its compilation cache, the functional
+env, the options of the SB3 path that it refuses."""
 
 from __future__ import annotations
 

@@ -171,9 +171,10 @@ def make_run_callback(
 
 
 def make_anneal_callback(config: TrainConfig) -> Any:
-    """PPO's ``log_std_final`` (ours, as the jitted PPO's :attr:`~train.learning.jitted.policy.PPOSettings.log_std_final`):
-    after each rollout's update the policy's log_std is capped at log_std_init + (log_std_final - log_std_init) *
-    (env steps done / budget), annealing the exploration noise whose energy v1 charges."""
+    """PPO's ``log_std_final`` (ours, as the jitted PPO's
+    :attr:`~train.learning.jitted.policy.PPOSettings.log_std_final`): after each rollout's update the policy's
+    log_std is capped at log_std_init + (log_std_final - log_std_init) * (env steps done / budget), annealing the
+    exploration noise whose energy v1 charges."""
     import torch
     from stable_baselines3.common.callbacks import BaseCallback
 
