@@ -20,6 +20,7 @@ configuration can read it.
 from __future__ import annotations
 
 import importlib
+import importlib.util
 from dataclasses import dataclass
 from typing import Any
 
@@ -59,7 +60,7 @@ class Learner:
     init_from: bool = False
     """Whether it starts from a saved network (``--init-from``)."""
     hyperparams: str | None = None
-    """``module:function`` that coerces its hyperparameters (a dict, returned checked; ValueError naming a bad one);
+    """``module:function`` that coerces its hyperparameters (a dict, returned checked; a ConfigError naming a bad one);
     None: they are the keywords of :attr:`model`'s constructor (``train.learning.hyperparams.check_algo_kwargs``)."""
 
     def check_options(self, config: Any) -> None:
@@ -71,11 +72,10 @@ class Learner:
                                  f"implemented by {describe(able)}")  # fmt: skip
 
     def check_installed(self) -> None:
-        """Raise ImportError naming the extra where a module it needs is not installed."""
+        """Raise ImportError naming the extra where a module it needs is not installed. Found, not imported: a
+        trainer may have to set XLA's flags before jax is imported (``train.learning.evolution.trainer``)."""
         for module in self.requires:
-            try:
-                importlib.import_module(module)
-            except ImportError:
+            if importlib.util.find_spec(module) is None:
                 raise ImportError(f'--backend {self.backend} --algo {self.algo} needs {module}, which is not '
                                   f'installed: pip install "dwr-gym[{self.extra}]"', name=module) from None  # fmt: skip
 
