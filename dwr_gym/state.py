@@ -101,7 +101,9 @@ class TaskState:
 def shaping_potential(coords: ErrorCoordinates, params: EnvParams) -> FloatArray:
     """P of the progress term's potential Phi = -P: L of eq. (21), or the distance d (``params.shaping_potential``)."""
     if params.shaping_potential == "distance":
-        return coords.distance
+        # a new array: the state keeps the potential, and a partial reset writes into it in place, which would
+        # change the distance that the step's infos (final_info of an autoreset) hold if both were one array
+        return coords.distance * 1.0
     return model.lyapunov(coords.distance, coords.orientation_error)
 
 

@@ -149,3 +149,29 @@ def test_leaving_the_arena_never_saves_the_energy_of_the_rest_of_the_episode() -
         return run(env, lambda obs, t: np.array([0.0, 1.0], np.float32), start)[0]  # spins at full speed to T_con
 
     assert exit_then("flail") > exit_then("leave")
+
+
+@pytest.mark.parametrize("autoreset_mode", ["same_step", "next_step"])
+def test_the_vector_envs_infos_of_an_ended_step_are_its_own_not_the_next_episodes(autoreset_mode: str) -> None:
+    """On v2 the shaping potential is the distance itself: the state keeps it and a reset writes into it, so an
+    ended robot's reported distance must still be that of its last pose (found by the JAX equivalence test: the
+    distance of the next episode's start leaked into final_info)."""
+    n = 6
+    env = gym.make_vec(dwr_gym.ENV_ID_V2, num_envs=n, vectorization_mode="vector_entry_point",
+                       autoreset_mode=autoreset_mode)  # fmt: skip
+    env.reset(seed=3, options={"T_con": np.linspace(0.3, 0.8, n)})
+    ended_seen = 0
+    for _ in range(20):
+        _, _, terminated, truncated, infos = env.step(np.tile([[1.0, 0.2]], (n, 1)).astype(np.float32))
+        ended = terminated | truncated
+        if autoreset_mode == "same_step" and ended.any():
+            final = infos["final_info"]
+            np.testing.assert_allclose(final["distance"][ended], np.hypot(*final["pose"][ended, :2].T), atol=1e-9)
+            np.testing.assert_allclose(infos["final_obs"][ended, 0], final["distance"][ended], rtol=1e-6)
+            ended_seen += int(ended.sum())
+        # the infos of the step (a new episode's first, after an autoreset in the same step) describe its pose
+        np.testing.assert_allclose(infos["distance"], np.hypot(*infos["pose"][:, :2].T), atol=1e-9)
+        if autoreset_mode == "next_step":
+            ended_seen += int(ended.sum())
+    env.close()
+    assert ended_seen >= n

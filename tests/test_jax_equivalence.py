@@ -98,11 +98,13 @@ def close(name: str, jax_value: object, numpy_value: object, atol: float, where:
     a, b = np.asarray(jax_value, np.float64), np.asarray(numpy_value, np.float64)
     if where is not None:
         a, b = a[where], b[where]
-    if "observation" in name and a.ndim == 2:  # the azimuth (features 1, 2) is undefined at the goal: a robot held
-        # there (v2) has a distance of 0 in one dtype's rounding and of 1e-9 in the other's, and (1, 0) or any angle
+    if "observation" in name and a.ndim == 2:  # the azimuth is undefined at the goal, and with it its features 1, 2
+        # and the orientation error (5): a robot held there (v2) at a distance of 1e-12 has any azimuth the last bit
+        # of its position gives (as the infos' orientation error, compared only away from the goal below)
         undefined = (a[:, 0] < 1e-6) | (b[:, 0] < 1e-6)
         a, b = a.copy(), b.copy()
         a[undefined, 1:3] = b[undefined, 1:3]
+        a[undefined, 5] = b[undefined, 5]
     np.testing.assert_allclose(a, b, rtol=0, atol=atol * max(1.0, float(np.max(np.abs(b), initial=0.0))), err_msg=name)
 
 
@@ -193,23 +195,19 @@ def test_float64_steps_equal_the_numpy_env_to_1e_12(seed: int, env_id: str) -> N
         check(env_id, "float64", seed)
 
 
-@pytest.mark.xfail(reason="open: with seed 0 one robot's info distance on an ended step differs between the JAX "
-                   "and numpy v2 envs (4.58 vs 2.39 m; a short T_con next to the arena's border), found at the end of "
-                   "the session that added v2's arena charge; not yet explained", strict=False)
-@settings(max_examples=2, **SETTINGS)
+@settings(max_examples=1, **SETTINGS)
 @given(seed=st.integers(0, 2**31 - 1))
-def test_v2_steps_equal_the_numpy_env_in_float64(seed: int) -> None:
-    """v2 (held to T_con) to the same tolerance as v0 and v1, but for what the azimuth decides within 1 mm of
-    the goal, where v2 holds robots (1000 times the tolerance there). In float32 its robots, which roam until
-    T_con, reach the arena's border often enough that one rounding step decides an exit in one env and not the
-    other (v0's and v1's float32 steps are compared above)."""
+def test_v2_steps_equal_the_numpy_env_in_float64_and_float32(seed: int) -> None:
+    """v2 (held to T_con) to the same tolerances as v0 and v1, but for what the azimuth decides within 1 mm of
+    the goal, where v2 holds robots (1000 times the tolerance there)."""
     with jax.enable_x64(True):
         check(dwr_gym.ENV_ID_V2, "float64", seed)
+    check(dwr_gym.ENV_ID_V2, "float32", seed)
 
 
 @pytest.mark.slow
 @settings(max_examples=25, **SETTINGS)
-@given(seed=st.integers(0, 2**31 - 1), env_id=st.sampled_from([dwr_gym.ENV_ID, dwr_gym.ENV_ID_V1]),
+@given(seed=st.integers(0, 2**31 - 1), env_id=st.sampled_from([dwr_gym.ENV_ID, dwr_gym.ENV_ID_V1, dwr_gym.ENV_ID_V2]),
        dtype=st.sampled_from(["float32", "float64"]))  # fmt: skip
 def test_many_more_steps_equal_the_numpy_env(seed: int, env_id: str, dtype: str) -> None:
     with jax.enable_x64(dtype == "float64"):
