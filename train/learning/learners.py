@@ -141,13 +141,22 @@ def find_learner(algo: str, backend: str) -> Learner:
                      f"{algo} trains with --backend {' or '.join(trained_by)}")  # fmt: skip
 
 
+BACKEND_NOTES = {"sb3": "stable-baselines3 on torch", "sbx": "sbx-rl: stable-baselines in JAX",
+                 "jax": "compiled whole with the JAX env"}  # fmt: skip
+"""What ``--backend``'s help says of each backend (a backend not here: its kind's line of :data:`KINDS`)."""
+
+
 def options_help() -> tuple[str, str]:
     """The help of ``--algo`` and ``--backend``, written from :data:`LEARNERS`."""
     by_algo = {algo: [learner.backend for learner in LEARNERS if learner.algo == algo] for algo in ALGORITHMS}
     algo = "algorithm: " + ", ".join(f"{name} ({'/'.join(backends)})" for name, backends in by_algo.items())
-    backend = "training library: sb3 (stable-baselines3 on torch, extra 'train'), sbx (sbx-rl: stable-baselines in " \
-              "JAX, extra 'sbx') or jax (compiled whole with the JAX env, extras 'jax' and 'es')"  # fmt: skip
-    return algo, backend
+    backends = []
+    for backend in BACKENDS:
+        learners = [learner for learner in LEARNERS if learner.backend == backend]
+        extras = list(dict.fromkeys(learner.extra for learner in learners))
+        note = BACKEND_NOTES.get(backend, KINDS[learners[0].kind])
+        backends.append(f"{backend} ({note}, extra{'s' if len(extras) > 1 else ''} {', '.join(map(repr, extras))})")
+    return algo, "training library: " + ", ".join(backends)
 
 
-__all__ = ["ALGORITHMS", "BACKENDS", "KINDS", "LEARNERS", "Learner", "describe", "find_learner", "options_help"]
+__all__ = ["ALGORITHMS", "BACKENDS", "BACKEND_NOTES", "KINDS", "LEARNERS", "Learner", "describe", "find_learner", "options_help"]
