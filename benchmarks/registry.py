@@ -40,6 +40,7 @@ SUITE: dict[str, str] = {
     "rl-rushing": "benchmarks.learning.rl_rushing",
     "incentives": "benchmarks.learning.incentives",
     "ship-rl-agents": "benchmarks.learning.ship_rl_agents",
+    "per-t-con": "benchmarks.learning.per_t_con",
     "prescribed-time-goal": "benchmarks.learning.prescribed_time_goal",
     "sbx-learn": "benchmarks.learning.sbx_learn",
     # robustness: the deadline under disturbances
@@ -66,6 +67,7 @@ SUITE: dict[str, str] = {
     "prescribed-time-agents": "benchmarks.recipes.prescribed_time_agents",
     "rl-agents": "benchmarks.recipes.rl_agents",
     "rl-anneal": "benchmarks.recipes.rl_anneal",
+    "rl-v2": "benchmarks.recipes.rl_v2",
     "robust-rl": "benchmarks.recipes.robust_rl",
 }
 

@@ -253,3 +253,45 @@ def test_the_jitted_trainer_of_a_residual_run_steps_the_residual_env() -> None:
     plain = TrainConfig(backend="jax")
     plain.validate()
     assert not isinstance(make_jax_env(plain)[0], ResidualGymnaxEnv)
+
+
+def test_an_es_residual_starts_its_search_at_the_expert() -> None:
+    """``--algo es --residual``: the search mean is a residual near zero (the agent is its expert at generation
+    0, as the residual PPO starts), where the same network without ``residual`` acts on its own."""
+    from dwr_gym.jax_env import make_gymnax_env
+    from train.learning.evolution.settings import ESSettings
+    from train.learning.evolution.strategies import JaxES
+    from train.learning.jitted.residual import residual_env
+
+    settings = ESSettings(population_size=4, episodes=2, net_arch=(16,))
+    config = TrainConfig(backend="jax", algo="es", residual=True, expert="pt-astolfi", env_id="DWRPointStabilization-v2")
+    env, env_params = make_gymnax_env("DWRPointStabilization-v2")
+    obs = jax.random.normal(jax.random.PRNGKey(2), (64, 10), jnp.float32)
+    actions = {}
+    for residual in (True, False):
+        es = JaxES(settings, residual_env(config, env) if residual else env, env_params, devices=1, residual=residual)
+        state = es.init(0)
+        actions[residual] = np.asarray(es.act(es.mean_params(state), obs, state.obs_stats))
+    assert np.max(np.abs(actions[True])) < 1e-2 < np.max(np.abs(actions[False]))
+
+
+@pytest.mark.slow
+def test_cli_trains_an_es_residual_on_v2_that_evaluate_loads_as_expert_plus_residual(tmp_path: Path) -> None:
+    import yaml
+
+    from train.learning.agents import load_agent
+    from train.learning.residual import ResidualPolicy
+
+    run_dir = tmp_path / "run"
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "OMP_NUM_THREADS": "1"}
+    command = [sys.executable, "-m", "train.cli", "train", "--backend", "jax", "--algo", "es", "--residual",
+               "--expert", "ptc", "--env", "DWRPointStabilization-v2", "--env-kwargs", "T_con_range=[10,11]",
+               "--eval-episodes", "3", "--no-progress", "--total-timesteps", "3000", "--eval-freq", "2000",
+               "--hyperparams", "population_size=4", "episodes=2", "policy_kwargs=dict(net_arch=[16])",
+               "--run-dir", str(run_dir)]  # fmt: skip
+    done = subprocess.run(command, cwd=ROOT, env=env, text=True, capture_output=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    saved = yaml.safe_load((run_dir / "config.yaml").read_text())
+    assert saved["config"]["residual"] and saved["config"]["algo"] == "es" and saved["learned_from"] == "reward"
+    _, policy = load_agent(run_dir)
+    assert isinstance(policy, ResidualPolicy) and policy.expert.controller.name == "ptc"

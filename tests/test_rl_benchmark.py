@@ -218,3 +218,17 @@ def test_the_energy_split_multiplies_back_and_prices_early_arrival(capsys: pytes
         assert row["timing"] >= 1 - 1e-3
     assert rows["optimal"]["timing"] < 1.1 and rows["optimal"]["energy_ratio"] < 1.05
     assert rows["ptc"]["energy_ratio"] > rows["optimal"]["energy_ratio"]
+
+
+def test_the_reference_laws_run_on_the_agents_env_id_and_v2_agents_ship_under_their_version() -> None:
+    """A table of v2 agents puts the laws beside them on v2 (in time there: at the goal at T_con), a mixed table
+    on v1; shipped v2 entries keep their version in their directory name."""
+    from benchmarks.learning.ship_rl_agents import shipped_name
+    from train.commands.benchmark import references_env
+    from train.learning.benchmark import parse_entry
+
+    v2 = [parse_entry("es-residual-v2"), parse_entry("ppo-jax-fixed-noise-v2")]
+    assert references_env(v2) == "DWRPointStabilization-v2"
+    assert references_env([*v2, parse_entry("ppo-jax")]) == "DWRPointStabilization-v1"
+    assert references_env([parse_entry("ppo")]) == "DWRPointStabilization-v1"
+    assert shipped_name("es-residual-v2") == "es_residual_v2" and shipped_name("sac-tuned") == "sac_tuned_v1"

@@ -8,6 +8,10 @@ agent's own arrival time as the deadline. Run on the benchmark's nominal set (se
 controllers:
 
     python -m benchmarks run rl-rushing train/pretrained/ppo_jax_v1 --controllers ptc pt-astolfi --n 50 --docs
+    python -m benchmarks run rl-rushing train/pretrained/es_residual_v2 --env DWRPointStabilization-v2 --docs
+
+On v2 (``--env``, written to rushing_v2.json) the energy counts until T_con and "in time" is at the goal at T_con;
+the arrival is the first time at the goal, so ``motion`` includes what the robot spends holding the goal.
 """
 
 from __future__ import annotations
@@ -54,7 +58,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("agents", nargs="*", help="run directories (or model .zip) of agents")
     parser.add_argument("--controllers", nargs="*", default=["ptc"], help="controllers beside them (default: ptc)")
     parser.add_argument("--n", type=int, default=50, help="episodes of the benchmark's nominal set (default 50)")
-    parser.add_argument("--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} (and its table)")
+    parser.add_argument("--env", default=None, help="env id (default: the task's, DWRPointStabilization-v1)")
+    parser.add_argument("--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} (rushing_v2.json "
+                        "with --env DWRPointStabilization-v2) and its table")  # fmt: skip
     args = parser.parse_args(argv)
     if args.n < 1:
         parser.error(f"--n {args.n} is invalid: expected >= 1")
@@ -66,7 +72,12 @@ def main(argv: list[str] | None = None) -> int:
     from train.evaluation.scenarios import make_scenario
     from train.learning.agents import load_agent
 
-    scenario = make_scenario("random", n=args.n, seed=EVAL_SEED, env_kwargs=env_keywords(TASK_ENV_ID, {}))
+    env_id = args.env or TASK_ENV_ID
+    try:
+        env_kwargs = env_keywords(env_id, {})
+    except ValueError as error:
+        parser.error(str(error))
+    scenario = make_scenario("random", n=args.n, seed=EVAL_SEED, env_kwargs=env_kwargs)
     policies: dict[str, Any] = {name: name for name in args.controllers}
     for path in args.agents:
         policies[Path(path).name] = load_agent(path)[1]
@@ -78,10 +89,11 @@ def main(argv: list[str] | None = None) -> int:
                                          description=f"optimum by {name}'s arrival")  # fmt: skip
         rows[name] = decomposition(result, at_arrival)
         print(name, json.dumps(rows[name]))
-    data = {"n": args.n, "seed": EVAL_SEED, "policies": rows}
+    data = {"n": args.n, "seed": EVAL_SEED, "env_id": env_id, "policies": rows}
     if args.docs:
-        write_json(JSON_PATH, data)
+        write_json(JSON_PATH if env_id == TASK_ENV_ID else JSON_PATH.with_name(f"rushing_{env_id.rsplit('-', 1)[-1]}.json"), data)
     return 0
 
 
-BLOCKS = (table("rl-rushing", Schema({"n": int, "seed": int, "policies": dict})),)
+BLOCKS = (table("rl-rushing", Schema({"n": int, "seed": int, "policies": dict})),
+          table("rl-rushing-v2", Schema({"n": int, "seed": int, "policies": dict})))  # fmt: skip

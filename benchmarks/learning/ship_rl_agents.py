@@ -55,10 +55,17 @@ def plot_curve(evaluations: Path, target: Path, title: str) -> None:
     plt.close(fig)
 
 
+def shipped_name(entry: str) -> str:
+    """The directory under train/pretrained/ of a ``--also`` entry: its name with underscores, ending in its env
+    version (``es-residual-v2`` -> ``es_residual_v2``, ``sac-tuned`` -> ``sac_tuned_v1``)."""
+    name = entry.replace("-", "_")
+    return name if name[-3:-1] == "_v" and name[-1].isdigit() else f"{name}_v1"
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = parser_for("ship-rl-agents", __doc__)
     parser.add_argument("out", help="the --out of dwr-gym benchmark")
-    parser.add_argument("--also", nargs="*", default=[], help="more entries to ship, as <entry>_v1 (e.g. sac tqc)")
+    parser.add_argument("--also", nargs="*", default=[], help="more entries to ship, as <entry>_v1, or <entry> where it ends in its env version (-v2)")
     args = parser.parse_args(argv)
     out = Path(args.out)
     # the best seeds of this --out's last report, and of the earlier runs that `--docs` merged into the docs' JSON
@@ -66,7 +73,7 @@ def main(argv: list[str] | None = None) -> int:
     best = json.loads(docs.read_text())["best_seed"] if docs.is_file() else {}
     if (out / "benchmark.json").is_file():
         best.update(json.loads((out / "benchmark.json").read_text())["best_seed"])
-    shipped = {**SHIPPED, **{name: f"{name.replace('-', '_')}_v1" for name in args.also}}
+    shipped = {**SHIPPED, **{name: shipped_name(name) for name in args.also}}
     for entry, directory in shipped.items():
         run = out / "runs" / f"{entry}-seed{best.get(entry)}"
         if entry not in best or not (run / "model.zip").is_file():

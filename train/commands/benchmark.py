@@ -93,7 +93,7 @@ def run(args: argparse.Namespace) -> int:
             state = json.loads(state_path.read_text())
             result["env_steps"] = state.get("timesteps", 0) * result.get("action_repeat", 1)
             result["seconds"] = state.get("wall_time", result["seconds"])
-    data = report(results, out, budget, tuple(args.references))
+    data = report(results, out, budget, tuple(args.references), env_id=references_env(entries))
     if args.docs:
         report(results, DOCS_DIR, budget, tuple(args.references), merged_with_docs(data))
         from train.reporting.doc_tables import main as regenerate_tables
@@ -102,27 +102,40 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def references_env(entries: list[Any]) -> str:
+    """The env id the reference controllers are evaluated on: the agents' when they all train on one, else v1."""
+    from train.env_ids import TASK_ENV_ID
+
+    ids = {entry.options.get("env_id", TASK_ENV_ID) for entry in entries}
+    return ids.pop() if len(ids) == 1 else TASK_ENV_ID
+
+
 def report(
     results: list[dict[str, Any]], out: Path, budget: dict[str, Any], references: tuple[str, ...],
-    data: dict[str, Any] | None = None,
+    data: dict[str, Any] | None = None, env_id: str | None = None,
 ) -> dict[str, Any]:  # fmt: skip
-    """Aggregate, print the tables, and write benchmark.json and the two figures of learning curves in ``out``."""
+    """Aggregate, print the tables, and write benchmark.json and the two figures of learning curves in ``out``;
+    the reference controllers run on ``env_id`` (default v1)."""
     from train.evaluation.benchmark import reference_controllers
     from train.reporting.rl_benchmark import aggregate, best_seed, disturbed_table, per_T_con_table, plot_curves, table
 
     if data is None:
-        refs = reference_controllers(references, n=budget["eval_episodes"], n_disturbed=budget["disturbed_episodes"],
+        from train.env_ids import TASK_ENV_ID
+
+        env_id = env_id or TASK_ENV_ID
+        refs = reference_controllers(references, env_id, n=budget["eval_episodes"],
+                                     n_disturbed=budget["disturbed_episodes"],
                                      n_optimum=budget.get("optimum_episodes") or None)  # fmt: skip
         summary = aggregate(results)
         data = {"budget": budget, "machine": machine(), "versions": versions(), "summary": summary, "references": refs,
-                "best_seed": {name: best_seed(results, name) for name in summary}}  # fmt: skip
+                "references_env": env_id, "best_seed": {name: best_seed(results, name) for name in summary}}  # fmt: skip
     out.mkdir(parents=True, exist_ok=True)
     (out / "benchmark.json").write_text(json.dumps(data, indent=1))
     plot_curves(data["summary"], out / "curves_steps.png", "env_steps")
     plot_curves(data["summary"], out / "curves_wall.png", "wall_time")
     print(table(data["summary"], data["references"]))
     print(disturbed_table(data["summary"], data["references"]))
-    print(per_T_con_table(data["summary"], data["references"]))
+    print(per_T_con_table(data["summary"], data["references"], data.get("references_env")))
     print(f"wrote {out / 'benchmark.json'}, {out / 'curves_steps.png'}, {out / 'curves_wall.png'}")
     return data
 

@@ -66,6 +66,13 @@ ENTRIES: dict[str, dict[str, Any]] = {
     "ppo-jax-v2": {"algo": "ppo", "backend": "jax", "env_id": V2},
     "ppo-jax-fixed-noise-v2": {"algo": "ppo", "backend": "jax", "env_id": V2,
                                "hyperparams": str(HYPERPARAMS_DIR / "ppo_jax_v2.yml")},
+    # ES on a residual (train/hyperparams/residual_es.yml): the search starts at the expert and pays nothing for
+    # exploring; a generation is about 1 M env steps (sigma 0.02 and a step of 0.002: from the expert, larger steps
+    # first lose the arrival, measured on one seed)
+    "es-residual-v2": {"algo": "es", "backend": "jax", "env_id": V2, "residual": True, "expert": "ptc",
+                       "eval_freq": 5_000_000, "checkpoint_freq": 5_000_000},
+    "es-residual-astolfi-v2": {"algo": "es", "backend": "jax", "env_id": V2, "residual": True, "expert": "pt-astolfi",
+                               "eval_freq": 5_000_000, "checkpoint_freq": 5_000_000},
     "sac-sbx-v2": {"algo": "sac", "backend": "sbx", "env_id": V2},
     "tqc-sbx-v2": {"algo": "tqc", "backend": "sbx", "env_id": V2},
     "crossq-sbx-v2": {"algo": "crossq", "backend": "sbx", "env_id": V2},

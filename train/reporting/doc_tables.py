@@ -276,9 +276,12 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "rl-goals": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "goals")),
     "rl-benchmark-readme": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "readme")),
     "rl-benchmark-disturbed": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "disturbed")),
+    "rl-v2": ("docs/rl_benchmark/v2.json", lambda data: rl_table(data, "random")),
+    "rl-v2-per-T_con": ("docs/rl_benchmark/v2.json", lambda data: rl_table(data, "per-T_con")),
     "rl-diagnosis": ("docs/rl_benchmark/diagnosis.json", lambda data: rl_table(data, "diagnosis")),
     "rl-levers": ("docs/rl_benchmark/levers.json", lambda data: rl_table(data, "levers")),
     "rl-rushing": ("docs/rl_benchmark/rushing.json", lambda data: rl_table(data, "rushing")),
+    "rl-rushing-v2": ("docs/rl_benchmark/rushing_v2.json", lambda data: rl_table(data, "rushing")),
     "datasets-suite": ("docs/datasets/suite.json", lambda data: dataset_tables.suite_table(data)),
     "datasets-baselines": ("docs/datasets/suite.json", lambda data: dataset_tables.baselines_table(data)),
     "datasets-speed": ("docs/datasets/speed.json", lambda data: dataset_tables.speed_table(data)),
@@ -320,7 +323,7 @@ def _rl_table(data: dict[str, Any], kind: str) -> str:
     if kind == "disturbed":
         return rl_benchmark.disturbed_table(data["summary"], data["references"])
     if kind == "per-T_con":
-        return rl_benchmark.per_T_con_table(data["summary"], data["references"])
+        return rl_benchmark.per_T_con_table(data["summary"], data["references"], data.get("references_env"))
     return rl_benchmark.table(data["summary"], data["references"])
 
 

@@ -186,8 +186,11 @@ def disturbed_table(summary: dict[str, Any], references: dict[str, Any] | None =
     return "\n".join(lines)
 
 
-def per_T_con_table(summary: dict[str, Any], references: dict[str, Any] | None = None) -> str:
-    """In time and E/opt (IQM over seeds) of each entry at each prescribed time of PER_T_CON."""
+def per_T_con_table(
+    summary: dict[str, Any], references: dict[str, Any] | None = None, references_env: str | None = None
+) -> str:
+    """In time and E/opt (IQM over seeds) of each entry at each prescribed time of PER_T_CON; the references were
+    evaluated on ``references_env`` (v1 when not recorded)."""
     names = [per_T_con_set(T_con) for T_con in PER_T_CON]
     head = " | ".join(f"{name.replace('T_con=', 'T_con ')} s: in time, E/opt" for name in names)
     lines = [f"| agent | env | {head} |", "|---" * (len(names) + 2) + "|"]
@@ -201,7 +204,8 @@ def per_T_con_table(summary: dict[str, Any], references: dict[str, Any] | None =
     for ref_name, sets in (references or {}).items():
         cells = [f"{sets[n]['in_time']:.2f}, {'-' if sets[n]['energy_ratio'] is None else format(sets[n]['energy_ratio'], '.2f')}"
                  if n in sets else "-" for n in names]  # fmt: skip
-        lines.append(f"| {ref_name} (controller) | v1 | " + " | ".join(cells) + " |")
+        env = (references_env or "DWRPointStabilization-v1").rsplit("-", 1)[-1]
+        lines.append(f"| {ref_name} (controller) | {env} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
 
@@ -299,8 +303,9 @@ def rushing_table(data: dict[str, Any]) -> str:
         lines.append(f"| {name} | {r['episodes']} | {r['arrival_share']:.2f} | {r['energy_ratio']:.2f} | "
                      f"{r['timing']:.2f} | {r['motion']:.2f} |")  # fmt: skip
     return "\n".join(lines) + (
-        f"\n\n*The episodes of the benchmark's nominal set (first {data['n']}, seed {data['seed']}) that arrive in "
-        "time; geometric means over them, so that E/opt = timing x motion; optima by CasADi (the goal pose).*\n"
+        f"\n\n*{data.get('env_id', 'DWRPointStabilization-v1')}: the episodes of the benchmark's nominal set (first "
+        f"{data['n']}, seed {data['seed']}) that arrive in time; geometric means over them, so that E/opt = timing x "
+        "motion; optima by CasADi (the goal pose).*\n"
     )
 
 

@@ -92,8 +92,10 @@ class ESState(flax.struct.PyTreeNode):
 class JaxES:
     """ES of one configuration on one gymnax-style env: :meth:`init` an :class:`ESState`, :meth:`generation` it."""
 
-    def __init__(self, settings: ESSettings, env: Any, env_params: Any, devices: int | None = None) -> None:
-        self.settings, self.env, self.env_params = settings, env, env_params
+    def __init__(
+        self, settings: ESSettings, env: Any, env_params: Any, devices: int | None = None, residual: bool = False
+    ) -> None:
+        self.settings, self.env, self.env_params, self.residual = settings, env, env_params, residual
         space = env.action_space(env_params)
         self.action_low = jnp.asarray(space.low, jnp.float32)
         self.action_high = jnp.asarray(space.high, jnp.float32)
@@ -123,6 +125,10 @@ class JaxES:
     def _init(self, rng: Any) -> Any:
         rng, key_net, key_strategy, key_obs = jax.random.split(rng, 4)
         params = self.network.init(key_net, jnp.zeros((self.obs_dim,), jnp.float32))
+        if self.residual:  # the search starts at the expert: a residual near zero (train.learning.jitted.residual)
+            from train.learning.jitted.residual import near_zero_head
+
+            params = near_zero_head(params)
         stats = ObservationStatistics.create(self.obs_dim)
         if self.settings.normalize_observations:
             keys = jax.random.split(key_obs, INITIAL_OBSERVATIONS)

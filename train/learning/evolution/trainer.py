@@ -67,7 +67,7 @@ class ESTrainer:
         from train.learning.jitted.export import SB3Exporter
         from train.learning.training_env import make_training_env
 
-        self.es = JaxES(self.settings, env, env_params, devices)
+        self.es = JaxES(self.settings, env, env_params, devices, residual=bool(config.residual))
         venv = make_training_env(config)
         self.exporter = SB3Exporter(venv, {"policy_kwargs": es_policy_kwargs(self.settings)}, config.seed)
         venv.close()
@@ -110,10 +110,10 @@ def train(
     :func:`train.learning.training.train`, whose contract it keeps through
     :func:`train.learning.jitted.run.train_jitted`)."""
     from train.learning.jitted.run import train_jitted
-    from train.learning.jitted.setup import check_env_options
+    from train.learning.jitted.setup import check_jitted_options
     from train.threads import torch_threads
 
-    check_env_options(config)
+    check_jitted_options(config)
     if config.num_envs not in (None, 1):
         raise ConfigError(f"--num-envs {config.num_envs} is invalid with --algo es: its robots are population_size x "
                           "episodes, hyperparameters (--hyperparams population_size=64 episodes=8)")  # fmt: skip

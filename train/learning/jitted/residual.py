@@ -1,10 +1,12 @@
-"""Residual agents on the jitted PPO (``dwr-gym train --backend jax --residual --expert ptc``): the functional env
-whose action is a residual on an analytic law, so that the law runs inside the compiled training loop.
+"""Residual agents on the jitted trainers (``dwr-gym train --backend jax --residual --expert ptc``, with ``--algo ppo``
+or ``es``): the functional env whose action is a residual on an analytic law, so that the law runs inside the
+compiled training loop.
 
 :class:`ResidualGymnaxEnv` is to the gymnax env what :class:`train.learning.residual.ResidualVecEnv` is to the SB3
 VecEnv: the env steps with clip(expert(obs) + scale * clip(residual, -1, 1), -1, 1) (:func:`residual_action`),
 the expert's action computed by :func:`baselines.expert.normalized_action` from the observation the agent saw, by
-the same copy of the law that the numpy expert runs (its array-API form). The PPO trains on it unchanged; the run
+the same copy of the law that the numpy expert runs (its array-API form). The PPO and the ES train on it unchanged
+(both start from a residual near zero, :func:`near_zero_head`: at the expert); the run
 exports the residual network as the SB3 path does, and its config.yaml (``residual: true``, ``expert``,
 ``residual_scale``) makes :func:`train.learning.agents.load_agent` act as expert + residual.
 """
@@ -74,13 +76,18 @@ def residual_env(config: TrainConfig, env: Any) -> ResidualGymnaxEnv:
                              config.residual_scale)  # fmt: skip
 
 
-def start_near_expert(runner: Any) -> Any:
-    """``runner`` with the mean head's weights scaled by :data:`LAST_LAYER_GAIN` and its bias zero, as SB3's
-    residual agents start: the residual is near zero, the agent near its expert."""
-    inner = dict(runner.params["params"])
+def near_zero_head(params: Any) -> Any:
+    """The network ``params`` with the mean head's weights scaled by :data:`LAST_LAYER_GAIN` and its bias zero, as
+    SB3's residual agents start: the residual is near zero, the agent near its expert."""
+    inner = dict(params["params"])
     head = inner["action"]
     inner["action"] = {**head, "kernel": head["kernel"] * LAST_LAYER_GAIN, "bias": jnp.zeros_like(head["bias"])}
-    return runner.replace(params={**runner.params, "params": inner})
+    return {**params, "params": inner}
 
 
-__all__ = ["ResidualGymnaxEnv", "check_residual_expert", "residual_action", "residual_env", "start_near_expert"]
+def start_near_expert(runner: Any) -> Any:
+    """``runner`` (the jitted PPO's state) with its network's residual near zero (:func:`near_zero_head`)."""
+    return runner.replace(params=near_zero_head(runner.params))
+
+
+__all__ = ["ResidualGymnaxEnv", "check_residual_expert", "near_zero_head", "residual_action", "residual_env", "start_near_expert"]

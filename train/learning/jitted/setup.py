@@ -1,6 +1,6 @@
 """What every jitted trainer (the PPO of :mod:`train.learning.jitted.trainer`, the ES of
 :mod:`train.learning.evolution.trainer`) sets up before it runs: XLA's threads, its compilation cache, the functional
-env, the options of the SB3 path that it refuses."""
+env, what it refuses."""
 
 from __future__ import annotations
 
@@ -13,9 +13,9 @@ from train.learning.config import ConfigError, TrainConfig
 JAX_EXTRA = 'pip install "dwr-gym[jax]"'
 
 
-def check_env_options(config: TrainConfig) -> None:
-    """Raise ConfigError (one line) for the options of the SB3 path's env wrappers (train.learning.wrappers), which
-    the functional env of a jitted trainer does not have."""
+def check_jitted_options(config: TrainConfig) -> None:
+    """Raise ConfigError (one line) for what a jitted trainer does not train: the options of the SB3 path's env
+    wrappers (train.learning.wrappers), and a residual on an expert that cannot run inside the compiled loop."""
     if config.normalize_obs:
         raise ConfigError(f"--normalize-obs is invalid with --backend {config.backend}: give --hyperparams "
                           "'policy_kwargs=dict(net_arch=[64, 64], normalize_observations=True)' (folded into the "
@@ -25,6 +25,10 @@ def check_env_options(config: TrainConfig) -> None:
             flag = "--" + name.replace("_", "-")
             raise ConfigError(f"{flag} is invalid with --backend {config.backend}: it is an option of --backend sb3 "
                               "and sbx only")  # fmt: skip
+    if config.residual:
+        from train.learning.jitted.residual import check_residual_expert
+
+        check_residual_expert(config)
 
 
 def configure_threads(threads: int | None) -> None:
@@ -70,4 +74,4 @@ def make_jax_env(config: TrainConfig) -> tuple[Any, Any]:
     return env, env_params
 
 
-__all__ = ["JAX_EXTRA", "check_env_options", "configure_threads", "make_jax_env", "use_compilation_cache"]
+__all__ = ["JAX_EXTRA", "check_jitted_options", "configure_threads", "make_jax_env", "use_compilation_cache"]

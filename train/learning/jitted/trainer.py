@@ -15,17 +15,12 @@ from pathlib import Path
 from typing import Any
 
 from train.learning.config import TrainConfig
-from train.learning.jitted.setup import check_env_options, configure_threads, make_jax_env, use_compilation_cache
+from train.learning.jitted.setup import check_jitted_options, configure_threads, make_jax_env, use_compilation_cache
 
 
 def check_jax_config(config: TrainConfig) -> None:
-    """Raise ConfigError (one line) for what the jitted PPO does not train: the env wrappers' options, and a residual
-    on an expert that cannot run inside the compiled loop."""
-    check_env_options(config)
-    if config.residual:
-        from train.learning.jitted.residual import check_residual_expert
-
-        check_residual_expert(config)
+    """Raise ConfigError (one line) for what the jitted PPO does not train (:func:`check_jitted_options`)."""
+    check_jitted_options(config)
 
 
 def export_runner(exporter: Any, ppo: Any, runner: Any, timesteps: int) -> Any:
