@@ -23,7 +23,10 @@ dwr-gym benchmark --agents 'tqc-tuned:algo=tqc,hyperparams=train/hyperparams/tqc
   --eval-freq 200000 --disturbed-episodes 100 --out results/rl-benchmark --docs
 dwr-gym benchmark --agents 'sac-utd8:algo=sac,hyperparams=train/hyperparams/sac_tuned.yml,hyperparam_overrides={gradient_steps: 8}' \
   --seeds 5 --jobs 2 --eval-freq 250000 --disturbed-episodes 100 --out results/rl-benchmark --docs
-python -m benchmarks run ship-rl-agents results/rl-benchmark --also sac-tuned tqc-tuned
+# evolution strategies (issue 41): OpenAI-ES on v1's reward with an arena of 50 m (docs/evolution.md), one core each
+dwr-gym benchmark --agents 'es-arena50:threads=1,total_timesteps=80000000' --seeds 5 --eval-freq 5000000 \
+  --disturbed-episodes 100 --out results/rl-benchmark --docs
+python -m benchmarks run ship-rl-agents results/rl-benchmark --also sac-tuned tqc-tuned es-arena50
 python -m benchmarks run rl-residual train/pretrained/residual_ppo_v1 train/pretrained/residual_ppo_astolfi_v1 --n 50 --docs
 python -m benchmarks run rl-diagnosis --n 200 --docs
 python -m benchmarks run rl-rushing train/pretrained/ppo_jax_v1 results/rl-benchmark/runs/ppo-jax-12m-seed2 \
