@@ -168,8 +168,8 @@ class RobustPTController(Controller):
         self.params: RobustPTParams = params if params is not None else RobustPTParams.from_kwargs(**kwargs)
         self.cruise = cruise
         """A learned cruise (anything with stable-baselines3's ``predict`` on the env's observations, e.g. a network
-        cloned by train.learning.robust_dagger) that drives on the estimate until the planner takes over; None: plan
-        from the start."""
+        cloned by train.learning.imitation.robust_dagger) that drives on the estimate until the planner takes over;
+        None: plan from the start."""
         p = self.params
         self._pool: Any = None
         if p.plan:

@@ -1,4 +1,5 @@
-"""DAgger on minimum-energy plans and the hand-over agents (train/learning/dagger.py, train/learning/handover.py)."""
+"""DAgger on minimum-energy plans and the hand-over agents (train/learning/imitation/dagger.py,
+train/learning/imitation/handover.py)."""
 
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ pytest.importorskip("casadi")
 from dwr_gym import V1_DEFAULTS
 from dwr_gym.params import EnvParams
 from train.learning.agents import load_agent
-from train.learning.dagger import DaggerConfig, _solve, labelled_samples, run
+from train.learning.imitation.dagger import DaggerConfig, _solve, labelled_samples, run
 
 
 def test_demonstration_samples_are_what_the_env_observes_when_the_plan_is_replayed() -> None:
@@ -45,7 +46,7 @@ def test_a_tiny_cloning_run_aggregates_each_rounds_data_and_saves_an_agent_that_
     """DAgger fits each round on all the data so far: the demonstrations and every round's re-planned labels."""
     import csv
 
-    from train.learning import dagger
+    from train.learning.imitation import dagger
 
     added: list[int] = []
 
@@ -87,7 +88,7 @@ class ConstantModel:
 
 def test_handover_policy_is_the_network_far_and_early_and_the_law_near_or_late() -> None:
     from baselines import ExpertPolicy, make_controller
-    from train.learning.handover import HandoverPolicy
+    from train.learning.imitation.handover import HandoverPolicy
 
     law = ExpertPolicy(make_controller("pt-astolfi"), 0.5, 2.0)
     policy = HandoverPolicy(ConstantModel(), law, distance=0.05, time_fraction=0.9)
@@ -114,7 +115,7 @@ def test_a_run_with_a_handover_section_loads_as_a_handover_policy_and_a_bad_one_
     import yaml
 
     from train.learning.agents import AgentLoadError
-    from train.learning.handover import HandoverPolicy
+    from train.learning.imitation.handover import HandoverPolicy
 
     run_dir = tmp_path / "agent"
     shutil.copytree(Path(__file__).resolve().parents[1] / "train" / "pretrained" / "dagger", run_dir)
@@ -134,7 +135,7 @@ def test_the_shipped_handover_agent_arrives_with_the_heading_for_less_energy_tha
     from train.evaluation.evaluate import evaluate
     from train.evaluation.scenarios import make_scenario
     from train.learning.agents import PRETRAINED
-    from train.learning.handover import HandoverPolicy
+    from train.learning.imitation.handover import HandoverPolicy
 
     _, agent = load_agent(PRETRAINED["dagger-handover"])
     assert isinstance(agent, HandoverPolicy)
@@ -149,7 +150,7 @@ def test_the_shipped_handover_agent_arrives_with_the_heading_for_less_energy_tha
 
 def test_a_composite_agent_comes_apart_so_that_its_network_is_reported_alone() -> None:
     from train.learning.agents import PRETRAINED, AgentLoadError
-    from train.learning.handover import HandoverPolicy
+    from train.learning.imitation.handover import HandoverPolicy
 
     label, network = load_agent(PRETRAINED["dagger-handover"], part="network")
     assert label == "dagger-handover (network alone)"
@@ -163,8 +164,8 @@ def test_a_composite_agent_comes_apart_so_that_its_network_is_reported_alone() -
 def test_the_module_command_line_builds_the_config_from_its_flags(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """`python -m train.learning.dagger` and `... robust_dagger`: every int, float and str field is a flag."""
-    from train.learning import dagger, robust_dagger
+    """`python -m train.learning.imitation.dagger` and `... robust_dagger`: every int, float and str field is a flag."""
+    from train.learning.imitation import dagger, robust_dagger
 
     got: dict[str, object] = {}
     monkeypatch.setattr(dagger, "run", lambda config, run_dir, command: got.update(config=config, run_dir=run_dir,
@@ -176,7 +177,7 @@ def test_the_module_command_line_builds_the_config_from_its_flags(
     assert (config.episodes, config.arrival_fraction, config.env_id, config.handover_expert) == (
         7, 0.9, "DWRPointStabilization-v0", "ptc")  # fmt: skip
     assert config.dagger_rounds == DaggerConfig().dagger_rounds  # the others keep their defaults
-    assert got["command"][:3] == ["python", "-m", "train.learning.dagger"] and "--episodes" in got["command"]
+    assert got["command"][:3] == ["python", "-m", "train.learning.imitation.dagger"] and "--episodes" in got["command"]
     with pytest.raises(SystemExit) as exit_info:
         dagger.main(["--run-dir", str(tmp_path / "b"), "--env", "CartPole-v1"])
     assert exit_info.value.code == 2
@@ -197,7 +198,7 @@ def test_handover_only_chooses_the_handover_of_a_trained_run_and_writes_it(
 
     import yaml
 
-    from train.learning import dagger
+    from train.learning.imitation import dagger
 
     run_dir = tmp_path / "agent"
     shutil.copytree(Path(__file__).resolve().parents[1] / "train" / "pretrained" / "dagger", run_dir)
@@ -225,7 +226,7 @@ def test_select_handover_takes_the_least_energy_among_those_in_time_and_on_headi
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     """The rule of select_handover's docstring, on made-up evaluations of the grid (no rollout)."""
-    from train.learning import dagger
+    from train.learning.imitation import dagger
 
     def fake(table):  # type: ignore[no-untyped-def]
         def evaluate(policy, params, T_cons, n, seed):  # type: ignore[no-untyped-def]
@@ -255,7 +256,7 @@ def test_dagger_rounds_re_plan_from_visited_states_to_the_original_target_or_mos
 ) -> None:
     """A robot that stands still visits its start at every step t: each re-plan from there arrives at
     0.85 T_con - t while that is at least half the time left, else at 0.85 (T_con - t); none of one interval or less."""
-    from train.learning import dagger
+    from train.learning.imitation import dagger
 
     class Still:
         def predict(self, obs, state=None, episode_start=None, deterministic=True):  # type: ignore[no-untyped-def]
@@ -284,7 +285,7 @@ def test_dagger_rounds_re_plan_from_visited_states_to_the_original_target_or_mos
 
 
 def test_plans_solved_in_worker_processes_are_those_solved_in_order() -> None:
-    from train.learning.dagger import solve_plans
+    from train.learning.imitation.dagger import solve_plans
 
     jobs = [((-0.4, 0.2, 0.3), 3.0, 0.05, 0.5, 2.0, 5), ((0.3, -0.3, 1.0), 2.0, 0.05, 0.5, 2.0, 5),
             ((0.2, 0.0, 0.0), 0.1, 0.05, 0.5, 2.0, 5)]  # fmt: skip  # the last one infeasible: None

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from train.learning.config import ConfigError, TrainConfig
-from train.learning.es_settings import ESSettings
+from train.learning.evolution.settings import ESSettings
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -57,19 +57,20 @@ def test_the_yaml_is_read_and_es_needs_the_jax_backend() -> None:
     config = resolved(hyperparam_overrides={"sigma": 0.02})
     assert config.algo_kwargs["sigma"] == 0.02 and config.algo_kwargs["strategy"] == "open_es"
     assert config.num_envs == 1 and config.total_timesteps > 0
-    with pytest.raises(ConfigError, match=r"^--algo es is invalid with --backend sb3: .* add --backend jax$"):
+    refused = r"^--algo 'es' is invalid with --backend sb3: .*; es trains with --backend jax$"
+    with pytest.raises(ConfigError, match=refused):
         TrainConfig(algo="es").validate()
     with pytest.raises(ConfigError, match=r"^hyperparameter"):
         resolved(hyperparam_overrides={"sigmaa": 0.02})
 
 
 def test_without_evosax_es_names_the_extra_to_install(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
-    from train.learning.jax_training import train_jax
+    from train.learning.training import train
 
     monkeypatch.setitem(sys.modules, "evosax", None)  # import evosax raises ImportError
     config = resolved(run_dir=str(tmp_path / "run"))
-    with pytest.raises(ConfigError, match=r'^--algo es needs evosax: pip install "dwr-gym\[es\]"$'):
-        train_jax(config)
+    with pytest.raises(ConfigError, match=r'^--backend jax --algo es needs evosax, .*: pip install "dwr-gym\[es\]"$'):
+        train(config)
     assert not (tmp_path / "run").exists()  # refused before any run directory is made
 
 
@@ -80,7 +81,7 @@ pytest.importorskip("evosax")
 def test_a_nan_fitness_is_ranked_last_and_never_reaches_the_mean() -> None:
     import jax.numpy as jnp
 
-    from train.learning.jax_es import centered_ranks, fitness_of, make_strategy
+    from train.learning.evolution.strategies import centered_ranks, fitness_of, make_strategy
 
     returns = jnp.asarray([3.0, jnp.nan, -1.0, 2.0, 0.5, -4.0])
     ranks = np.asarray(centered_ranks(fitness_of(returns)))
@@ -101,7 +102,7 @@ def test_a_nan_fitness_is_ranked_last_and_never_reaches_the_mean() -> None:
 def test_antithetic_sampling_draws_mirrored_pairs(strategy_name: str) -> None:
     import jax.numpy as jnp
 
-    from train.learning.jax_es import make_strategy
+    from train.learning.evolution.strategies import make_strategy
 
     mean = jnp.linspace(-1.0, 1.0, 7)
     strategy, params = make_strategy(ESSettings(strategy=strategy_name, population_size=8, sigma=0.3), mean)
@@ -115,7 +116,7 @@ def test_antithetic_sampling_draws_mirrored_pairs(strategy_name: str) -> None:
 @pytest.fixture(scope="module")
 def small_es() -> Any:
     from dwr_gym.jax_env.gymnax import make_gymnax_env
-    from train.learning.jax_es import JaxES
+    from train.learning.evolution.strategies import JaxES
 
     settings = ESSettings(population_size=4, episodes=3, net_arch=(16,))
     env, env_params = make_gymnax_env("DWRPointStabilization-v1", T_con_range=(10.0, 11.0))
@@ -137,8 +138,8 @@ def test_every_candidate_plays_the_same_episodes(small_es: Any) -> None:
 
 
 def test_the_exported_agent_acts_as_the_evolved_policy(small_es: Any) -> None:
-    from train.learning.es_training import es_policy_kwargs
-    from train.learning.jax_export import SB3Exporter
+    from train.learning.evolution.trainer import es_policy_kwargs
+    from train.learning.jitted.export import SB3Exporter
     from train.learning.training_env import make_training_env
 
     es = small_es

@@ -289,7 +289,7 @@ def test_an_unknown_hyperparameter_lists_the_accepted_ones(tmp_path: Path, capsy
 def test_a_residual_on_the_optimal_expert_warns_at_once_that_it_plans_per_robot(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    import train.learning.training as training
+    import train.learning.sb3.trainer as training
 
     def stop(config: TrainConfig) -> None:
         raise RuntimeError("stopped before the first plan")

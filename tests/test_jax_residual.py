@@ -115,7 +115,7 @@ def test_the_jax_expert_acts_from_observations_as_the_numpy_expert(name: str, st
 
 
 def test_laws_with_state_or_a_planner_are_refused_as_a_jax_residual_expert_in_one_line() -> None:
-    from train.learning.jax_training import check_jax_config
+    from train.learning.jitted.trainer import check_jax_config
 
     for expert in ("fabregas", "optimal"):
         config = TrainConfig(backend="jax", residual=True, expert=expert, num_envs=8)
@@ -130,7 +130,7 @@ def test_the_residual_env_steps_with_the_numpy_experts_action_plus_the_scaled_re
     import dwr_gym
     from baselines.expert import ExpertPolicy
     from dwr_gym.jax_env import make_gymnax_env
-    from train.learning.jax_residual import ResidualGymnaxEnv
+    from train.learning.jitted.residual import ResidualGymnaxEnv
 
     with jax.enable_x64(True):
         env, params = make_gymnax_env(dwr_gym.ENV_ID_V1, dtype="float64")
@@ -216,8 +216,8 @@ class _TinyEnv:
 
 @pytest.mark.slow  # compiles a PPO update: over a minute on a busy 2-core machine
 def test_critic_warmup_keeps_the_actor_as_it_is_while_the_critic_learns() -> None:
-    from train.learning.jax_policy import PPOSettings
-    from train.learning.jax_ppo import JaxPPO
+    from train.learning.jitted.policy import PPOSettings
+    from train.learning.jitted.ppo import JaxPPO
 
     def changed(before: Any, after: Any) -> dict[str, bool]:
         return {name: not all(np.array_equal(a, b) for a, b in zip(jax.tree.leaves(before.params["params"][name]),
@@ -243,8 +243,8 @@ def test_critic_warmup_is_an_option_of_residual_agents_too() -> None:
 
 
 def test_the_jitted_trainer_of_a_residual_run_steps_the_residual_env() -> None:
-    from train.learning.jax_residual import ResidualGymnaxEnv
-    from train.learning.jax_training import make_jax_env
+    from train.learning.jitted.residual import ResidualGymnaxEnv
+    from train.learning.jitted.trainer import make_jax_env
 
     config = TrainConfig(backend="jax", residual=True, expert="pt-astolfi", residual_scale=0.3)
     config.validate()
@@ -259,9 +259,9 @@ def test_an_es_residual_starts_its_search_at_the_expert() -> None:
     """``--algo es --residual``: the search mean is a residual near zero (the agent is its expert at generation
     0, as the residual PPO starts), where the same network without ``residual`` acts on its own."""
     from dwr_gym.jax_env import make_gymnax_env
-    from train.learning.es_settings import ESSettings
-    from train.learning.jax_es import JaxES
-    from train.learning.jax_residual import residual_env
+    from train.learning.evolution.settings import ESSettings
+    from train.learning.evolution.strategies import JaxES
+    from train.learning.jitted.residual import residual_env
 
     settings = ESSettings(population_size=4, episodes=2, net_arch=(16,))
     config = TrainConfig(backend="jax", algo="es", residual=True, expert="pt-astolfi", env_id="DWRPointStabilization-v2")

@@ -24,7 +24,7 @@ import jax.numpy as jnp
 
 from train.learning.config import ConfigError, TrainConfig
 from train.learning.hyperparams import resolve_hyperparams
-from train.learning.jax_policy import PPOSettings, gaussian_entropy, gaussian_log_prob, make_network
+from train.learning.jitted.policy import PPOSettings, gaussian_entropy, gaussian_log_prob, make_network
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -49,7 +49,7 @@ def random_params(settings: PPOSettings, seed: int) -> Any:
 def test_exported_sb3_policy_acts_as_the_jax_policy(normalize: bool) -> None:
     import torch
 
-    from train.learning.jax_export import SB3Exporter
+    from train.learning.jitted.export import SB3Exporter
     from train.learning.training_env import make_training_env
 
     config = resolved()
@@ -80,7 +80,7 @@ def test_advantages_are_sb3s_with_the_truncation_bootstrap() -> None:
     from gymnasium import spaces
     from stable_baselines3.common.buffers import RolloutBuffer
 
-    from train.learning.jax_ppo import gae
+    from train.learning.jitted.ppo import gae
 
     steps, envs, gamma, lam = 24, 5, 0.97, 0.9
     rng = np.random.default_rng(1)
@@ -108,7 +108,7 @@ def test_observation_statistics_are_sb3s_running_mean_and_variance() -> None:
     parallel algorithm), so the exported model's folded scaling is VecNormalize's."""
     from stable_baselines3.common.running_mean_std import RunningMeanStd
 
-    from train.learning.jax_ppo import OBS_EPSILON, ObservationStatistics
+    from train.learning.jitted.ppo import OBS_EPSILON, ObservationStatistics
 
     rng = np.random.default_rng(4)
     ours, theirs = ObservationStatistics.create(3), RunningMeanStd(shape=(3,))
@@ -127,7 +127,7 @@ def test_the_loss_is_the_clipped_surrogate_plus_the_value_and_entropy_terms() ->
     """JaxPPO.loss on a minibatch against the PPO loss written out in numpy (SB3's: advantages normalised with
     ddof 1, the pessimistic min of the clipped and unclipped surrogates, vf_coef * MSE, ent_coef * -entropy)."""
     from dwr_gym.jax_env.gymnax import make_gymnax_env
-    from train.learning.jax_ppo import JaxPPO
+    from train.learning.jitted.ppo import JaxPPO
 
     env, env_params = make_gymnax_env("DWRPointStabilization-v1")
     settings = PPOSettings(n_envs=2, n_steps=4, batch_size=8, ent_coef=0.03, vf_coef=0.7, clip_range=0.1)
@@ -155,7 +155,7 @@ def test_a_rollout_records_what_the_policy_did_and_the_updates_follow_the_schedu
     the budget, so the last update leaves the weights as they were."""
     import dwr_gym
     from dwr_gym.jax_env.gymnax import make_gymnax_env
-    from train.learning.jax_ppo import JaxPPO
+    from train.learning.jitted.ppo import JaxPPO
 
     env, env_params = make_gymnax_env(dwr_gym.ENV_ID, T_con=0.5)
     settings = PPOSettings(n_envs=2, n_steps=16, batch_size=8, n_epochs=2, learning_rate=1e-2, linear_schedule=True)
@@ -198,7 +198,7 @@ def test_settings_read_the_yaml_and_refuse_what_they_do_not_implement() -> None:
 
 def test_log_std_final_caps_the_noise_along_the_budget_and_ends_at_its_value() -> None:
     from dwr_gym.jax_env.gymnax import make_gymnax_env
-    from train.learning.jax_ppo import JaxPPO
+    from train.learning.jitted.ppo import JaxPPO
 
     config = resolved(hyperparam_overrides={"log_std_final": -3.0})
     settings = PPOSettings.from_algo_kwargs({**config.algo_kwargs, "n_steps": 8, "batch_size": 16, "n_epochs": 1}, 4)
@@ -217,7 +217,7 @@ def test_every_seeds_learning_curve_is_measured_on_the_same_evaluation_set(tmp_p
     """The jitted trainer evaluates on the starts drawn with --eval-seed, whatever the training seed: the curves of
     two seeds compare episode for episode (and differ from the starts the training seed would draw)."""
     from train.evaluation.scenarios import make_scenario
-    from train.learning.jax_run import JaxRun
+    from train.learning.jitted.run import JaxRun
 
     runs = [JaxRun(resolved(backend="jax", seed=seed, eval_seed=777, eval_episodes=5), tmp_path, None, {}, None)
             for seed in (0, 5)]  # fmt: skip
@@ -251,7 +251,7 @@ def test_backend_jax_refuses_other_algorithms(tmp_path: Path) -> None:
 
 
 def test_a_missing_jax_extra_is_one_line_naming_it(monkeypatch: pytest.MonkeyPatch) -> None:
-    from train.learning.jax_training import make_jax_env
+    from train.learning.jitted.trainer import make_jax_env
 
     monkeypatch.setitem(sys.modules, "optax", None)  # as if optax were not installed
     with pytest.raises(ConfigError, match=r"optax is missing\): pip install \"dwr-gym\[jax\]\"$"):

@@ -1,4 +1,4 @@
-"""DAgger under randomised disturbances (train/learning/robust_dagger.py) on a tiny budget: the loop, the data it
+"""DAgger under randomised disturbances (train/learning/imitation/robust_dagger.py) on a tiny budget: the loop, the data it
 aggregates, the student it rolls out, the run directory it leaves."""
 
 from __future__ import annotations
@@ -15,8 +15,8 @@ import yaml
 pytest.importorskip("casadi")
 
 from dwr_gym import V1_DEFAULTS
-from train.learning import robust_dagger
-from train.learning.robust_dagger import RobustDaggerConfig, expert_arrival, run
+from train.learning.imitation import robust_dagger
+from train.learning.imitation.robust_dagger import RobustDaggerConfig, expert_arrival, run
 
 #: One T_con and near starts: few and small plans (the T_con of tests/test_dagger.py's tiny run: the same solvers).
 ENV_KWARGS = {**V1_DEFAULTS, "T_con_range": (10.0, 10.0), "start_distance": (0.3, 0.5)}

@@ -90,6 +90,6 @@ def test_a_missing_sbx_names_the_extra(monkeypatch: pytest.MonkeyPatch) -> None:
     from train.learning.hyperparams import algorithm_class
 
     monkeypatch.setitem(sys.modules, "sbx", None)  # import sbx now raises ImportError, as where it is not installed
-    with pytest.raises(ConfigError, match=r'needs sbx-rl .*pip install "dwr-gym\[sbx\]"'):
+    with pytest.raises(ConfigError, match=r'needs sbx, .*pip install "dwr-gym\[sbx\]"'):
         algorithm_class("sac", "sbx")
     assert algorithm_class("sac").__module__.startswith("stable_baselines3")  # the other backends need no sbx

@@ -60,7 +60,7 @@ def test_a_recipe_is_replayed_with_only_seed_run_dir_env_and_budget_changed(tmp_
                             tmp_path / "d", "DWRPointStabilization-v1", 1.0)[1:]  # fmt: skip
     assert moved == [
         "-m",
-        "train.learning.dagger",
+        "train.learning.imitation.dagger",
         "--run-dir",
         str(tmp_path / "d"),
         "--seed",

@@ -37,8 +37,8 @@ def train_seed(name: str, seed: int, out: Path, overrides: dict[str, Any], env_k
                args: argparse.Namespace, command: list[str]) -> Path:  # fmt: skip
     from train.learning.config import TrainConfig
     from train.learning.hyperparams import resolve_hyperparams
-    from train.learning.jax_training import train_jax
     from train.learning.runs import read_state
+    from train.learning.training import train
 
     run_dir = out / f"{name}-seed{seed}"
     if read_state(run_dir).get("finished"):
@@ -50,7 +50,7 @@ def train_seed(name: str, seed: int, out: Path, overrides: dict[str, Any], env_k
         config.total_timesteps = args.env_steps
     config.validate()
     config = resolve_hyperparams(config, {"total_timesteps"} if args.env_steps else set())
-    train_jax(config, command=command)
+    train(config, command=command)
     return run_dir
 
 

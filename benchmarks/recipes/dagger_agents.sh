@@ -9,7 +9,7 @@
 set -euo pipefail
 export OMP_NUM_THREADS=1
 for seed in 0 1 2; do
-  python -m train.learning.dagger --run-dir "runs/dagger_handover_s$seed" --seed "$seed" --episodes 1000 --dagger-rounds 4 \
+  python -m train.learning.imitation.dagger --run-dir "runs/dagger_handover_s$seed" --seed "$seed" --episodes 1000 --dagger-rounds 4 \
     --dagger-episodes 300 --replans-per-episode 5 --epochs 30 --workers 2 --near-goal-weight 1 \
     --handover-expert pt-astolfi --eval-episodes 200
 done

@@ -64,7 +64,8 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
     "evaluation": (["train/evaluation/rollout.py", "train/evaluation/scenarios.py", "train/evaluation/evaluate.py"],
                    ["tests/test_controllers.py", "tests/test_optimal.py", "tests/test_prescribed_time.py",
                     "tests/test_robustness.py"]),
-    "learning": (["train/learning/dagger.py", "train/learning/robust_dagger.py", "train/learning/residual.py"],
+    "learning": (["train/learning/imitation/dagger.py", "train/learning/imitation/robust_dagger.py",
+                  "train/learning/residual.py"],
                  ["tests/test_dagger.py", "tests/test_robust_dagger.py", "tests/test_residual.py",
                   *(f"tests/test_train.py::test_{name}" for name in (
                       "residual_action_arithmetic_and_clipping", "residual_wrapper_logs_expert_and_residual_parts",
@@ -72,7 +73,7 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
                       "zero_init_scales_the_last_layer_to_gain_and_zeroes_its_bias",
                       "short_training_run_of_each_algorithm[ppo-residual]"))]),
     "jax_env": (["dwr_gym/jax_env/*"], ["tests/test_jax_env.py", "tests/test_jax_equivalence.py"]),
-    "jax_ppo": (["train/learning/jax_ppo.py", "train/learning/jax_policy.py", "train/learning/jax_export.py"],
+    "jax_ppo": (["train/learning/jitted/ppo.py", "train/learning/jitted/policy.py", "train/learning/jitted/export.py"],
                 ["tests/test_jax_training.py"]),
     "protocol": (["train/learning/benchmark.py", "train/evaluation/benchmark.py", "train/reporting/rl_benchmark.py"],
                  ["tests/test_rl_protocol.py", "tests/test_rl_benchmark.py",

@@ -63,11 +63,11 @@ BUGS: dict[str, tuple[str, str, str, str]] = {
         "the SB3 adapter's TimeLimit.truncated set to terminated", "dwr_gym/sb3.py",
         '"TimeLimit.truncated": bool(truncated[i] and not terminated[i]),', '"TimeLimit.truncated": bool(terminated[i]),'),
     "dagger_keeps_the_last_round": (
-        "DAgger keeps only the last round's data", "train/learning/dagger.py",
+        "DAgger keeps only the last round's data", "train/learning/imitation/dagger.py",
         "data = concatenate([data, dagger_samples(model, config, params, rng)])",
         "data = dagger_samples(model, config, params, rng)"),
     "robust_dagger_keeps_the_last_round": (
-        "robust DAgger keeps only the last round's data", "train/learning/robust_dagger.py",
+        "robust DAgger keeps only the last round's data", "train/learning/imitation/robust_dagger.py",
         "data = concatenate([data, dagger_samples(model, config, params, rng)])",
         "data = dagger_samples(model, config, params, rng)"),
     "no_replan_out_of_the_tube": (

@@ -66,12 +66,12 @@ def timed(run: Any) -> tuple[float, float, Any]:
 
 def measure(repeats: int, updates: int) -> dict[str, Any]:
     from train.learning.config import TrainConfig
-    from train.learning.es_settings import ESSettings
+    from train.learning.evolution.settings import ESSettings
+    from train.learning.evolution.strategies import JaxES
     from train.learning.hyperparams import resolve_hyperparams
-    from train.learning.jax_es import JaxES
-    from train.learning.jax_policy import PPOSettings
-    from train.learning.jax_ppo import JaxPPO
-    from train.learning.jax_training import make_jax_env
+    from train.learning.jitted.policy import PPOSettings
+    from train.learning.jitted.ppo import JaxPPO
+    from train.learning.jitted.trainer import make_jax_env
 
     es_config = resolve_hyperparams(TrainConfig(algo="es", backend="jax"), set())
     settings = ESSettings.from_algo_kwargs(es_config.algo_kwargs)

@@ -70,9 +70,9 @@ def machine() -> str:
 
 def speed(env_id: str, repeats: int, updates: int) -> dict[str, Any]:
     """Alternating rounds of the jitted PPO alone and residual on each of :data:`EXPERTS`, with one PPO setting."""
-    from train.learning.jax_policy import PPOSettings
-    from train.learning.jax_ppo import JaxPPO
-    from train.learning.jax_training import make_jax_env
+    from train.learning.jitted.policy import PPOSettings
+    from train.learning.jitted.ppo import JaxPPO
+    from train.learning.jitted.trainer import make_jax_env
 
     reference = make_config(env_id, residual=True)  # the residual's settings, for every variant
     settings = PPOSettings.from_algo_kwargs(reference.algo_kwargs, int(reference.num_envs or 0))
@@ -132,8 +132,8 @@ def learn(env_id: str, time_limit: float, n: int, out: Path, experts: tuple[str,
     """Train a residual on each expert for ``time_limit`` seconds and evaluate it beside its expert."""
     import csv
 
-    from train.learning.jax_training import train_jax
     from train.learning.runs import read_state
+    from train.learning.training import train
 
     results = []
     for expert in experts:
@@ -142,7 +142,7 @@ def learn(env_id: str, time_limit: float, n: int, out: Path, experts: tuple[str,
                              eval_freq=500_000, checkpoint_freq=500_000, run_dir=str(run_dir), overwrite=True,
                              critic_warmup=critic_warmup, hyperparam_overrides=dict(overrides or {}))  # fmt: skip
         began = time.perf_counter()
-        train_jax(config, command=["benchmarks/jax_residual.py", "learn"])
+        train(config, command=["benchmarks/jax_residual.py", "learn"])
         wall = time.perf_counter() - began
         state = read_state(run_dir)
         with (run_dir / "evaluations.csv").open() as handle:
@@ -291,7 +291,7 @@ def main(argv: list[str] | None = None) -> None:
                                + " --xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1").strip()  # fmt: skip
     suffix = "" if args.env.endswith("v1") else "_" + args.env.split("-")[-1]
     if args.what == "speed":
-        from train.learning.jax_training import use_compilation_cache
+        from train.learning.jitted.trainer import use_compilation_cache
 
         use_compilation_cache()
         data, name, lines = speed(args.env, args.repeats, args.updates), "residual_speed.json", render_speed
@@ -300,7 +300,7 @@ def main(argv: list[str] | None = None) -> None:
         lines = render_terms
     else:
         from train.learning.hyperparams import parse_overrides
-        from train.learning.jax_training import use_compilation_cache
+        from train.learning.jitted.trainer import use_compilation_cache
 
         use_compilation_cache()
         data = learn(args.env, args.time_limit, args.episodes, args.out, tuple(args.experts), args.critic_warmup,

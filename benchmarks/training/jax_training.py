@@ -63,9 +63,9 @@ def make_config(overrides: dict[str, Any] | None = None) -> Any:
 
 def setup(config: Any) -> tuple[Any, Any, Any]:
     """(config, settings, JaxPPO) of ``config``."""
-    from train.learning.jax_policy import PPOSettings
-    from train.learning.jax_ppo import JaxPPO
-    from train.learning.jax_training import make_jax_env
+    from train.learning.jitted.policy import PPOSettings
+    from train.learning.jitted.ppo import JaxPPO
+    from train.learning.jitted.trainer import make_jax_env
 
     settings = PPOSettings.from_algo_kwargs(config.algo_kwargs, int(config.num_envs or 0))
     env, env_params = make_jax_env(config)
@@ -96,7 +96,7 @@ def speed(threads: int, repeats: int, updates: int, seeds: int) -> dict[str, Any
     import torch
     from stable_baselines3 import PPO
 
-    from train.learning.jax_export import sb3_policy_kwargs
+    from train.learning.jitted.export import sb3_policy_kwargs
     from train.learning.training_env import make_training_env
 
     torch.set_num_threads(threads)
@@ -162,8 +162,8 @@ def learn(seeds: int, eval_every: int, budget_s: float, overrides: dict[str, Any
     import jax
     import numpy as np
 
-    from train.learning.jax_export import SB3Exporter
-    from train.learning.jax_training import export_runner
+    from train.learning.jitted.export import SB3Exporter
+    from train.learning.jitted.trainer import export_runner
     from train.learning.training_env import make_training_env
 
     config, settings, ppo = setup(config)

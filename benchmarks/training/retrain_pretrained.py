@@ -4,14 +4,14 @@
     python -m benchmarks run retrain-pretrained --agents ppo --seeds 0 --budget 0.1        # a quicker check
 
 The recipe of an agent is the ``command:`` its run recorded in config.yaml (``dwr-gym train ...``,
-``python -m train.learning.dagger ...``, or any other module with ``--run-dir`` and ``--seed``; a later
+``python -m train.learning.imitation.dagger ...``, or any other module with ``--run-dir`` and ``--seed``; a later
 step recorded as ``"then: <command>"`` runs after it in the same run directory). Each is run again as it
 was typed, with only ``--seed`` and ``--run-dir`` replaced, so a new agent directory needs no change here.
 Two things are added where the recorded command relied on what were defaults then: ``--env <env_id of the
 config>`` to a ``dwr-gym train`` command that names no env (the default env was v0 before it became v1),
-and ``train.dagger`` is read as its new place, ``train.learning.dagger``. Everything else a command leaves
-unset takes today's defaults: the `dwr-gym train` recipes train with the batch-sized defaults of issue 23
-(docs/training.md), not the 16 robots the shipped agents were trained with.
+and a module that moved since (``train.dagger``, ``train.learning.dagger``) is read as its new place. Everything
+else a command leaves unset takes today's defaults: the `dwr-gym train` recipes train with the batch-sized defaults
+of issue 23 (docs/training.md), not the 16 robots the shipped agents were trained with.
 
 ``--budget F`` multiplies the budget flags of every recipe (``--total-timesteps``, ``--episodes``,
 ``--dagger-episodes``) by F when the full budgets do not fit; the JSON and the docs block say so.
@@ -84,6 +84,19 @@ def _has(args: list[str], flag: str) -> bool:
     return any(a == flag or a.startswith(flag + "=") for a in args)
 
 
+def moved_module(name: str) -> str:
+    """Where a module that a recorded command ran lives now: the module of that name in ``train.learning`` or one of
+    its packages (``train.dagger`` and ``train.learning.dagger`` are ``train.learning.imitation.dagger``)."""
+    import pkgutil
+
+    import train.learning
+
+    short = name.rsplit(".", 1)[-1]
+    found = [info.name for info in pkgutil.walk_packages(train.learning.__path__, "train.learning.")
+             if info.name.rsplit(".", 1)[-1] == short]  # fmt: skip
+    return found[0] if found else name
+
+
 def runnable(step: list[str], seed: int, run_dir: Path, env_id: str, budget: float) -> list[str]:
     """One recorded step as this checkout runs it: the seed, run directory and budget replaced."""
     program, args = step[0], step[1:]
@@ -93,7 +106,7 @@ def runnable(step: list[str], seed: int, run_dir: Path, env_id: str, budget: flo
             args += ["--env", env_id]
     elif Path(program).name.startswith("python"):
         if args[:1] == ["-m"] and importlib.util.find_spec(args[1]) is None:  # a module that moved
-            args = ["-m", "train.learning." + args[1].rsplit(".", 1)[-1], *args[2:]]
+            args = ["-m", moved_module(args[1]), *args[2:]]
     else:
         raise ValueError(f"recorded command {shlex.join(step)!r} is not dwr-gym or python: cannot replay it")
     args = _set(_set(args, "--run-dir", str(run_dir)), "--seed", str(seed)) if _has(args, "--seed") else \

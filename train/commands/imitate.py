@@ -9,10 +9,10 @@ from train.commands.shared import UsageError, validated_env_params
 
 
 def add_parser(sub: Any) -> None:
-    """The ``imitate`` subcommand, generated from :class:`train.learning.imitation.ImitationConfig`."""
+    """The ``imitate`` subcommand, generated from :class:`train.learning.imitation.cloning.ImitationConfig`."""
     import dataclasses
 
-    from train.learning.imitation import ImitationConfig
+    from train.learning.imitation.cloning import ImitationConfig
 
     p = sub.add_parser("imitate", help="clone the optimal planner into a network policy for any T_con",
                        description="Record the optimal controller on the env's task (T_con drawn per episode) and fit "
@@ -39,7 +39,7 @@ def run(args: argparse.Namespace) -> int:
 
     from train.env_ids import check_env_id
     from train.evaluation.optimum import casadi_available
-    from train.learning.imitation import ImitationConfig, env_kwargs, imitate
+    from train.learning.imitation.cloning import ImitationConfig, env_kwargs, imitate
 
     given = {k: v for k, v in vars(args).items() if k not in ("func", "command", "run_dir", "no_progress")}
     for key in ("T_con_range", "start_distance", "net_arch"):

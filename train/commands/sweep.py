@@ -17,7 +17,7 @@ from train.commands.shared import (
     count,
     parse_env_kwargs,
 )
-from train.learning.config import BUDGET_HELP, TrainConfig
+from train.learning.config import ALGO_HELP, BUDGET_HELP, TrainConfig
 from train.learning.sweep import METRICS, SEARCHES
 
 EVAL_FREQ = TrainConfig.eval_freq
@@ -27,7 +27,8 @@ def add_parser(sub: Any) -> None:
     """The ``sweep`` subcommand."""
     p = sub.add_parser("sweep", help="seeds and hyperparameter searches on Ray Tune (local, or a cluster)",
                        description="Each trial runs the training of `dwr-gym train`; needs the extra [sweep].")  # fmt: skip
-    p.add_argument("--algo", default="ppo", help="algorithm: ppo, sac, td3, tqc or crossq (default: ppo)")
+    p.add_argument("--algo", default="ppo", help=f"{ALGO_HELP}; a backend other than sb3 with --option backend=NAME "
+                   "(default: ppo)")  # fmt: skip
     p.add_argument("--residual", action="store_true", help="residual agents on the PTC expert")
     p.add_argument("--time-limit", type=float, help="stop each run after this many seconds (default: none)")
     p.add_argument("--option", action="append", default=[], metavar="KEY=VALUE",

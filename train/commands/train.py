@@ -1,5 +1,5 @@
-"""``dwr-gym train``: a PPO/SAC/TD3 agent, plain or residual on an expert; its options are the fields of
-:class:`train.learning.config.TrainConfig`."""
+"""``dwr-gym train``: an agent of one of the learners of :mod:`train.learning.learners`, plain or residual on an
+expert; its options are the fields of :class:`train.learning.config.TrainConfig`."""
 
 from __future__ import annotations
 
@@ -17,7 +17,7 @@ def add_parser(sub: Any) -> None:
 
     from train.learning.config import TrainConfig
 
-    p = sub.add_parser("train", help="train a PPO/SAC/TD3 agent, plain or residual on the PTC expert",
+    p = sub.add_parser("train", help="train an agent with the learner of --algo on --backend, plain or residual on an expert",
                        description="Options left out take the YAML file's value, else the default shown.")  # fmt: skip
     for f in dataclasses.fields(TrainConfig):
         if f.metadata.get("cli") is False:

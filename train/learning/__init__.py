@@ -1,2 +1,3 @@
-"""Learning: stable-baselines3 training, residual and hand-over policies, DAgger and imitation of the
-optimum, and the sweeps of ``dwr-gym sweep``."""
+"""Learning: ``dwr-gym train``'s learners (the registry :mod:`train.learning.learners`, the trainers by kind in
+``sb3``, ``jitted`` and ``evolution``), the imitation learners (``imitation``), and what they all share: the
+configuration, the hyperparameters, the run directory, the agents, residual policies and the sweeps."""

@@ -69,8 +69,8 @@ def load_agent(path: str | Path, part: str = "whole") -> tuple[str, Any]:
     if part == "network":
         return f"{label} (network alone)", policy
     handover = load_extra(run_dir).get("handover")
-    if handover:  # a network that hands over to an analytic law for the finish (train.learning.handover.HandoverPolicy)
-        from train.learning.handover import make_handover_policy
+    if handover:  # a network that hands over to an analytic law for the finish (imitation.handover.HandoverPolicy)
+        from train.learning.imitation.handover import make_handover_policy
 
         try:
             policy = make_handover_policy(
@@ -80,8 +80,8 @@ def load_agent(path: str | Path, part: str = "whole") -> tuple[str, Any]:
         except (KeyError, TypeError, ValueError) as error:
             raise AgentLoadError(f"agent {str(path)!r} has an invalid handover section: {error}") from error
     robust = load_extra(run_dir).get("robust_agent")
-    if robust is not None:  # robust-pt whose cruise is the network (train.learning.robust_dagger)
-        from train.learning.robust_agent import agent
+    if robust is not None:  # robust-pt whose cruise is the network (train.learning.imitation.robust_dagger)
+        from train.learning.imitation.robust_agent import agent
 
         if part == "no-plan":
             robust, label = {**robust, "plan": False}, f"{label} (no planner)"

@@ -213,13 +213,7 @@ def run_one(entry: Entry, seed: int, out: Path, budget: dict[str, Any], progress
         elif not state.is_file():
             config.overwrite = True
         if not (state.is_file() and json.loads(state.read_text()).get("finished")):
-            trainer = train
-            if config.backend == "jax":  # the jitted PPO or ES (train.learning.jax_training), where it is installed
-                try:
-                    from train.learning.jax_training import train_jax as trainer
-                except ImportError as error:
-                    raise ConfigError(f"agent {entry.name!r} needs the jax backend: {error}") from error
-            trainer(config, command=train_command(entry, config))
+            train(config, command=train_command(entry, config))  # a missing extra: a ConfigError naming it
         _, policy = load_agent(run_dir)
         repeat, config_dict = config.action_repeat, config.to_dict()
     train_seconds = time.time() - start

@@ -13,12 +13,9 @@ from typing import Any
 
 from dwr_gym.validation import as_bool, as_choice, as_float, as_int
 from train.env_ids import ENV_HELP, TASK_ENV_ID, UNRECORDED_ENV_ID, check_env_id, env_keywords
+from train.learning.learners import ALGORITHMS, BACKENDS, find_learner, options_help
 
-ALGORITHMS: tuple[str, ...] = ("ppo", "sac", "td3", "tqc", "crossq", "es")
-BACKENDS: tuple[str, ...] = ("sb3", "jax", "sbx")
-"""Training libraries: stable-baselines3 on torch, the jitted trainers on the JAX functional env (PPO, and ES, which
-only it trains), or sbx-rl, the JAX stable-baselines (SAC, TD3, TQC, CrossQ). All write the same run directory;
-model.zip loads as a stable-baselines3 model, of sbx's class for sbx (``train.learning.hyperparams.algorithm_class``)."""
+ALGO_HELP, BACKEND_HELP = options_help()
 LEARNED_FROM: tuple[str, ...] = ("reward", "expert", "expert, then reward")
 """What an agent learned from, as its config.yaml records it (``learned_from``): the env's reward (RL, residual
 RL), an expert's actions (cloning, DAgger), or both in turn (RL fine-tuning of a cloned network, ``--init-from``)."""
@@ -46,10 +43,8 @@ def option(default: Any, help: str, **kwargs: Any) -> Any:
 class TrainConfig:
     """Everything a training run needs; written beside the model as config.yaml so it can be re-run exactly."""
 
-    algo: str = option("ppo", "algorithm: ppo, sac, td3, tqc, crossq (these two from sb3-contrib) or es (evolution "
-                       "strategies, --backend jax)")
-    backend: str = option("sb3", "training library: sb3 (stable-baselines3 on torch), jax (jitted PPO and ES, extra "
-                          "'jax') or sbx (sbx-rl: SAC, TD3, TQC, CrossQ in JAX, extra 'sbx')")
+    algo: str = option("ppo", ALGO_HELP)
+    backend: str = option("sb3", BACKEND_HELP)
     threads: int | None = option(
         None,
         "torch threads while it trains and evaluates; the caller's count is restored afterwards",
@@ -131,11 +126,10 @@ class TrainConfig:
             raise ConfigError(f"--hyperparams {self.hyperparams!r} is invalid: no such file")
         if self.init_from is not None and not Path(self.init_from).exists():
             raise ConfigError(f"--init-from {self.init_from!r} is invalid: no such run directory or model file")
-        if self.algo == "es" and self.backend != "jax":
-            raise ConfigError("--algo es is invalid with --backend sb3: evolution strategies train on the JAX env; "
-                              "add --backend jax")
-        if self.init_from is not None and self.backend != "sb3":
-            raise ConfigError("--init-from is implemented by --backend sb3 only")
+        try:  # the algorithm on the backend, and the options it implements (train.learning.learners)
+            find_learner(self.algo, self.backend).check_options(self)
+        except ValueError as error:
+            raise ConfigError(str(error)) from None
         if self.critic_warmup and ((self.init_from is None and not self.residual) or self.algo != "ppo"):
             raise ConfigError(f"--critic-warmup {self.critic_warmup} is invalid: it needs --init-from or --residual, "
                               "and --algo ppo")  # fmt: skip

@@ -13,6 +13,7 @@ from typing import Any
 
 from dwr_gym.validation import as_bool, as_float, as_int
 from train.learning.config import MAX_TIMESTEPS, MAX_TRAIN_ENVS, ConfigError, TrainConfig
+from train.learning.learners import find_learner
 
 ENV_SECTION = re.compile(r"^(dwr_gym:)?DWRPointStabilization-v\d+$")
 ZOO_KEYS_UNSUPPORTED = ("normalize", "frame_stack", "env_wrapper", "callback", "vec_env_wrapper")
@@ -206,22 +207,13 @@ def _check_policy_kwargs(value: Any) -> dict[str, Any]:
 
 
 def algorithm_class(algo: str, backend: str = "sb3") -> Any:
-    """The class of ``algo`` whose model files a run of ``backend`` writes: sbx-rl's for ``sbx``, else
-    stable-baselines3's (the jitted PPO of ``jax`` saves an SB3 PPO, and ES its evolved actor as one)."""
-    if backend == "sbx":
-        from train.learning.sbx_backend import sbx_class
-
-        return sbx_class(algo)
-    import stable_baselines3
-
-    if algo in ("tqc", "crossq"):
-        try:
-            import sb3_contrib
-        except ImportError as error:
-            raise ConfigError(f'--algo {algo} needs sb3-contrib: pip install "dwr-gym[train]"') from error
-        return {"tqc": sb3_contrib.TQC, "crossq": sb3_contrib.CrossQ}[algo]
-    return {"ppo": stable_baselines3.PPO, "es": stable_baselines3.PPO, "sac": stable_baselines3.SAC,
-            "td3": stable_baselines3.TD3}[algo]
+    """The class whose model files a run of ``algo`` on ``backend`` writes: its learner's ``model``
+    (:mod:`train.learning.learners`; the jitted PPO and ES save an SB3 PPO); a ConfigError naming the extra to
+    install where its library is missing."""
+    try:
+        return find_learner(algo, backend).model_class()
+    except (ValueError, ImportError) as error:
+        raise ConfigError(str(error)) from None
 
 
 _ALIASES = {"lr": "learning_rate", "learning-rate": "learning_rate", "batch": "batch_size", "epochs": "n_epochs",
@@ -231,12 +223,14 @@ _ALIASES = {"lr": "learning_rate", "learning-rate": "learning_rate", "batch": "b
 
 def check_algo_kwargs(algo: str, params: dict[str, Any], backend: str = "sb3") -> dict[str, Any]:
     """The hyperparameters coerced to their types; unknown or ill-typed ones raise ConfigError before any work."""
-    if algo == "es":
-        from train.learning.es_settings import check_es_kwargs
-
+    try:
+        learner = find_learner(algo, backend)
+    except ValueError as error:
+        raise ConfigError(str(error)) from None
+    if learner.hyperparams is not None:  # a learner with hyperparameters of its own (ES's)
         if "policy_kwargs" in params:
             params = {**params, "policy_kwargs": _check_policy_kwargs(params["policy_kwargs"] or {})}
-        return check_es_kwargs(params)
+        return learner.function(learner.hyperparams)(params)
     cls = algorithm_class(algo, backend)
     accepted = set(inspect.signature(cls.__init__).parameters) - {"self", "env", "device", "seed"}
     accepted |= {"action_noise_sigma"} | ({"log_std_final", "log_std_fixed"} if algo == "ppo" else set())
@@ -324,7 +318,7 @@ def build_algo_kwargs(params: dict[str, Any], backend: str = "sb3") -> dict[str,
         kwargs["learning_rate"] = lambda progress_remaining: progress_remaining * start
     policy_kwargs = dict(kwargs.get("policy_kwargs") or {})
     if backend == "sbx":
-        from train.learning.sbx_backend import sbx_policy_kwargs
+        from train.learning.sb3.sbx_backend import sbx_policy_kwargs
 
         policy_kwargs = sbx_policy_kwargs(policy_kwargs)
     elif isinstance(policy_kwargs.get("activation_fn"), str):

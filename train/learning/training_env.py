@@ -1,6 +1,6 @@
 """The env a run trains on and the policy its model acts as: the native vector env behind SB3's VecEnv API
 (residual, action repeat and normalisation as configured), and the model wrapped the same way at run time.
-Shared by both trainers (:mod:`train.learning.training`, :mod:`train.learning.jax_training`) and the agent loader.
+Shared by both trainers (:mod:`train.learning.training`, :mod:`train.learning.jitted.trainer`) and the agent loader.
 """
 
 from __future__ import annotations

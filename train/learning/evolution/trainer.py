@@ -1,5 +1,5 @@
-"""``dwr-gym train --algo es --backend jax``: the evolution strategies of :mod:`train.learning.jax_es` as a
-:class:`train.learning.jax_run.JitTrainer`, in the same run directory, with the same evaluations, checkpoints,
+"""``dwr-gym train --algo es --backend jax``: the evolution strategies of :mod:`train.learning.evolution.strategies`
+as a :class:`train.learning.jitted.run.JitTrainer`, in the same run directory, with the same evaluations, checkpoints,
 resume and Ctrl-C as the jitted PPO.
 
 The env steps a run counts are every step of every candidate's episodes (an ended episode's held steps are not
@@ -14,10 +14,11 @@ from __future__ import annotations
 import os
 import sys
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
-from train.learning.config import TrainConfig
-from train.learning.es_settings import ESSettings
+from train.learning.config import ConfigError, TrainConfig
+from train.learning.evolution.settings import ESSettings
 
 
 def force_host_devices(count: int) -> bool:
@@ -49,11 +50,11 @@ def _torch_name(activation: str) -> str:
 
 
 class ESTrainer:
-    """ES as a :class:`train.learning.jax_run.JitTrainer`: settings checked, env, strategy and exporter built,
+    """ES as a :class:`train.learning.jitted.run.JitTrainer`: settings checked, env, strategy and exporter built,
     before any run directory is made."""
 
     def __init__(self, config: TrainConfig) -> None:
-        from train.learning.jax_setup import configure_threads, make_jax_env, use_compilation_cache
+        from train.learning.jitted.setup import configure_threads, make_jax_env, use_compilation_cache
 
         devices = host_devices(config.threads)
         force_host_devices(devices)
@@ -62,8 +63,8 @@ class ESTrainer:
         config.num_envs = 1  # (the exporter's native env; the ES's robots are population_size x episodes)
         env, env_params = make_jax_env(config)
         use_compilation_cache()
-        from train.learning.jax_es import JaxES
-        from train.learning.jax_export import SB3Exporter
+        from train.learning.evolution.strategies import JaxES
+        from train.learning.jitted.export import SB3Exporter
         from train.learning.training_env import make_training_env
 
         self.es = JaxES(self.settings, env, env_params, devices, residual=bool(config.residual))
@@ -98,3 +99,23 @@ class ESTrainer:
     def start_note(self, config: TrainConfig) -> str | None:
         return (f"ES: {self.settings.strategy}, {self.settings.population_size} candidates x "
                 f"{self.settings.episodes} episodes per generation on {self.es.devices} device(s)")  # fmt: skip
+
+
+def train(
+    config: TrainConfig,
+    command: list[str] | None = None,
+    on_evaluation: Callable[[dict[str, Any]], None] | None = None,
+) -> Path:
+    """Train as configured with ES; returns the run directory (the learner of ``--algo es --backend jax``, called by
+    :func:`train.learning.training.train`, whose contract it keeps through
+    :func:`train.learning.jitted.run.train_jitted`)."""
+    from train.learning.jitted.run import train_jitted
+    from train.learning.jitted.setup import check_jitted_options
+    from train.threads import torch_threads
+
+    check_jitted_options(config)
+    if config.num_envs not in (None, 1):
+        raise ConfigError(f"--num-envs {config.num_envs} is invalid with --algo es: its robots are population_size x "
+                          "episodes, hyperparameters (--hyperparams population_size=64 episodes=8)")  # fmt: skip
+    with torch_threads(config.threads):
+        return train_jitted(config, ESTrainer(config), command, on_evaluation)

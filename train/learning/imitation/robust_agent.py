@@ -1,4 +1,4 @@
-"""The robust prescribed-time agent: ``robust-pt`` whose cruise is a learned network (see train.learning.robust_dagger)."""
+"""The robust prescribed-time agent: ``robust-pt`` whose cruise is a learned network (see train.learning.imitation.robust_dagger)."""
 
 from __future__ import annotations
 

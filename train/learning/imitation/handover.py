@@ -18,7 +18,7 @@ class HandoverPolicy:
     time is past ``time_fraction`` T_con, or the time left is less than ``speed_margin`` times the straight-line
     time d / u_max (the network is behind schedule); then the ``expert`` acts. Put as a residual on the law:
     action = law + w (network - law) with w = 1 before the hand-over and 0 after it. Networks cloned from
-    minimum-energy plans spend little energy but miss the last centimetres (see train.learning.dagger); a
+    minimum-energy plans spend little energy but miss the last centimetres (see train.learning.imitation.dagger); a
     prescribed-time law that also steers the heading (``pt-astolfi``) finishes from wherever they are.
     """
 

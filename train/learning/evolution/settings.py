@@ -1,4 +1,4 @@
-"""The hyperparameters of ``dwr-gym train --algo es --backend jax`` (:mod:`train.learning.jax_es`), under the names
+"""The hyperparameters of ``dwr-gym train --algo es --backend jax`` (:mod:`train.learning.evolution.strategies`), under the names
 of train/hyperparams/es.yml; checked here, before jax is imported, so bad values end the command in one line.
 """
 
@@ -19,7 +19,7 @@ STRATEGIES: dict[str, str] = {
     "cma_es": "CMA_ES",  # full CMA-ES, Hansen 2001: a (parameters x parameters) covariance, slow past ~1000
 }
 #: Strategies that sample mirrored pairs (theta + sigma z, theta - sigma z): PGPE always, OpenAI-ES and SNES
-#: when ``antithetic`` (SNES's through :class:`train.learning.jax_es.MirroredSNES`).
+#: when ``antithetic`` (SNES's through :class:`train.learning.evolution.strategies.MirroredSNES`).
 ANTITHETIC: dict[str, tuple[bool, ...]] = {"open_es": (True, False), "snes": (True, False), "pgpe": (True,),
                                            "sep_cma_es": (False,), "cma_es": (False,)}  # fmt: skip
 #: YAML keys of the ES, with their defaults; ``policy_kwargs`` (the network) is read as the jitted PPO's.
@@ -95,8 +95,8 @@ class ESSettings:
         return settings
 
     def ppo_settings(self) -> Any:
-        """The jitted PPO's settings of the same network, whose actor is the ES policy (train.learning.jax_policy)."""
-        from train.learning.jax_policy import PPOSettings
+        """The jitted PPO's settings of the same network, whose actor is the ES policy (train.learning.jitted.policy)."""
+        from train.learning.jitted.policy import PPOSettings
 
         return PPOSettings(n_envs=1, n_steps=1, batch_size=1, net_arch=self.net_arch, activation=self.activation,
                            ortho_init=self.ortho_init, normalize_observations=self.normalize_observations)  # fmt: skip
@@ -107,7 +107,7 @@ class ESSettings:
 
 def _policy(policy: dict[str, Any]) -> dict[str, Any]:
     """ESSettings' network fields from ``policy_kwargs`` (checked by train.learning.hyperparams before)."""
-    from train.learning.jax_policy import ACTIVATIONS
+    from train.learning.jitted.policy import ACTIVATIONS
 
     arch = policy.get("net_arch", [64, 64])
     if isinstance(arch, dict):

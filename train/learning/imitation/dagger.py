@@ -10,7 +10,7 @@ observation (pose relative to the goal, t / T_con, T_con). This module learns th
 2. **DAgger rounds**: the network drives; from states it visits, plans are solved again over the time
    left and added to the data, so it learns to recover from its own errors.
 
-Unlike ``dwr-gym imitate`` (:mod:`train.learning.imitation`, which records the re-planning ``optimal``
+Unlike ``dwr-gym imitate`` (:mod:`train.learning.imitation.cloning`, which records the re-planning ``optimal``
 controller under action noise), the labels here are whole plans solved from the states the *network*
 reaches, so the data follows the student's own mistakes (Ross, Gordon, Bagnell 2011).
 
@@ -19,7 +19,7 @@ The network is the actor of a stable-baselines3 PPO policy, saved with a ``confi
 the network alone (the optimiser is only used to make the training data). Needs the ``optimal`` and
 ``train`` extras.
 
-    python -m train.learning.dagger --run-dir runs/dagger_s0 --seed 0
+    python -m train.learning.imitation.dagger --run-dir runs/dagger_s0 --seed 0
 """
 
 from __future__ import annotations
@@ -86,7 +86,7 @@ class DaggerConfig:
     """Env keywords on top of those ``env_id`` is registered with."""
     handover_expert: str = ""
     """If set (e.g. "pt-astolfi"), the trained network hands over to this analytic law for the finish
-    (train.learning.handover.HandoverPolicy), with the thresholds of HANDOVER_GRID that :func:`select_handover` chooses
+    (train.learning.imitation.handover.HandoverPolicy), with the thresholds of HANDOVER_GRID that :func:`select_handover` chooses
     on the evaluation starts (not a benchmark's)."""
     threads: int = 1
     """torch threads while it runs (restored afterwards; train.threads)."""
@@ -292,7 +292,7 @@ def select_handover(model: Any, config: DaggerConfig, params: EnvParams) -> tupl
     """The hand-over of HANDOVER_GRID that, on the evaluation starts (seed 12345, not a benchmark's), arrives in
     time in >= 99 % of episodes with a mean final heading error <= 0.1 rad at every T_con and spends the least
     energy; failing that, the one that arrives in time most often. Returns it with every row tried."""
-    from train.learning.handover import make_handover_policy
+    from train.learning.imitation.handover import make_handover_policy
 
     tried = []
     for distance, fraction, margin in HANDOVER_GRID:
@@ -386,7 +386,7 @@ def main(argv: list[str] | None = None) -> None:
     if args.handover_only:
         add_handover(Path(args.run_dir), args.handover_expert, args.eval_episodes)
         return
-    run(DaggerConfig(**values), Path(args.run_dir), ["python", "-m", "train.learning.dagger", *(argv or sys.argv[1:])])
+    run(DaggerConfig(**values), Path(args.run_dir), ["python", "-m", "train.learning.imitation.dagger", *(argv or sys.argv[1:])])
 
 
 def add_handover(run_dir: Path, expert: str, eval_episodes: int) -> None:

@@ -6,7 +6,7 @@ on the controller's state estimate, with the estimated disturbance cancelled, un
 its analytic finish) takes over. This module trains the network:
 
 1. it starts from a network cloned from minimum-energy plans (``init_from``, the shipped ``dagger_handover``) or
-   from demonstrations (:func:`train.learning.dagger.demonstrations`);
+   from demonstrations (:func:`train.learning.imitation.dagger.demonstrations`);
 2. each DAgger round, the network drives, behind the filter, from random starts and T_con in the env's range, in
    ``disturbed_fraction`` of the episodes on a robot drawn from :class:`dwr_gym.randomization.DisturbanceDistribution`
    (all seven kinds, magnitudes beyond the evaluation sets) with pose and actuation noise; from states it visits,
@@ -18,7 +18,7 @@ The saved run is a ``dwr-gym`` run directory whose config.yaml has a ``robust_ag
 parameters): ``load_agent`` builds the controller with the network as its cruise. Needs the ``optimal`` and
 ``train`` extras.
 
-    python -m train.learning.robust_dagger --run-dir runs/robust_s0 --seed 0
+    python -m train.learning.imitation.robust_dagger --run-dir runs/robust_s0 --seed 0
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ from dwr_gym import core
 from dwr_gym.params import EnvParams
 from dwr_gym.randomization import DisturbanceDistribution
 from train.learning.config import TASK_ENV_ID, TrainConfig, check_env_id, env_keywords
-from train.learning.dagger import (
+from train.learning.imitation.dagger import (
     DaggerConfig,
     Dataset,
     concatenate,
@@ -275,7 +275,7 @@ def main(argv: list[str] | None = None) -> None:
     except ValueError as error:
         parser.error(str(error))
     run(RobustDaggerConfig(**values), Path(args.run_dir),
-        ["python", "-m", "train.learning.robust_dagger", *(argv or sys.argv[1:])])  # fmt: skip
+        ["python", "-m", "train.learning.imitation.robust_dagger", *(argv or sys.argv[1:])])  # fmt: skip
 
 
 if __name__ == "__main__":

@@ -7,11 +7,11 @@ mean *deterministic* return (the policy's mean action, clipped: no action noise,
 and the strategy's ``tell`` moves the search distribution by the centered ranks of the fitnesses (a NaN return, a
 diverged candidate, ranks last). The episodes are stepped under ``vmap`` over candidates and episodes, in
 ``lax.scan`` chunks of steps inside a ``lax.while_loop`` that stops when every episode has ended; the candidates are
-split across the host's XLA devices with ``shard_map`` (one device per core: :func:`train.learning.es_training.force_host_devices`).
+split across the host's XLA devices with ``shard_map`` (one device per core: :func:`train.learning.evolution.trainer.force_host_devices`).
 
-The policy is the actor of the jitted PPO's network (:func:`train.learning.jax_policy.make_network`): only its
+The policy is the actor of the jitted PPO's network (:func:`train.learning.jitted.policy.make_network`): only its
 layers ``policy_<i>`` and ``action`` evolve; :meth:`JaxES.mean_params` puts the mean into the whole network so
-:class:`train.learning.jax_export.SB3Exporter` writes it as an SB3 PPO model like any other agent.
+:class:`train.learning.jitted.export.SB3Exporter` writes it as an SB3 PPO model like any other agent.
 """
 
 from __future__ import annotations
@@ -26,9 +26,9 @@ import optax
 from evosax.core.optimizer import clipup
 from jax.sharding import NamedSharding, PartitionSpec
 
-from train.learning.es_settings import STRATEGIES, ESSettings
-from train.learning.jax_policy import make_network
-from train.learning.jax_ppo import ObservationStatistics
+from train.learning.evolution.settings import STRATEGIES, ESSettings
+from train.learning.jitted.policy import make_network
+from train.learning.jitted.ppo import ObservationStatistics
 
 #: Steps of one ``lax.scan`` chunk between two checks of whether every episode has ended.
 STEPS_PER_CHUNK = 25
@@ -125,8 +125,8 @@ class JaxES:
     def _init(self, rng: Any) -> Any:
         rng, key_net, key_strategy, key_obs = jax.random.split(rng, 4)
         params = self.network.init(key_net, jnp.zeros((self.obs_dim,), jnp.float32))
-        if self.residual:  # the search starts at the expert: a residual near zero (train.learning.jax_residual)
-            from train.learning.jax_residual import near_zero_head
+        if self.residual:  # the search starts at the expert: a residual near zero (train.learning.jitted.residual)
+            from train.learning.jitted.residual import near_zero_head
 
             params = near_zero_head(params)
         stats = ObservationStatistics.create(self.obs_dim)

@@ -1,5 +1,6 @@
-"""What every jitted trainer (the PPO of :mod:`train.learning.jax_training`, the ES of
-:mod:`train.learning.es_training`) sets up before it runs: XLA's threads, its compilation cache, the functional env."""
+"""What every jitted trainer (the PPO of :mod:`train.learning.jitted.trainer`, the ES of
+:mod:`train.learning.evolution.trainer`) sets up before it runs: XLA's threads, its compilation cache, the functional
+env, what it refuses."""
 
 from __future__ import annotations
 
@@ -10,6 +11,24 @@ from typing import Any
 from train.learning.config import ConfigError, TrainConfig
 
 JAX_EXTRA = 'pip install "dwr-gym[jax]"'
+
+
+def check_jitted_options(config: TrainConfig) -> None:
+    """Raise ConfigError (one line) for what a jitted trainer does not train: the options of the SB3 path's env
+    wrappers (train.learning.wrappers), and a residual on an expert that cannot run inside the compiled loop."""
+    if config.normalize_obs:
+        raise ConfigError(f"--normalize-obs is invalid with --backend {config.backend}: give --hyperparams "
+                          "'policy_kwargs=dict(net_arch=[64, 64], normalize_observations=True)' (folded into the "
+                          "exported weights)")  # fmt: skip
+    for name, inactive in (("normalize_reward", False), ("action_repeat", 1)):
+        if getattr(config, name) != inactive:
+            flag = "--" + name.replace("_", "-")
+            raise ConfigError(f"{flag} is invalid with --backend {config.backend}: it is an option of --backend sb3 "
+                              "and sbx only")  # fmt: skip
+    if config.residual:
+        from train.learning.jitted.residual import check_residual_expert
+
+        check_residual_expert(config)
 
 
 def configure_threads(threads: int | None) -> None:
@@ -48,11 +67,11 @@ def make_jax_env(config: TrainConfig) -> tuple[Any, Any]:
         env, env_params = make_gymnax_env(config.env_id, **config.env_keywords())
     except (TypeError, ValueError, NotImplementedError) as error:
         raise ConfigError(f"--backend jax cannot run this env: {error}") from None
-    if config.residual:  # the env's action is the residual on the expert (train.learning.jax_residual)
-        from train.learning.jax_residual import residual_env
+    if config.residual:  # the env's action is the residual on the expert (train.learning.jitted.residual)
+        from train.learning.jitted.residual import residual_env
 
         env = residual_env(config, env)
     return env, env_params
 
 
-__all__ = ["JAX_EXTRA", "configure_threads", "make_jax_env", "use_compilation_cache"]
+__all__ = ["JAX_EXTRA", "check_jitted_options", "configure_threads", "make_jax_env", "use_compilation_cache"]

@@ -1,5 +1,5 @@
-"""The run of a jitted trainer (``dwr-gym train --backend jax``: the PPO of :mod:`train.learning.jax_training`, the
-ES of :mod:`train.learning.es_training`) in the run directory of :mod:`train.learning.runs`, the same as the
+"""The run of a jitted trainer (``dwr-gym train --backend jax``: the PPO of :mod:`train.learning.jitted.trainer`, the
+ES of :mod:`train.learning.evolution.trainer`) in the run directory of :mod:`train.learning.runs`, the same as the
 stable-baselines3 path writes.
 
 A trainer (:class:`JitTrainer`) advances its state, a pytree, by jitted chunks up to the next evaluation or
@@ -130,7 +130,7 @@ class JaxRun:
         self.last_checkpoint = steps
         write_state(self.run_dir, {"timesteps": steps, "wall_time": self.wall_time(), "best": self.best_row,
                                    "best_score": self.best[2], "last_eval": self.last_eval, "finished": finished,
-                                   "backend": "jax"})  # fmt: skip
+                                   "backend": self.config.backend})  # fmt: skip
 
 
 def train_jitted(

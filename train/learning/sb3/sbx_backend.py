@@ -1,10 +1,11 @@
 """``dwr-gym train --backend sbx``: SAC, TD3, TQC and CrossQ of sbx-rl (the JAX stable-baselines) on the same path
-as stable-baselines3 (:mod:`train.learning.training`).
+as stable-baselines3 (:mod:`train.learning.sb3.trainer`).
 
 sbx keeps stable-baselines3's API (``learn`` with SB3 callbacks, ``predict``, ``save``/``load`` to the same zip,
 the replay buffer) and runs the networks and their updates in JAX, compiled by XLA. So the run directory, the
 evaluation on the fixed set, checkpoints, resume and Ctrl-C are those of the SB3 path unchanged, and a saved sbx
-agent loads wherever agents load (:func:`train.learning.agents.load_agent` reads ``backend`` from config.yaml).
+agent loads wherever agents load (:func:`train.learning.agents.load_agent` reads ``backend`` from config.yaml;
+its class is its entry's ``model`` in :mod:`train.learning.learners`).
 """
 
 from __future__ import annotations
@@ -13,32 +14,15 @@ from typing import Any
 
 from train.learning.config import ConfigError, TrainConfig
 
-SBX_ALGORITHMS: tuple[str, ...] = ("sac", "td3", "tqc", "crossq")
-"""The algorithms of ``--backend sbx``: sbx-rl's off-policy methods for continuous actions."""
-SBX_EXTRA = 'pip install "dwr-gym[sbx]"'
 FLAX_ACTIVATIONS = {"nn.Tanh": "tanh", "nn.ReLU": "relu", "nn.ELU": "elu", "nn.LeakyReLU": "leaky_relu",
                     "nn.SiLU": "silu", "nn.GELU": "gelu", "nn.Sigmoid": "sigmoid"}  # fmt: skip
 """rl-zoo3's torch spellings of ``activation_fn`` (the YAML files') as the flax functions sbx's networks take."""
 
 
-def sbx_class(algo: str) -> Any:
-    """sbx's class of ``algo``; a ConfigError naming the extra when sbx-rl is not installed."""
-    if algo not in SBX_ALGORITHMS:
-        raise ConfigError(f"--algo {algo!r} is invalid with --backend sbx: expected one of {', '.join(SBX_ALGORITHMS)}")
-    try:
-        import sbx
-    except ImportError as error:
-        raise ConfigError(f"--backend sbx needs sbx-rl ({error.name} is missing): {SBX_EXTRA}") from None
-    return {"sac": sbx.SAC, "td3": sbx.TD3, "tqc": sbx.TQC, "crossq": sbx.CrossQ}[algo]
-
-
 def check_sbx_config(config: TrainConfig) -> None:
-    """Raise ConfigError (one line) for what --backend sbx does not train."""
-    if config.algo not in SBX_ALGORITHMS:
-        raise ConfigError(f"--algo {config.algo!r} is invalid with --backend sbx: expected one of "
-                          f"{', '.join(SBX_ALGORITHMS)} (PPO: --backend jax or sb3)")  # fmt: skip
-    if config.residual:  # its start at the expert zeroes the last layer of a torch network
-        raise ConfigError("--residual is invalid with --backend sbx: residual agents train with --backend sb3")
+    """Raise ConfigError (one line) for a --device other than cpu. (Its algorithms, and that it trains no residual,
+    whose start at the expert zeroes the last layer of a torch network, are its entries in
+    :mod:`train.learning.learners`.)"""
     if config.device != "cpu":  # JAX places the networks itself, on its default device
         raise ConfigError(f"--device {config.device!r} is invalid with --backend sbx: it runs on JAX's default "
                           "device; leave --device at cpu (JAX_PLATFORMS=cuda chooses a GPU)")  # fmt: skip
@@ -54,4 +38,4 @@ def sbx_policy_kwargs(policy_kwargs: dict[str, Any]) -> dict[str, Any]:
     return kwargs
 
 
-__all__ = ["SBX_ALGORITHMS", "SBX_EXTRA", "check_sbx_config", "sbx_class", "sbx_policy_kwargs"]
+__all__ = ["check_sbx_config", "sbx_policy_kwargs"]

@@ -13,13 +13,13 @@ from typing import Any
 
 import numpy as np
 
-from train.learning.jax_policy import NORMALIZE_KEY
+from train.learning.jitted.policy import NORMALIZE_KEY
 
 
 def folded_params(params: Any, obs_mean: Any = None, obs_var: Any = None) -> dict[str, dict[str, np.ndarray]]:
     """The network's parameters as float64 numpy arrays, with the observation scaling (if given) folded into
     the first layers: a network on raw observations that computes what ``params`` computes on normalised ones."""
-    from train.learning.jax_ppo import OBS_EPSILON
+    from train.learning.jitted.ppo import OBS_EPSILON
 
     layers = {name: {k: np.asarray(v, np.float64) for k, v in layer.items()} if isinstance(layer, dict) else layer
               for name, layer in params["params"].items()}  # fmt: skip

@@ -9,7 +9,7 @@ episode, advantages normalised per minibatch, the clipped surrogate plus ``vf_co
 error, gradients clipped to ``max_grad_norm``, Adam with eps 1e-5.
 
 >>> import gymnax, jax
->>> from train.learning.jax_policy import PPOSettings
+>>> from train.learning.jitted.policy import PPOSettings
 >>> env, env_params = gymnax.make("Pendulum-v1")
 >>> settings = PPOSettings(n_envs=4, n_steps=8, batch_size=16, n_epochs=1)
 >>> ppo = JaxPPO(settings, env, env_params)
@@ -29,7 +29,7 @@ import jax
 import jax.numpy as jnp
 import optax
 
-from train.learning.jax_policy import PPOSettings, gaussian_entropy, gaussian_log_prob, make_network
+from train.learning.jitted.policy import PPOSettings, gaussian_entropy, gaussian_log_prob, make_network
 
 #: The epsilon of stable-baselines3's VecNormalize: observations are (obs - mean) / sqrt(var + OBS_EPSILON).
 OBS_EPSILON = 1e-8

@@ -4,7 +4,7 @@ and its hyperparameters under the names of train/hyperparams/ppo.yml.
 The network is the one SB3 builds for ``PPO("MlpPolicy", env, policy_kwargs=dict(net_arch=[64, 64]))``: separate
 actor and critic MLPs of ``net_arch`` with ``activation_fn`` (tanh), a linear mean head, a state-independent
 ``log_std`` and a linear value head, orthogonally initialised with SB3's gains (sqrt(2) for the hidden layers,
-0.01 for the mean, 1 for the value), biases zero. So :mod:`train.learning.jax_export` can copy the weights into an
+0.01 for the mean, 1 for the value), biases zero. So :mod:`train.learning.jitted.export` can copy the weights into an
 SB3 model tensor for tensor.
 """
 
@@ -164,7 +164,7 @@ def make_network(settings: PPOSettings, action_dim: int) -> Any:
     """The flax module ``ActorCritic``: obs (..., n) -> (mean (..., action_dim), log_std (action_dim,), value (...)).
 
     Its parameters are named ``policy_<i>``, ``value_<i>`` (hidden layers), ``action`` (the mean head),
-    ``value`` (the value head) and ``log_std``, the names :mod:`train.learning.jax_export` maps onto SB3's.
+    ``value`` (the value head) and ``log_std``, the names :mod:`train.learning.jitted.export` maps onto SB3's.
     """
     import flax.linen as nn
     import jax.numpy as jnp
