@@ -50,7 +50,7 @@ ENTRIES: dict[str, dict[str, Any]] = {
     "crossq": {"algo": "crossq"},
     "residual-ppo": {"algo": "ppo", "residual": True, "expert": "ptc"},
     "residual-ppo-astolfi": {"algo": "ppo", "residual": True, "expert": "pt-astolfi"},
-    # the residual inside the jitted PPO's compiled loop (train.learning.jax_residual): millions of steps per run
+    # the residual inside the jitted PPO's compiled loop (train.learning.jitted.residual): millions of steps per run
     "residual-ppo-jax": {"algo": "ppo", "backend": "jax", "residual": True, "expert": "ptc"},
     "residual-ppo-jax-astolfi": {"algo": "ppo", "backend": "jax", "residual": True, "expert": "pt-astolfi"},
     "residual-ppo-jax-v2": {"algo": "ppo", "backend": "jax", "residual": True, "expert": "ptc",
