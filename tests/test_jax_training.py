@@ -169,6 +169,16 @@ def test_a_rollout_records_what_the_policy_did_and_the_updates_follow_the_schedu
     ended = np.asarray(transitions.terminated | transitions.truncated)
     assert float(totals["episodes"]) == ended.sum() >= 2  # each robot truncated at 15 steps at the latest
     assert float(totals["reward_sum"]) == pytest.approx(float(np.sum(transitions.reward)), rel=1e-5)
+    # return_sum: the returns of the episodes that ended (from the runner's start: every robot's first episode);
+    # successes: those that ended at the goal (an arrival ends a v0 episode; the final observation's distance)
+    rewards, returns, running = np.asarray(transitions.reward, np.float64), 0.0, np.zeros(settings.n_envs)
+    for t in range(settings.n_steps):
+        running += rewards[t]
+        returns += float(np.sum(np.where(ended[t], running, 0.0)))
+        running = np.where(ended[t], 0.0, running)
+    assert float(totals["return_sum"]) == pytest.approx(returns, rel=1e-5, abs=1e-4)
+    arrived = np.asarray(transitions.terminated) & (np.asarray(transitions.final_obs)[..., 0] <= params_tolerance(env))
+    assert float(totals["successes"]) == arrived.sum()
     assert int(after.updates) == 0 and not np.array_equal(after.obs, runner.obs)
 
     budget = 2 * settings.steps_per_update
@@ -181,6 +191,28 @@ def test_a_rollout_records_what_the_policy_did_and_the_updates_follow_the_schedu
         np.testing.assert_array_equal(a, b)  # the rate at the end of the budget is 0
     assert int(second.updates) == 2 and int(second.opt_state[1].count) == 2 * 2 * 4
     assert float(metrics["episodes"]) == float(totals["episodes"])  # the same first rollout, the same key
+
+
+def params_tolerance(env: Any) -> float:
+    return float(env.default_params.goal_tolerance)
+
+
+def test_log_std_fixed_sets_the_noise_to_its_schedule_whatever_the_gradient() -> None:
+    """With log_std_fixed the log standard deviation is the schedule's value after every update (from log_std_init
+    to log_std_final over the budget), not a cap the gradient may stay below; without log_std_final it stays at
+    log_std_init."""
+    from dwr_gym.jax_env.gymnax import make_gymnax_env
+    from train.learning.jax_ppo import JaxPPO
+
+    env, env_params = make_gymnax_env("DWRPointStabilization-v1")
+    for final, expected in ((-2.0, lambda update: -0.5 * update), (None, lambda update: 0.3)):
+        settings = PPOSettings(n_envs=4, n_steps=8, batch_size=16, n_epochs=1, learning_rate=0.5, log_std_init=0.3 if
+                               final is None else 0.0, log_std_final=final, log_std_fixed=True)  # fmt: skip
+        ppo = JaxPPO(settings, env, env_params)
+        runner = ppo.init(seed=0)
+        for update in (1, 2, 3, 4):  # a budget of 4 updates of 32 steps
+            runner, _ = ppo.run(runner, 1, total_timesteps=128)
+            np.testing.assert_allclose(np.asarray(runner.params["params"]["log_std"]), expected(update), atol=1e-6)
 
 
 def test_settings_read_the_yaml_and_refuse_what_they_do_not_implement() -> None:
