@@ -261,3 +261,38 @@ def test_the_jax_envs_pickle_with_their_keywords_and_accept_an_empty_disturbance
     assert vector.num_envs == 3 and vector.params.T_con == 7.0
     assert DWRJaxVectorEnv(num_envs=1).num_envs == 1
     assert functional_params(dwr_gym.ENV_ID, disturbances=[]).env_params == functional_params(dwr_gym.ENV_ID).env_params
+
+
+def test_the_single_jax_env_terminates_where_its_robot_leaves_the_arena() -> None:
+    """gym.make's JAX env returns the step's flags: driving straight on at full speed, the robot leaves the 5 m arena
+    before v0's 30 s horizon, and that step is terminated (not truncated), with the arena's penalty."""
+    env = gym.make(dwr_gym.JAX_ENV_ID)
+    env.reset(seed=2)
+    for _ in range(env.spec.max_episode_steps):
+        _, reward, terminated, truncated, info = env.step(np.array([1.0, 0.0], np.float32))
+        assert terminated == bool(info["terminated"]) and truncated == bool(info["truncated"])
+        if terminated or truncated:
+            break
+    assert terminated and not truncated and float(info["distance"]) > env.unwrapped.params.arena_radius
+    assert float(info["reward_terms"]["arena"]) == -env.unwrapped.params.arena_penalty and reward < 0
+
+
+def test_a_seeded_reset_of_the_jax_vector_env_is_reproducible() -> None:
+    env = gym.make_vec(dwr_gym.JAX_ENV_ID, num_envs=3)
+    first, _ = env.reset(seed=5)
+    env.step(np.ones((3, 2), np.float32))
+    again, _ = env.reset(seed=5)
+    other, _ = env.reset(seed=6)
+    np.testing.assert_array_equal(np.asarray(first), np.asarray(again))
+    assert not np.array_equal(np.asarray(first), np.asarray(other))
+
+
+def test_the_observation_noise_at_reset_has_its_sigma_and_is_drawn_apart_from_the_start() -> None:
+    """The reset's measured heading is the drawn heading plus noise of standard deviation ``observation_noise``,
+    independent of it (noise drawn with the start's own key would be a function of the heading drawn)."""
+    func_env = DWRFuncEnv(dwr_gym.ENV_ID_V1, observation_noise=0.05)
+    state = jax.jit(jax.vmap(func_env.initial))(jax.random.split(jax.random.PRNGKey(1), 2000))
+    obs, psi = np.asarray(state.observation, np.float64), np.asarray(state.psi, np.float64)
+    noise = np.angle(np.exp(1j * (np.arctan2(obs[:, 4], obs[:, 3]) - psi)))
+    assert abs(np.std(noise) - 0.05) < 0.005
+    assert abs(np.corrcoef(noise, psi)[0, 1]) < 0.1
