@@ -296,3 +296,25 @@ def test_the_observation_noise_at_reset_has_its_sigma_and_is_drawn_apart_from_th
     noise = np.angle(np.exp(1j * (np.arctan2(obs[:, 4], obs[:, 3]) - psi)))
     assert abs(np.std(noise) - 0.05) < 0.005
     assert abs(np.corrcoef(noise, psi)[0, 1]) < 0.1
+    # a step standing still measures the same heading with fresh noise of the same sigma
+    step = jax.jit(jax.vmap(func_env.transition, in_axes=(0, None, 0)))
+    state = step(state, jnp.zeros(2), jax.random.split(jax.random.PRNGKey(2), 2000))
+    obs = np.asarray(state.observation, np.float64)
+    fresh = np.angle(np.exp(1j * (np.arctan2(obs[:, 4], obs[:, 3]) - psi)))
+    assert abs(np.std(fresh) - 0.05) < 0.005 and abs(np.corrcoef(fresh, noise)[0, 1]) < 0.1
+
+
+def test_a_float32_jax_env_keeps_float32_states_when_x64_is_on() -> None:
+    """A session that enables jax_enable_x64 for other work still gets the float32 env it asked for: float64 starts
+    placed with initial_state become float32 states, and a step keeps them so (no float64 creeps in)."""
+    from dwr_gym.jax_env.func_env import initial_state, observation_space, transition_state
+
+    with jax.enable_x64(True):
+        params = functional_params(dwr_gym.ENV_ID, dtype="float32")
+        start = (np.array([1.0, -0.5]), np.array([0.5, 2.0]), np.array([0.2, 3.0]))
+        space = observation_space(params)
+        state = initial_state(start, np.array([5.0, 8.0]), jax.random.PRNGKey(0), params, space)
+        state = transition_state(state, jnp.ones((2, 2), jnp.float32), jax.random.PRNGKey(1), params, space)
+        floats = {name: leaf.dtype for name, leaf in vars(state).items()
+                  if hasattr(leaf, "dtype") and jnp.issubdtype(leaf.dtype, jnp.floating)}  # fmt: skip
+        assert set(floats.values()) == {jnp.dtype("float32")}, floats
