@@ -79,8 +79,14 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
                  ["tests/test_rl_protocol.py", "tests/test_rl_benchmark.py",
                   "tests/test_docs.py::test_every_table_agrees_with_its_json"]),
     "datasets": (["train/datasets/*"], ["tests/test_datasets.py"]),
+    # the first-hour tests of the optimum's cache only (the others train agents, minutes per mutant)
     "guards": (["train/threads.py", "train/evaluation/optimum.py"],
-               ["tests/test_threads.py", "tests/test_first_hour_training.py", "tests/test_optimal.py"]),
+               ["tests/test_threads.py", "tests/test_optimal.py",
+                *(f"tests/test_first_hour_training.py::test_{name}" for name in (
+                    "the_optimum_cache_keeps_what_an_interrupted_command_solved",
+                    "two_commands_caching_at_once_keep_each_others_optima",
+                    "the_cache_is_read_merged_and_replaced_under_one_exclusive_lock",
+                    "two_commands_solving_the_same_episodes_share_the_work"))]),
 }  # fmt: skip
 #: Words of DESELECTED a group keeps: the learning group's subject is the tiny DAgger runs.
 KEPT = {"learning": ("cloning_run",)}
