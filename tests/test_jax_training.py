@@ -213,6 +213,30 @@ def test_log_std_fixed_sets_the_noise_to_its_schedule_whatever_the_gradient() ->
         np.testing.assert_allclose(np.asarray(runner.params["params"]["log_std"]), 0.5 - 0.5 * update, atol=1e-6)
 
 
+def test_env_step_reads_an_env_that_reports_only_done_and_restarts_it() -> None:
+    """A gymnax env without the terminated and truncated flags in its info (gymnax's own envs): ``done`` is the
+    termination, the step that ends returns the new episode's observation, and ``final_obs`` the ended one's."""
+    from train.learning.jax_ppo import env_step
+
+    class Counter:  # the observation counts the steps; the episode is done at the third
+        def step_env(self, key: Any, state: Any, action: Any, params: Any) -> tuple[Any, ...]:
+            state = state + 1
+            return jnp.full(1, state, jnp.float32), state, jnp.float32(1.0), state >= 3, {}
+
+        def reset_env(self, key: Any, params: Any) -> tuple[Any, Any]:
+            return jnp.zeros(1, jnp.float32), jnp.asarray(0)
+
+        def is_truncated(self, state: Any, params: Any) -> Any:
+            return jnp.asarray(False)
+
+    step = jax.jit(lambda state: env_step(Counter(), None, jax.random.PRNGKey(0), state, jnp.zeros(1)))
+    obs, state, reward, terminated, truncated, final_obs, success = step(jnp.asarray(1))
+    assert (float(obs[0]), int(state), bool(terminated), bool(truncated)) == (2.0, 2, False, False)
+    obs, state, reward, terminated, truncated, final_obs, success = step(state)
+    assert (float(obs[0]), int(state), bool(terminated), bool(truncated)) == (0.0, 0, True, False)
+    assert float(final_obs[0]) == 3.0 and float(reward) == 1.0 and not bool(success)
+
+
 def test_settings_read_the_yaml_and_refuse_what_they_do_not_implement() -> None:
     config = resolved()
     settings = PPOSettings.from_algo_kwargs(config.algo_kwargs, 256)
@@ -222,6 +246,9 @@ def test_settings_read_the_yaml_and_refuse_what_they_do_not_implement() -> None:
         PPOSettings.from_algo_kwargs({**config.algo_kwargs, "use_sde": True}, 256)
     with pytest.raises(ConfigError, match="batch_size=1000 is invalid for --backend jax"):
         PPOSettings.from_algo_kwargs({**config.algo_kwargs, "batch_size": 1000}, 256)
+    with pytest.raises(ConfigError, match=r"^policy_kwargs activation_fn='nn.Swish' is invalid for --backend jax: "
+                                          r"expected one of nn.Tanh, nn.Relu"):  # fmt: skip
+        PPOSettings.from_algo_kwargs({**config.algo_kwargs, "policy_kwargs": {"activation_fn": "nn.Swish"}}, 256)
     linear = PPOSettings.from_algo_kwargs({**config.algo_kwargs, "learning_rate": "lin_1e-3"}, 256)
     assert linear.linear_schedule and linear.learning_rate == 1e-3
 

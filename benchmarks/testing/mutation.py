@@ -89,7 +89,7 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
                     "two_commands_solving_the_same_episodes_share_the_work"))]),
 }  # fmt: skip
 #: Words of DESELECTED a group keeps: the learning group's subject is the tiny DAgger runs.
-KEPT = {"learning": ("cloning_run",)}
+KEPT = {"learning": ("cloning_run",), "jax_ppo": ("learns",)}  # jax_ppo: the critic warm-up test (one tiny update)
 #: Words a group leaves out besides: the shipped robust agent's evaluations take minutes per mutant.
 EXTRA = {"robust": ("shipped",),
          # the protocol's older end-to-end run (two minutes per mutant on a busy machine; test_rl_protocol.py trains
