@@ -165,6 +165,8 @@ def test_a_rollout_records_what_the_policy_did_and_the_updates_follow_the_schedu
     np.testing.assert_array_equal(transitions.obs[0], runner.obs)
     mean, log_std, value = ppo.policy(runner.params, transitions.obs)
     np.testing.assert_allclose(transitions.log_prob, gaussian_log_prob(transitions.action, mean, log_std), atol=1e-5)
+    z = np.asarray((transitions.action - mean) / np.exp(log_std))  # the sampled actions: mean + std * N(0, 1)
+    assert abs(z.mean()) < 0.5 and abs(z.std() - 1.0) < 0.35, (z.mean(), z.std())
     np.testing.assert_allclose(transitions.value, value, atol=1e-6)
     ended = np.asarray(transitions.terminated | transitions.truncated)
     assert float(totals["episodes"]) == ended.sum() >= 2  # each robot truncated at 15 steps at the latest
