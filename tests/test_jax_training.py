@@ -239,6 +239,32 @@ def test_env_step_reads_an_env_that_reports_only_done_and_restarts_it() -> None:
     assert float(final_obs[0]) == 3.0 and float(reward) == 1.0 and not bool(success)
 
 
+def test_each_epoch_passes_over_the_whole_rollout_in_a_new_random_order() -> None:
+    """As SB3's PPO, every epoch splits the rollout into minibatches afresh: each transition once per epoch, in an
+    order that differs from epoch to epoch (consecutive steps of one robot would otherwise share a minibatch)."""
+    from dwr_gym.jax_env.gymnax import make_gymnax_env
+    from train.learning.jax_ppo import JaxPPO
+
+    env, env_params = make_gymnax_env("DWRPointStabilization-v1")
+    settings = PPOSettings(n_envs=2, n_steps=8, batch_size=8, n_epochs=2)
+    ppo = JaxPPO(settings, env, env_params)
+    seen: list[np.ndarray] = []
+    loss = ppo.loss
+
+    def watched(params: Any, batch: tuple[Any, ...]) -> Any:
+        jax.debug.callback(lambda obs: seen.append(np.asarray(obs)), batch[0], ordered=True)
+        return loss(params, batch)
+
+    ppo.loss = watched  # type: ignore[method-assign]
+    ppo.run(ppo.init(seed=2), 1, total_timesteps=10_000)
+    jax.effects_barrier()
+    assert len(seen) == 4 and all(batch.shape == (8, 10) for batch in seen)  # 2 epochs of 2 minibatches
+    first, second = np.concatenate(seen[:2]), np.concatenate(seen[2:])
+    rows = lambda a: sorted(map(tuple, a))  # noqa: E731
+    assert rows(first) == rows(second) and len(set(map(tuple, first))) == 16  # the same 16 transitions, once each
+    assert not np.array_equal(first, second)
+
+
 def test_settings_read_the_yaml_and_refuse_what_they_do_not_implement() -> None:
     config = resolved()
     settings = PPOSettings.from_algo_kwargs(config.algo_kwargs, 256)
