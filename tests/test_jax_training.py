@@ -181,6 +181,7 @@ def test_a_rollout_records_what_the_policy_did_and_the_updates_follow_the_schedu
     assert float(totals["return_sum"]) == pytest.approx(returns, rel=1e-5, abs=1e-4)
     arrived = np.asarray(transitions.terminated) & (np.asarray(transitions.final_obs)[..., 0] <= params_tolerance(env))
     assert float(totals["successes"]) == arrived.sum()
+    np.testing.assert_allclose(after.episode_return, running, rtol=1e-5, atol=1e-5)  # restarted at 0 at each end
     assert int(after.updates) == 0 and not np.array_equal(after.obs, runner.obs)
 
     budget = 2 * settings.steps_per_update
@@ -263,6 +264,24 @@ def test_each_epoch_passes_over_the_whole_rollout_in_a_new_random_order() -> Non
     rows = lambda a: sorted(map(tuple, a))  # noqa: E731
     assert rows(first) == rows(second) and len(set(map(tuple, first))) == 16  # the same 16 transitions, once each
     assert not np.array_equal(first, second)
+
+
+def test_each_activation_is_the_one_the_exported_sb3_model_computes() -> None:
+    """The exported model runs torch's activation of the name in policy_kwargs: the jitted network's, for every
+    activation it accepts, computes the same function."""
+    import torch
+
+    from train.learning.jax_policy import ACTIVATIONS, activation_function
+
+    torch_names = {"tanh": "Tanh", "relu": "ReLU", "elu": "ELU", "leakyrelu": "LeakyReLU", "silu": "SiLU",
+                   "gelu": "GELU", "sigmoid": "Sigmoid"}  # fmt: skip
+    assert set(ACTIVATIONS) == set(torch_names)
+    x = np.linspace(-4.0, 4.0, 33, dtype=np.float32)
+    for name, torch_name in torch_names.items():
+        settings = PPOSettings.from_algo_kwargs({"policy_kwargs": {"activation_fn": f"nn.{torch_name}"}}, 64)
+        assert settings.activation == name
+        expected = getattr(torch.nn, torch_name)()(torch.as_tensor(x)).numpy()
+        np.testing.assert_allclose(np.asarray(activation_function(name)(jnp.asarray(x))), expected, atol=1e-6)
 
 
 def test_settings_read_the_yaml_and_refuse_what_they_do_not_implement() -> None:
