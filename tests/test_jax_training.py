@@ -240,14 +240,15 @@ def test_env_step_reads_an_env_that_reports_only_done_and_restarts_it() -> None:
     assert float(final_obs[0]) == 3.0 and float(reward) == 1.0 and not bool(success)
 
 
-def test_each_epoch_passes_over_the_whole_rollout_in_a_new_random_order() -> None:
+def test_each_epoch_passes_over_the_whole_rollout_in_a_new_random_order_and_a_warm_up_trains_the_critic_alone() -> None:
     """As SB3's PPO, every epoch splits the rollout into minibatches afresh: each transition once per epoch, in an
-    order that differs from epoch to epoch (consecutive steps of one robot would otherwise share a minibatch)."""
+    order that differs from epoch to epoch (consecutive steps of one robot would otherwise share a minibatch).
+    Within --critic-warmup's steps (the first update here) only the critic's weights move."""
     from dwr_gym.jax_env.gymnax import make_gymnax_env
     from train.learning.jax_ppo import JaxPPO
 
     env, env_params = make_gymnax_env("DWRPointStabilization-v1")
-    settings = PPOSettings(n_envs=2, n_steps=8, batch_size=8, n_epochs=2)
+    settings = PPOSettings(n_envs=2, n_steps=8, batch_size=8, n_epochs=2, critic_warmup=16)
     ppo = JaxPPO(settings, env, env_params)
     seen: list[np.ndarray] = []
     loss = ppo.loss
@@ -257,13 +258,33 @@ def test_each_epoch_passes_over_the_whole_rollout_in_a_new_random_order() -> Non
         return loss(params, batch)
 
     ppo.loss = watched  # type: ignore[method-assign]
-    ppo.run(ppo.init(seed=2), 1, total_timesteps=10_000)
+    start = ppo.init(seed=2)
+    after, _ = ppo.run(start, 1, total_timesteps=10_000)
     jax.effects_barrier()
     assert len(seen) == 4 and all(batch.shape == (8, 10) for batch in seen)  # 2 epochs of 2 minibatches
     first, second = np.concatenate(seen[:2]), np.concatenate(seen[2:])
     rows = lambda a: sorted(map(tuple, a))  # noqa: E731
     assert rows(first) == rows(second) and len(set(map(tuple, first))) == 16  # the same 16 transitions, once each
     assert not np.array_equal(first, second)
+    for name, leaf in start.params["params"].items():
+        moved = not all(np.array_equal(x, y) for x, y in zip(jax.tree.leaves(leaf),
+                                                            jax.tree.leaves(after.params["params"][name]), strict=True))  # fmt: skip
+        assert moved == name.startswith("value"), name
+
+
+def test_the_critic_warm_up_zeroes_the_actors_gradients_only_while_frozen() -> None:
+    """--critic-warmup: while frozen, the gradients of the actor (its hidden layers, mean head and log_std) are 0 and
+    the critic's untouched; once not frozen, every gradient is the loss's."""
+    from train.learning.jax_ppo import actor_masked_grad
+
+    names = ("policy_0", "policy_1", "action", "log_std", "value_0", "value_1", "value")
+    params = {"params": {name: {"kernel": jnp.full((2, 2), float(k + 1))} for k, name in enumerate(names)}}
+    grad = jax.grad(lambda p, batch: sum(jnp.sum(leaf * batch) for leaf in jax.tree.leaves(p)))
+    for frozen in (True, False):
+        masked = actor_masked_grad(grad, jnp.asarray(frozen), params, jnp.asarray(3.0))["params"]
+        for name in names:
+            actor = not name.startswith("value")
+            np.testing.assert_array_equal(masked[name]["kernel"], 0.0 if frozen and actor else 3.0, err_msg=name)
 
 
 def test_each_activation_is_the_one_the_exported_sb3_model_computes() -> None:

@@ -73,8 +73,7 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
                       "short_training_run_of_each_algorithm[ppo-residual]"))]),
     "jax_env": (["dwr_gym/jax_env/*"], ["tests/test_jax_env.py", "tests/test_jax_equivalence.py"]),
     "jax_ppo": (["train/learning/jax_ppo.py", "train/learning/jax_policy.py", "train/learning/jax_export.py"],
-                ["tests/test_jax_training.py",
-                 "tests/test_jax_residual.py::test_critic_warmup_keeps_the_actor_as_it_is_while_the_critic_learns"]),
+                ["tests/test_jax_training.py"]),
     "protocol": (["train/learning/benchmark.py", "train/evaluation/benchmark.py", "train/reporting/rl_benchmark.py"],
                  ["tests/test_rl_protocol.py", "tests/test_rl_benchmark.py",
                   "tests/test_docs.py::test_every_table_agrees_with_its_json"]),
@@ -89,7 +88,7 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
                     "two_commands_solving_the_same_episodes_share_the_work"))]),
 }  # fmt: skip
 #: Words of DESELECTED a group keeps: the learning group's subject is the tiny DAgger runs.
-KEPT = {"learning": ("cloning_run",), "jax_ppo": ("learns",)}  # jax_ppo: the critic warm-up test (one tiny update)
+KEPT = {"learning": ("cloning_run",)}
 #: Words a group leaves out besides: the shipped robust agent's evaluations take minutes per mutant.
 EXTRA = {"robust": ("shipped",),
          # the protocol's older end-to-end run (two minutes per mutant on a busy machine; test_rl_protocol.py trains
