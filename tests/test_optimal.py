@@ -180,9 +180,24 @@ def test_bad_parameters_and_a_missing_casadi_give_clear_errors(monkeypatch: pyte
         make_controller("optimal", dt=-1)
     with pytest.raises(ValueError, match=r"unknown parameter\(s\) 'horizon'"):
         make_controller("optimal", horizon=3)
+    assert optimum_module.casadi_available()  # what the commands ask before they plan optima
     monkeypatch.setitem(sys.modules, "casadi", None)
     with pytest.raises(ImportError, match=r'the optimal controller needs CasADi: pip install "dwr-gym\[optimal\]"'):
         make_controller("optimal")
+    assert not optimum_module.casadi_available()
+
+
+def test_a_solver_process_leaves_ctrl_c_to_the_command_that_started_it() -> None:
+    """The optima's worker processes ignore SIGINT (Ctrl-C reaches the whole process group): the command itself
+    stops them and keeps what they solved."""
+    import signal
+
+    before = signal.getsignal(signal.SIGINT)
+    try:
+        optimum_module._ignore_interrupts()
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+    finally:
+        signal.signal(signal.SIGINT, before)
 
 
 @pytest.mark.parametrize(
