@@ -101,10 +101,11 @@ EXTRA = {"robust": ("shipped",),
 #: Groups whose module runs code at import (dwr_gym.model builds its torch-backed functions then): mutmut imports
 #: them anew for each mutant instead of forking after collection, which would keep the unmutated import.
 IMPORT_PER_MUTANT = {"model"}
-#: Groups whose tests run jax: XLA's threads do not survive a fork of the process that ran them (mutmut's stats run),
-#: so their mutants fork from a server that never ran jax; XLA's compilation cache is shared by the mutants, which
+#: Groups whose tests run threads that do not survive a fork of the process that ran them (mutmut's stats run): XLA's
+#: (jax_env, jax_ppo), a process pool's forked from it (guards: its mutants hung until their timeout, counted killed).
+#: Their mutants fork from a server that never ran a test. XLA's compilation cache is shared by the mutants, which
 #: then compile again only the programs their mutation changed (the cache is keyed by the program).
-JAX_GROUPS = {"jax_env", "jax_ppo"}
+FORKSERVER_GROUPS = {"jax_env", "jax_ppo", "guards"}
 
 
 def deselected(group: str) -> str:
@@ -125,7 +126,7 @@ def mutmut_config(group: str) -> str:
                                 "-W", "ignore::DeprecationWarning"],
         "timeout_multiplier": 20.0,  # a mutant that times out counts as killed: room for a busy shared machine
         "forkserver_warmup": "none" if group in IMPORT_PER_MUTANT else "collect",
-        "process_isolation": "forkserver" if group in JAX_GROUPS else "fork",
+        "process_isolation": "forkserver" if group in FORKSERVER_GROUPS else "fork",
     }  # fmt: skip
     return "\n[tool.mutmut]\n" + "".join(f"{key} = {json.dumps(value)}\n" for key, value in table.items())
 
