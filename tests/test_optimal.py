@@ -352,3 +352,24 @@ def test_the_optima_solved_as_ray_tasks_on_a_local_cluster_are_the_local_process
     np.testing.assert_array_equal(on_ray, local)
     (cached,) = (tmp_path / "ray").glob("optimal-energy-*.json")
     assert len(json.loads(cached.read_text())) == 4
+
+
+def test_missing_optima_are_what_optimal_energies_solves_and_nothing_once_cached(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: object
+) -> None:
+    """A command sums the optima its sets will solve from ``missing_optima``: before solving, every episode (once per
+    start and T_con, pose and position apart); after, none; starts given in float32 are the same episodes."""
+    monkeypatch.setenv("DWR_GYM_CACHE", str(tmp_path))
+    monkeypatch.setattr(optimum_module, "_solve_energy", lambda job: 1.0)
+    scenario = make_scenario("random", n=4, seed=8)
+    params = dwr_gym.EnvParams(**scenario.env_kwargs)
+    goals = np.array([[0.3, -0.7, 1.1], [-1.2, 0.4, -2.5], [0.0, 0.0, 0.0], [2.0, 1.0, 0.3]])
+    before = optimum_module.missing_optima(params, scenario.starts, goals)
+    assert len(before) == 4
+    assert len(optimum_module.missing_optima(params, scenario.starts, goals, heading=False)) == 4
+    optimum_module.optimal_energies(params, scenario.starts, goals, workers=1)
+    assert optimum_module.missing_optima(params, scenario.starts, goals) == set()
+    assert len(optimum_module.missing_optima(params, scenario.starts, goals, heading=False)) == 4
+    starts32, goals32 = scenario.starts.astype(np.float32), goals.astype(np.float32)
+    optimum_module.optimal_energies(params, starts32.astype(np.float64), goals32.astype(np.float64), workers=1)
+    assert optimum_module.missing_optima(params, starts32, goals32) == set()
