@@ -373,3 +373,52 @@ def test_missing_optima_are_what_optimal_energies_solves_and_nothing_once_cached
     starts32, goals32 = scenario.starts.astype(np.float32), goals.astype(np.float32)
     optimum_module.optimal_energies(params, starts32.astype(np.float64), goals32.astype(np.float64), workers=1)
     assert optimum_module.missing_optima(params, starts32, goals32) == set()
+
+
+def test_optima_are_solved_by_the_pool_asked_for_with_a_bar_counting_the_plans(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``workers`` processes (forked; spawned once jax is loaded, whose threads a fork can deadlock), each given an
+    even share of the batch; with ``address`` the Ray cluster's workers instead; the progress bar names the work and
+    counts its plans."""
+    import types
+
+    from train.evaluation import ray_pool
+
+    made: list[tuple[object, ...]] = []
+
+    class Pool:  # solves in this process, recording how it was made and used
+        workers = 3
+
+        def __init__(self, *args: object, **kwargs: object) -> None:
+            context = kwargs.get("mp_context")
+            made.append((*args, context.get_start_method() if context else None, kwargs.get("initializer")))
+
+        def map(self, function: object, jobs: object, chunksize: int = 1) -> object:
+            made.append(("chunksize", chunksize))
+            return map(function, jobs)  # type: ignore[call-overload]
+
+        def shutdown(self, **kwargs: object) -> None:
+            pass
+
+    monkeypatch.setattr(optimum_module, "ProcessPoolExecutor", Pool)
+    monkeypatch.setattr(ray_pool, "RayPool", Pool)
+    monkeypatch.setattr(optimum_module, "_solve_energy", lambda job: 1.0)
+    scenario = make_scenario("random", n=4, seed=9)  # 4 plans: the fewest a pool is made for
+    params = dwr_gym.EnvParams(**scenario.env_kwargs)
+    monkeypatch.delitem(sys.modules, "jax", raising=False)
+    for case, jax_loaded, kwargs in (("fork", False, {"workers": 2}), ("spawn", True, {"workers": 2}),
+                                     ("ray", False, {"address": "auto"})):  # fmt: skip
+        if jax_loaded:
+            monkeypatch.setitem(sys.modules, "jax", types.ModuleType("jax"))
+        monkeypatch.setenv("DWR_GYM_CACHE", str(tmp_path / case))
+        made.clear()
+        energies, _ = optimum_module.optimal_energies(params, scenario.starts, scenario.goals, progress=True,
+                                                      description=f"optimum ({case})", **kwargs)  # fmt: skip
+        assert energies.tolist() == [1.0] * 4
+        if case == "ray":
+            assert made == [("auto", None, None), ("chunksize", 2)]  # 4 plans on its 3 workers: 2, 2
+        else:
+            assert made == [(2, case, optimum_module._ignore_interrupts), ("chunksize", 2)]
+        err = capsys.readouterr().err
+        assert f"optimum ({case})" in err and "/4" in err and "plan" in err
