@@ -187,7 +187,7 @@ def test_bad_parameters_and_a_missing_casadi_give_clear_errors(monkeypatch: pyte
     assert not optimum_module.casadi_available()
 
 
-def test_a_solver_process_leaves_ctrl_c_to_the_command_that_started_it() -> None:
+def test_a_solver_process_leaves_the_interrupt_to_the_command_that_started_it() -> None:
     """The optima's worker processes ignore SIGINT (Ctrl-C reaches the whole process group): the command itself
     stops them and keeps what they solved."""
     import signal
