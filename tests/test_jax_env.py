@@ -318,3 +318,26 @@ def test_a_float32_jax_env_keeps_float32_states_when_x64_is_on() -> None:
         floats = {name: leaf.dtype for name, leaf in vars(state).items()
                   if hasattr(leaf, "dtype") and jnp.issubdtype(leaf.dtype, jnp.floating)}  # fmt: skip
         assert set(floats.values()) == {jnp.dtype("float32")}, floats
+
+
+def test_v2_on_jax_ends_at_T_con_and_pays_the_heading_and_the_miss_as_the_numpy_env() -> None:
+    """v2 held to T_con on JAX: a robot standing 1 m from the goal, turned 0.5 rad, ends at the step floor(T_con / dt)
+    (terminated, not truncated) with the numpy v2 env's reward terms: no arrival, the heading's cost and the miss."""
+    from dwr_gym.jax_env.func_env import initial_state, observation_space, transition_state
+
+    with jax.enable_x64(True):
+        params = functional_params(dwr_gym.ENV_ID_V2, dtype="float64", T_con_range=None, T_con=0.5)
+        space = observation_space(params)
+        start = (np.array([1.0]), np.array([0.0]), np.array([0.5]))
+        state = initial_state(start, np.array([0.5]), jax.random.PRNGKey(0), params, space)
+        numpy_env = gym.make(dwr_gym.ENV_ID_V2, T_con_range=None, T_con=0.5).unwrapped
+        numpy_env.reset(options={"start": (1.0, 0.0, 0.5), "goal": (0.0, 0.0, 0.0)})
+        for step in range(1, 11):  # v2 steps 0.05 s: T_con is its 10th step
+            state = transition_state(state, jnp.zeros((1, 2)), jax.random.PRNGKey(step), params, space)
+            _, reward, terminated, truncated, info = numpy_env.step(np.zeros(2, np.float32))
+            assert bool(state.terminated[0]) == terminated == (step == 10) and not (bool(state.truncated[0]) or truncated)
+            assert float(state.reward[0]) == pytest.approx(reward, abs=1e-12)
+            for term, value in info["reward_terms"].items():
+                assert float(state.reward_terms[term][0]) == pytest.approx(value, abs=1e-12), term
+        assert info["reward_terms"]["heading"] < 0 and info["reward_terms"]["late"] < 0
+        assert info["reward_terms"]["arrival"] == 0

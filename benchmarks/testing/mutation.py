@@ -48,9 +48,11 @@ DESELECTED = (
 GROUPS: dict[str, tuple[list[str], list[str]]] = {
     "model": (["dwr_gym/model.py"],
               ["tests/test_model.py", "tests/test_paper_by_hand.py", "tests/test_golden.py", "tests/test_env.py"]),
+    # with the JAX env's tests: core's array-API paths (jax arrays, traced) run only there
     "core": (["dwr_gym/core.py", "dwr_gym/state.py", "dwr_gym/observation.py"],
              ["tests/test_env.py", "tests/test_vector_env.py", "tests/test_golden.py", "tests/test_paper_by_hand.py",
-              "tests/test_prescribed_time.py", "tests/test_goal_env.py"]),
+              "tests/test_prescribed_time.py", "tests/test_goal_env.py", "tests/test_env_v2.py", "tests/test_jax_env.py",
+              "tests/test_jax_equivalence.py::test_float64_steps_equal_the_numpy_env_to_1e_12"]),
     "disturbances": (["dwr_gym/disturbances.py"],
                      ["tests/test_robustness.py", "tests/test_paper_by_hand.py"]),
     "randomization": (["dwr_gym/randomization.py"], ["tests/test_randomization.py"]),
@@ -102,10 +104,11 @@ EXTRA = {"robust": ("shipped",),
 #: them anew for each mutant instead of forking after collection, which would keep the unmutated import.
 IMPORT_PER_MUTANT = {"model"}
 #: Groups whose tests run threads that do not survive a fork of the process that ran them (mutmut's stats run): XLA's
-#: (jax_env, jax_ppo), a process pool's forked from it (guards: its mutants hung until their timeout, counted killed).
+#: (jax_env, jax_ppo, core's JAX tests), a process pool's forked from it (guards: its mutants hung until their
+#: timeout, counted killed).
 #: Their mutants fork from a server that never ran a test. XLA's compilation cache is shared by the mutants, which
 #: then compile again only the programs their mutation changed (the cache is keyed by the program).
-FORKSERVER_GROUPS = {"jax_env", "jax_ppo", "guards"}
+FORKSERVER_GROUPS = {"jax_env", "jax_ppo", "guards", "core"}
 
 
 def deselected(group: str) -> str:
