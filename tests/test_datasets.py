@@ -393,17 +393,24 @@ def test_collecting_with_progress_shows_a_bar_counting_the_episodes(capsys: pyte
     assert "random: episodes" in err and "/2" in err
 
 
-def test_make_dataset_and_the_command_share_their_defaults() -> None:
-    """``make_dataset(id, policy)`` writes the dataset ``dwr-gym dataset ID --policy NAME`` writes: the same episodes,
-    seed, batch of robots (which robot runs which episode) and reference set when neither is given them."""
-    import inspect
-
+def test_make_dataset_and_the_command_share_their_defaults(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``make_dataset(id, policy)`` collects what ``dwr-gym dataset ID --policy NAME`` collects: the same number of
+    episodes, seed and batch of robots (which robot runs which episode) when neither is given them."""
     from train.cli import build_parser
-    from train.datasets import make_dataset
-    from train.datasets.build import DatasetRequest
+    from train.datasets import build, make_dataset
 
-    args = build_parser().parse_args(["dataset", "dwr-gym/x-v0", "--policy", "ptc"])
-    defaults = inspect.signature(make_dataset).parameters
-    for name in ("episodes", "seed", "num_envs", "ref_episodes"):
-        assert defaults[name].default == getattr(args, name), name
-    assert DatasetRequest.__dataclass_fields__["num_envs"].default == args.num_envs
+    class CollectedError(Exception):
+        pass
+
+    asked: dict[str, object] = {}
+
+    def spy(policy: object, env_kwargs: object, episodes: int, **kwargs: object) -> None:
+        asked.update(episodes=episodes, **kwargs)
+        raise CollectedError
+
+    monkeypatch.setattr(build, "collect", spy)
+    with pytest.raises(CollectedError):
+        make_dataset("dwr-gym/x-v0", policy="random")
+    args = build_parser().parse_args(["dataset", "dwr-gym/x-v0", "--policy", "random"])
+    assert {name: asked[name] for name in ("episodes", "seed", "num_envs")} == {
+        "episodes": args.episodes, "seed": args.seed, "num_envs": args.num_envs}  # fmt: skip
