@@ -422,3 +422,13 @@ def test_optima_are_solved_by_the_pool_asked_for_with_a_bar_counting_the_plans(
             assert made == [(2, case, optimum_module._ignore_interrupts), ("chunksize", 2)]
         err = capsys.readouterr().err
         assert f"optimum ({case})" in err and "/4" in err and "plan" in err
+
+
+def test_optima_are_cached_in_the_users_cache_folder_unless_dwr_gym_cache_names_another(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    monkeypatch.setenv("HOME", str(tmp_path))
+    monkeypatch.delenv("DWR_GYM_CACHE", raising=False)
+    assert optimum_module.cache_dir() == tmp_path / ".cache" / "dwr-gym"
+    monkeypatch.setenv("DWR_GYM_CACHE", str(tmp_path / "elsewhere"))
+    assert optimum_module.cache_dir() == tmp_path / "elsewhere"
