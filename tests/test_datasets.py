@@ -353,3 +353,64 @@ def test_make_dataset_writes_the_episodes_of_a_controller_or_random_actions_name
         np.testing.assert_array_equal(episode.actions, expected.actions[k])
     with pytest.raises(ValueError, match="env_id 'CartPole-v1' is invalid"):
         make_dataset("dwr-gym/x-v0", env_id="CartPole-v1")
+
+
+def test_the_recorded_actions_are_the_ones_the_env_applied_within_the_action_space() -> None:
+    """A policy asking for more than the robot's limits (a scaled agent, a controller past saturation) is clipped to
+    [-1, 1] as the env clips it: the dataset holds the actions that drove its observations, inside the action space
+    its spec declares, so a cloned policy learns commands the robot can run."""
+
+    class Eager:
+        def predict(self, observation: np.ndarray, **kwargs: object) -> tuple[np.ndarray, None]:
+            n = np.asarray(observation).shape[0]
+            return np.tile(np.array([[1.7, -2.5]], np.float32), (n, 1)), None
+
+    episodes = collect(Eager(), {**env_keywords(V1), "T_con": 0.5}, 3, seed=5, num_envs=3)
+    space = gym.make(V1).action_space
+    for actions in episodes.actions:
+        assert all(space.contains(action) for action in actions)
+        np.testing.assert_array_equal(actions, np.tile([[1.0, -1.0]], (len(actions), 1)))
+
+
+def test_each_episode_records_the_disturbance_its_robot_drew() -> None:
+    """Under a DisturbanceDistribution every episode's metadata holds what was drawn for it: robot i's first episode
+    (reset with seed + i) drew what a single env reset with that seed draws."""
+    distribution = {"disturbance_distribution": DisturbanceDistribution(probability=1.0, seed=4)}
+    kwargs = {**env_keywords(V1), "T_con": 0.5, **distribution}
+    episodes = collect(RandomPolicy(0), kwargs, 3, seed=9, num_envs=3)
+    for k, meta in enumerate(episodes.metadata):
+        single = gym.make(V1, T_con=0.5, **distribution).unwrapped
+        single.reset(seed=9 + k)
+        drawn = {key: np.asarray(value[0]).tolist() for key, value in single.perturbation.episode().items()}
+        assert meta["disturbance"] == drawn
+    assert episodes.metadata[0]["disturbance"] != episodes.metadata[1]["disturbance"]
+
+
+def test_collecting_with_progress_shows_a_bar_counting_the_episodes(capsys: pytest.CaptureFixture[str]) -> None:
+    collect(RandomPolicy(0), {**env_keywords(V1), "T_con": 0.5}, 2, num_envs=2, progress=True,
+            description="random: episodes")  # fmt: skip
+    err = capsys.readouterr().err
+    assert "random: episodes" in err and "/2" in err
+
+
+def test_make_dataset_and_the_command_share_their_defaults(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``make_dataset(id, policy)`` collects what ``dwr-gym dataset ID --policy NAME`` collects: the same number of
+    episodes, seed and batch of robots (which robot runs which episode) when neither is given them."""
+    from train.cli import build_parser
+    from train.datasets import build, make_dataset
+
+    class CollectedError(Exception):
+        pass
+
+    asked: dict[str, object] = {}
+
+    def spy(policy: object, env_kwargs: object, episodes: int, **kwargs: object) -> None:
+        asked.update(episodes=episodes, **kwargs)
+        raise CollectedError
+
+    monkeypatch.setattr(build, "collect", spy)
+    with pytest.raises(CollectedError):
+        make_dataset("dwr-gym/x-v0", policy="random")
+    args = build_parser().parse_args(["dataset", "dwr-gym/x-v0", "--policy", "random"])
+    assert {name: asked[name] for name in ("episodes", "seed", "num_envs")} == {
+        "episodes": args.episodes, "seed": args.seed, "num_envs": args.num_envs}  # fmt: skip

@@ -360,3 +360,6 @@ def test_a_start_on_the_arena_border_is_allowed_and_beyond_it_is_refused() -> No
     assert info["distance"] == 2.0
     with pytest.raises(ValueError, match=r"start pose is 2.001 m from the goal, outside the arena"):
         env.reset(options={"start": (-2.001, 0.0, 0.0), "goal": (0.0, 0.0, 0.0)})
+    # on the border the robot has not left (the arena is d <= arena_radius): standing still, its episode goes on
+    _, _, terminated, _, info = env.step(np.zeros(2, np.float32))
+    assert info["distance"] == 2.0 and not terminated and info["reward_terms"]["arena"] == 0.0

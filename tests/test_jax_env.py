@@ -157,6 +157,7 @@ def test_what_the_jax_envs_cannot_do_is_a_one_line_error_naming_it() -> None:
         (lambda: DWRJaxEnv().reset(options={"start": [1.0, 0.0, 0.0]}), "reset options ['start'] are invalid"),
         (lambda: DWRJaxVectorEnv(2).reset(options={"T_con": 3.0}), "reset options ['T_con'] are invalid"),
         (lambda: DWRJaxVectorEnv(num_envs=0), "num_envs=0 is invalid"),
+        (lambda: DWRJaxVectorEnv(num_envs=2**24 + 1), "num_envs=16777217 is invalid"),
         (lambda: DWRFuncEnv(params=functional_params(), u_max=0.2), "env_kwargs=['u_max'] are invalid with params"),
         (lambda: FunctionalParams.from_env_params({"u_max": 0.2}), "is invalid: expected a dwr_gym.params.EnvParams"),
         (lambda: functional_params(disturbance_distribution=dwr_gym.randomization.DisturbanceDistribution(seed=1)),
@@ -181,3 +182,162 @@ def test_the_functional_params_are_the_envs_in_the_dtype_asked_for() -> None:
         assert space.dtype == np.float64
         np.testing.assert_array_equal(space.high, numpy_env.observation_space.high.astype(np.float64))
     assert functional_params(dwr_gym.ENV_ID, heading_tolerance=0.2).heading_tolerance == 0.2
+
+
+def test_the_gymnax_spaces_are_the_envs_and_contain_exactly_their_bounds() -> None:
+    """A gymnax trainer sizes its policy from ``num_actions`` and the spaces, and clips to their bounds: they are
+    the numpy env's spaces; ``contains`` holds on the bounds and not past them; ``sample`` draws within them."""
+    env, params = make_gymnax_env(dwr_gym.ENV_ID_V1)
+    numpy_env = gym.make(dwr_gym.ENV_ID_V1).unwrapped
+    assert env.name == gym.spec(dwr_gym.ENV_ID_V1).name
+    for space, expected in ((env.observation_space(params), numpy_env.observation_space),
+                            (env.action_space(params), numpy_env.action_space)):  # fmt: skip
+        np.testing.assert_array_equal(np.broadcast_to(space.low, expected.shape), expected.low)
+        np.testing.assert_array_equal(np.broadcast_to(space.high, expected.shape), expected.high)
+        assert space.shape == expected.shape and np.dtype(space.dtype) == expected.dtype
+        low, high = (jnp.broadcast_to(jnp.asarray(bound), space.shape) for bound in (space.low, space.high))
+        assert bool(space.contains(low)) and bool(space.contains(high))
+        nudge = jnp.zeros(space.shape).at[0].set(1e-3)
+        assert not bool(space.contains(low - nudge)) and not bool(space.contains(high + nudge))
+        samples = jax.vmap(space.sample)(jax.random.split(jax.random.PRNGKey(0), 64))
+        assert samples.dtype == expected.dtype and bool(jax.vmap(space.contains)(samples).all())
+    assert env.num_actions == env.action_space(params).shape[0] == 2
+
+
+def test_the_jax_env_draws_starts_and_T_con_as_independent_uniforms_over_the_numpy_envs_ranges() -> None:
+    """``initial`` draws what the numpy env's reset draws: distance, bearing, heading and T_con, each uniform over
+    its range (v1's start_distance, a full turn, start_heading, T_con_range) and independent of the others."""
+    func_env = DWRFuncEnv(dwr_gym.ENV_ID_V1)
+    params = func_env.default_params
+    n = 4000
+    state = jax.jit(jax.vmap(func_env.initial))(jax.random.split(jax.random.PRNGKey(0), n))
+    x, y, psi, T_con = (np.asarray(getattr(state, name), np.float64) for name in ("x", "y", "psi", "T_con"))
+    draws = {"distance": (np.hypot(x, y), params.start_distance), "bearing": (np.arctan2(y, x), (-np.pi, np.pi)),
+             "heading": (psi, params.start_heading), "T_con": (T_con, params.T_con_range)}  # fmt: skip
+    uniforms = []
+    for name, (values, (low, high)) in draws.items():
+        u = (values - low) / (high - low)
+        assert u.min() >= -1e-6 and u.max() <= 1 + 1e-6, name
+        ks = np.max(np.abs(np.sort(u) - (np.arange(n) + 0.5) / n))  # Kolmogorov-Smirnov distance to U(0, 1)
+        assert ks < 0.035, (name, ks)
+        uniforms.append(u)
+    correlation = np.corrcoef(uniforms) - np.eye(len(uniforms))
+    assert np.abs(correlation).max() < 0.06, correlation
+    np.testing.assert_allclose(np.asarray(state.initial_distance), np.hypot(x, y), rtol=1e-5)
+
+
+def test_the_gymnax_adapter_uses_the_params_it_is_given_and_its_own_without() -> None:
+    """Domain randomisation through gymnax's interface: reset and step follow the params passed (a start distance
+    of exactly 0.5 m, a slower robot), and the env's own when none are; ``is_terminal`` is the step's ``done``."""
+    env, params = make_gymnax_env(dwr_gym.ENV_ID, T_con=0.5)
+    slow = params.replace(start_distance=(0.5, 0.5), u_max=0.1)
+    key = jax.random.PRNGKey(3)
+    _, state = env.reset(key, slow)
+    assert float(state.initial_distance) == pytest.approx(0.5)
+    _, default_state = env.reset(key)
+    assert float(default_state.initial_distance) != pytest.approx(0.5)
+    _, _, _, _, info = env.step(key, state, jnp.array([1.0, 0.0]), slow)
+    assert float(info["linear_velocity"]) == pytest.approx(0.1)
+    _, _, _, _, info = env.step(key, state, jnp.array([1.0, 0.0]))
+    assert float(info["linear_velocity"]) == pytest.approx(params.u_max)
+    for _ in range(15):  # standing still until the horizon (15 steps at T_con 0.5 s)
+        _, state, _, done, _ = env.step_env(key, state, jnp.zeros(2), slow)
+        assert bool(env.is_terminal(state, slow)) == bool(done)
+    assert bool(done)
+
+
+def test_the_jax_envs_pickle_with_their_keywords_and_accept_an_empty_disturbance_list() -> None:
+    """A pickled JAX env (sent to a worker process) comes back with the same parameters and dtype, a vector env with
+    its number of robots; ``disturbances=[]``, as a config file writes none, is the nominal robot."""
+    import pickle
+
+    from dwr_gym.jax_env.wrappers import DWRJaxEnv, DWRJaxVectorEnv
+
+    env = DWRJaxEnv(T_con=7.0, u_max=0.3)
+    copy = pickle.loads(pickle.dumps(env))
+    assert copy.params == env.params and copy.params.u_max == 0.3
+    assert copy.observation_space == env.observation_space
+    vector = pickle.loads(pickle.dumps(DWRJaxVectorEnv(num_envs=3, T_con=7.0)))
+    assert vector.num_envs == 3 and vector.params.T_con == 7.0
+    assert DWRJaxVectorEnv(num_envs=1).num_envs == 1
+    assert functional_params(dwr_gym.ENV_ID, disturbances=[]).env_params == functional_params(dwr_gym.ENV_ID).env_params
+
+
+def test_the_single_jax_env_terminates_where_its_robot_leaves_the_arena() -> None:
+    """gym.make's JAX env returns the step's flags: driving straight on at full speed, the robot leaves the 5 m arena
+    before v0's 30 s horizon, and that step is terminated (not truncated), with the arena's penalty."""
+    env = gym.make(dwr_gym.JAX_ENV_ID)
+    env.reset(seed=2)
+    for _ in range(env.spec.max_episode_steps):
+        _, reward, terminated, truncated, info = env.step(np.array([1.0, 0.0], np.float32))
+        assert terminated == bool(info["terminated"]) and truncated == bool(info["truncated"])
+        if terminated or truncated:
+            break
+    assert terminated and not truncated and float(info["distance"]) > env.unwrapped.params.arena_radius
+    assert float(info["reward_terms"]["arena"]) == -env.unwrapped.params.arena_penalty and reward < 0
+
+
+def test_a_seeded_reset_of_the_jax_vector_env_is_reproducible() -> None:
+    env = gym.make_vec(dwr_gym.JAX_ENV_ID, num_envs=3)
+    first, _ = env.reset(seed=5)
+    env.step(np.ones((3, 2), np.float32))
+    again, _ = env.reset(seed=5)
+    other, _ = env.reset(seed=6)
+    np.testing.assert_array_equal(np.asarray(first), np.asarray(again))
+    assert not np.array_equal(np.asarray(first), np.asarray(other))
+
+
+def test_the_observation_noise_at_reset_has_its_sigma_and_is_drawn_apart_from_the_start() -> None:
+    """The reset's measured heading is the drawn heading plus noise of standard deviation ``observation_noise``,
+    independent of it (noise drawn with the start's own key would be a function of the heading drawn)."""
+    func_env = DWRFuncEnv(dwr_gym.ENV_ID_V1, observation_noise=0.05)
+    state = jax.jit(jax.vmap(func_env.initial))(jax.random.split(jax.random.PRNGKey(1), 2000))
+    obs, psi = np.asarray(state.observation, np.float64), np.asarray(state.psi, np.float64)
+    noise = np.angle(np.exp(1j * (np.arctan2(obs[:, 4], obs[:, 3]) - psi)))
+    assert abs(np.std(noise) - 0.05) < 0.005
+    assert abs(np.corrcoef(noise, psi)[0, 1]) < 0.1
+    # a step standing still measures the same heading with fresh noise of the same sigma
+    step = jax.jit(jax.vmap(func_env.transition, in_axes=(0, None, 0)))
+    state = step(state, jnp.zeros(2), jax.random.split(jax.random.PRNGKey(2), 2000))
+    obs = np.asarray(state.observation, np.float64)
+    fresh = np.angle(np.exp(1j * (np.arctan2(obs[:, 4], obs[:, 3]) - psi)))
+    assert abs(np.std(fresh) - 0.05) < 0.005 and abs(np.corrcoef(fresh, noise)[0, 1]) < 0.1
+
+
+def test_a_float32_jax_env_keeps_float32_states_when_x64_is_on() -> None:
+    """A session that enables jax_enable_x64 for other work still gets the float32 env it asked for: float64 starts
+    placed with initial_state become float32 states, and a step keeps them so (no float64 creeps in)."""
+    from dwr_gym.jax_env.func_env import initial_state, observation_space, transition_state
+
+    with jax.enable_x64(True):
+        params = functional_params(dwr_gym.ENV_ID, dtype="float32")
+        start = (np.array([1.0, -0.5]), np.array([0.5, 2.0]), np.array([0.2, 3.0]))
+        space = observation_space(params)
+        state = initial_state(start, np.array([5.0, 8.0]), jax.random.PRNGKey(0), params, space)
+        state = transition_state(state, jnp.ones((2, 2), jnp.float32), jax.random.PRNGKey(1), params, space)
+        floats = {name: leaf.dtype for name, leaf in vars(state).items()
+                  if hasattr(leaf, "dtype") and jnp.issubdtype(leaf.dtype, jnp.floating)}  # fmt: skip
+        assert set(floats.values()) == {jnp.dtype("float32")}, floats
+
+
+def test_v2_on_jax_ends_at_T_con_and_pays_the_heading_and_the_miss_as_the_numpy_env() -> None:
+    """v2 held to T_con on JAX: a robot standing 1 m from the goal, turned 0.5 rad, ends at the step floor(T_con / dt)
+    (terminated, not truncated) with the numpy v2 env's reward terms: no arrival, the heading's cost and the miss."""
+    from dwr_gym.jax_env.func_env import initial_state, observation_space, transition_state
+
+    with jax.enable_x64(True):
+        params = functional_params(dwr_gym.ENV_ID_V2, dtype="float64", T_con_range=None, T_con=0.5)
+        space = observation_space(params)
+        start = (np.array([1.0]), np.array([0.0]), np.array([0.5]))
+        state = initial_state(start, np.array([0.5]), jax.random.PRNGKey(0), params, space)
+        numpy_env = gym.make(dwr_gym.ENV_ID_V2, T_con_range=None, T_con=0.5).unwrapped
+        numpy_env.reset(options={"start": (1.0, 0.0, 0.5), "goal": (0.0, 0.0, 0.0)})
+        for step in range(1, 11):  # v2 steps 0.05 s: T_con is its 10th step
+            state = transition_state(state, jnp.zeros((1, 2)), jax.random.PRNGKey(step), params, space)
+            _, reward, terminated, truncated, info = numpy_env.step(np.zeros(2, np.float32))
+            assert bool(state.terminated[0]) == terminated == (step == 10) and not (bool(state.truncated[0]) or truncated)
+            assert float(state.reward[0]) == pytest.approx(reward, abs=1e-12)
+            for term, value in info["reward_terms"].items():
+                assert float(state.reward_terms[term][0]) == pytest.approx(value, abs=1e-12), term
+        assert info["reward_terms"]["heading"] < 0 and info["reward_terms"]["late"] < 0
+        assert info["reward_terms"]["arrival"] == 0

@@ -165,10 +165,23 @@ def test_a_rollout_records_what_the_policy_did_and_the_updates_follow_the_schedu
     np.testing.assert_array_equal(transitions.obs[0], runner.obs)
     mean, log_std, value = ppo.policy(runner.params, transitions.obs)
     np.testing.assert_allclose(transitions.log_prob, gaussian_log_prob(transitions.action, mean, log_std), atol=1e-5)
+    z = np.asarray((transitions.action - mean) / np.exp(log_std))  # the sampled actions: mean + std * N(0, 1)
+    assert abs(z.mean()) < 0.5 and abs(z.std() - 1.0) < 0.35, (z.mean(), z.std())
     np.testing.assert_allclose(transitions.value, value, atol=1e-6)
     ended = np.asarray(transitions.terminated | transitions.truncated)
     assert float(totals["episodes"]) == ended.sum() >= 2  # each robot truncated at 15 steps at the latest
     assert float(totals["reward_sum"]) == pytest.approx(float(np.sum(transitions.reward)), rel=1e-5)
+    # return_sum: the returns of the episodes that ended (from the runner's start: every robot's first episode);
+    # successes: those that ended at the goal (an arrival ends a v0 episode; the final observation's distance)
+    rewards, returns, running = np.asarray(transitions.reward, np.float64), 0.0, np.zeros(settings.n_envs)
+    for t in range(settings.n_steps):
+        running += rewards[t]
+        returns += float(np.sum(np.where(ended[t], running, 0.0)))
+        running = np.where(ended[t], 0.0, running)
+    assert float(totals["return_sum"]) == pytest.approx(returns, rel=1e-5, abs=1e-4)
+    arrived = np.asarray(transitions.terminated) & (np.asarray(transitions.final_obs)[..., 0] <= params_tolerance(env))
+    assert float(totals["successes"]) == arrived.sum()
+    np.testing.assert_allclose(after.episode_return, running, rtol=1e-5, atol=1e-5)  # restarted at 0 at each end
     assert int(after.updates) == 0 and not np.array_equal(after.obs, runner.obs)
 
     budget = 2 * settings.steps_per_update
@@ -183,6 +196,115 @@ def test_a_rollout_records_what_the_policy_did_and_the_updates_follow_the_schedu
     assert float(metrics["episodes"]) == float(totals["episodes"])  # the same first rollout, the same key
 
 
+def params_tolerance(env: Any) -> float:
+    return float(env.default_params.goal_tolerance)
+
+
+def test_log_std_fixed_sets_the_noise_to_its_schedule_whatever_the_gradient() -> None:
+    """With log_std_fixed the log standard deviation is the schedule's value after every update (from log_std_init
+    to log_std_final over the budget), not a cap the gradient may stay below (a large rate would move it)."""
+    from dwr_gym.jax_env.gymnax import make_gymnax_env
+    from train.learning.jax_ppo import JaxPPO
+
+    env, env_params = make_gymnax_env("DWRPointStabilization-v1")
+    settings = PPOSettings(n_envs=4, n_steps=8, batch_size=16, n_epochs=1, learning_rate=0.5, log_std_init=0.5,
+                           log_std_final=-1.5, log_std_fixed=True)  # fmt: skip
+    ppo = JaxPPO(settings, env, env_params)
+    runner = ppo.init(seed=0)
+    for update in (1, 2, 3, 4):  # a budget of 4 updates of 32 steps: from 0.5 down by 0.5 per update
+        runner, _ = ppo.run(runner, 1, total_timesteps=128)
+        np.testing.assert_allclose(np.asarray(runner.params["params"]["log_std"]), 0.5 - 0.5 * update, atol=1e-6)
+
+
+def test_env_step_reads_an_env_that_reports_only_done_and_restarts_it() -> None:
+    """A gymnax env without the terminated and truncated flags in its info (gymnax's own envs): ``done`` is the
+    termination, the step that ends returns the new episode's observation, and ``final_obs`` the ended one's."""
+    from train.learning.jax_ppo import env_step
+
+    class Counter:  # the observation counts the steps; the episode is done at the third
+        def step_env(self, key: Any, state: Any, action: Any, params: Any) -> tuple[Any, ...]:
+            state = state + 1
+            return jnp.full(1, state, jnp.float32), state, jnp.float32(1.0), state >= 3, {}
+
+        def reset_env(self, key: Any, params: Any) -> tuple[Any, Any]:
+            return jnp.zeros(1, jnp.float32), jnp.asarray(0)
+
+        def is_truncated(self, state: Any, params: Any) -> Any:
+            return jnp.asarray(False)
+
+    step = jax.jit(lambda state: env_step(Counter(), None, jax.random.PRNGKey(0), state, jnp.zeros(1)))
+    obs, state, reward, terminated, truncated, final_obs, success = step(jnp.asarray(1))
+    assert (float(obs[0]), int(state), bool(terminated), bool(truncated)) == (2.0, 2, False, False)
+    obs, state, reward, terminated, truncated, final_obs, success = step(state)
+    assert (float(obs[0]), int(state), bool(terminated), bool(truncated)) == (0.0, 0, True, False)
+    assert float(final_obs[0]) == 3.0 and float(reward) == 1.0 and not bool(success)
+
+
+def test_each_epoch_passes_over_the_whole_rollout_in_a_new_random_order_and_a_warm_up_trains_the_critic_alone() -> None:
+    """As SB3's PPO, every epoch splits the rollout into minibatches afresh: each transition once per epoch, in an
+    order that differs from epoch to epoch (consecutive steps of one robot would otherwise share a minibatch).
+    Within --critic-warmup's steps (the first update here) only the critic's weights move."""
+    from dwr_gym.jax_env.gymnax import make_gymnax_env
+    from train.learning.jax_ppo import JaxPPO
+
+    env, env_params = make_gymnax_env("DWRPointStabilization-v1")
+    settings = PPOSettings(n_envs=2, n_steps=8, batch_size=8, n_epochs=2, critic_warmup=16)
+    ppo = JaxPPO(settings, env, env_params)
+    seen: list[np.ndarray] = []
+    loss = ppo.loss
+
+    def watched(params: Any, batch: tuple[Any, ...]) -> Any:
+        jax.debug.callback(lambda obs: seen.append(np.asarray(obs)), batch[0], ordered=True)
+        return loss(params, batch)
+
+    ppo.loss = watched  # type: ignore[method-assign]
+    start = ppo.init(seed=2)
+    after, _ = ppo.run(start, 1, total_timesteps=10_000)
+    jax.effects_barrier()
+    assert len(seen) == 4 and all(batch.shape == (8, 10) for batch in seen)  # 2 epochs of 2 minibatches
+    first, second = np.concatenate(seen[:2]), np.concatenate(seen[2:])
+    rows = lambda a: sorted(map(tuple, a))  # noqa: E731
+    assert rows(first) == rows(second) and len(set(map(tuple, first))) == 16  # the same 16 transitions, once each
+    assert not np.array_equal(first, second)
+    for name, leaf in start.params["params"].items():
+        moved = not all(np.array_equal(x, y) for x, y in zip(jax.tree.leaves(leaf),
+                                                            jax.tree.leaves(after.params["params"][name]), strict=True))  # fmt: skip
+        assert moved == name.startswith("value"), name
+
+
+def test_the_critic_warm_up_zeroes_the_actors_gradients_only_while_frozen() -> None:
+    """--critic-warmup: while frozen, the gradients of the actor (its hidden layers, mean head and log_std) are 0 and
+    the critic's untouched; once not frozen, every gradient is the loss's."""
+    from train.learning.jax_ppo import actor_masked_grad
+
+    names = ("policy_0", "policy_1", "action", "log_std", "value_0", "value_1", "value")
+    params = {"params": {name: {"kernel": jnp.full((2, 2), float(k + 1))} for k, name in enumerate(names)}}
+    grad = jax.grad(lambda p, batch: sum(jnp.sum(leaf * batch) for leaf in jax.tree.leaves(p)))
+    for frozen in (True, False):
+        masked = actor_masked_grad(grad, jnp.asarray(frozen), params, jnp.asarray(3.0))["params"]
+        for name in names:
+            actor = not name.startswith("value")
+            np.testing.assert_array_equal(masked[name]["kernel"], 0.0 if frozen and actor else 3.0, err_msg=name)
+
+
+def test_each_activation_is_the_one_the_exported_sb3_model_computes() -> None:
+    """The exported model runs torch's activation of the name in policy_kwargs: the jitted network's, for every
+    activation it accepts, computes the same function."""
+    import torch
+
+    from train.learning.jax_policy import ACTIVATIONS, activation_function
+
+    torch_names = {"tanh": "Tanh", "relu": "ReLU", "elu": "ELU", "leakyrelu": "LeakyReLU", "silu": "SiLU",
+                   "gelu": "GELU", "sigmoid": "Sigmoid"}  # fmt: skip
+    assert set(ACTIVATIONS) == set(torch_names)
+    x = np.linspace(-4.0, 4.0, 33, dtype=np.float32)
+    for name, torch_name in torch_names.items():
+        settings = PPOSettings.from_algo_kwargs({"policy_kwargs": {"activation_fn": f"nn.{torch_name}"}}, 64)
+        assert settings.activation == name
+        expected = getattr(torch.nn, torch_name)()(torch.as_tensor(x)).numpy()
+        np.testing.assert_allclose(np.asarray(activation_function(name)(jnp.asarray(x))), expected, atol=1e-6)
+
+
 def test_settings_read_the_yaml_and_refuse_what_they_do_not_implement() -> None:
     config = resolved()
     settings = PPOSettings.from_algo_kwargs(config.algo_kwargs, 256)
@@ -192,6 +314,9 @@ def test_settings_read_the_yaml_and_refuse_what_they_do_not_implement() -> None:
         PPOSettings.from_algo_kwargs({**config.algo_kwargs, "use_sde": True}, 256)
     with pytest.raises(ConfigError, match="batch_size=1000 is invalid for --backend jax"):
         PPOSettings.from_algo_kwargs({**config.algo_kwargs, "batch_size": 1000}, 256)
+    with pytest.raises(ConfigError, match=r"^policy_kwargs activation_fn='nn.Swish' is invalid for --backend jax: "
+                                          r"expected one of nn.Tanh, nn.Relu"):  # fmt: skip
+        PPOSettings.from_algo_kwargs({**config.algo_kwargs, "policy_kwargs": {"activation_fn": "nn.Swish"}}, 256)
     linear = PPOSettings.from_algo_kwargs({**config.algo_kwargs, "learning_rate": "lin_1e-3"}, 256)
     assert linear.linear_schedule and linear.learning_rate == 1e-3
 

@@ -213,9 +213,24 @@ def test_bad_parameters_and_a_missing_casadi_give_clear_errors(monkeypatch: pyte
         make_controller("optimal", dt=-1)
     with pytest.raises(ValueError, match=r"unknown parameter\(s\) 'horizon'"):
         make_controller("optimal", horizon=3)
+    assert optimum_module.casadi_available()  # what the commands ask before they plan optima
     monkeypatch.setitem(sys.modules, "casadi", None)
     with pytest.raises(ImportError, match=r'the optimal controller needs CasADi: pip install "dwr-gym\[optimal\]"'):
         make_controller("optimal")
+    assert not optimum_module.casadi_available()
+
+
+def test_a_solver_process_leaves_the_interrupt_to_the_command_that_started_it() -> None:
+    """The optima's worker processes ignore SIGINT (Ctrl-C reaches the whole process group): the command itself
+    stops them and keeps what they solved."""
+    import signal
+
+    before = signal.getsignal(signal.SIGINT)
+    try:
+        optimum_module._ignore_interrupts()
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+    finally:
+        signal.signal(signal.SIGINT, before)
 
 
 @pytest.mark.parametrize(
@@ -370,3 +385,83 @@ def test_the_optima_solved_as_ray_tasks_on_a_local_cluster_are_the_local_process
     np.testing.assert_array_equal(on_ray, local)
     (cached,) = (tmp_path / "ray").glob("optimal-energy-*.json")
     assert len(json.loads(cached.read_text())) == 4
+
+
+def test_missing_optima_are_what_optimal_energies_solves_and_nothing_once_cached(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: object
+) -> None:
+    """A command sums the optima its sets will solve from ``missing_optima``: before solving, every episode (once per
+    start and T_con, pose and position apart); after, none; starts given in float32 are the same episodes."""
+    monkeypatch.setenv("DWR_GYM_CACHE", str(tmp_path))
+    monkeypatch.setattr(optimum_module, "_solve_energy", lambda job: 1.0)
+    scenario = make_scenario("random", n=4, seed=8)
+    params = dwr_gym.EnvParams(**scenario.env_kwargs)
+    goals = np.array([[0.3, -0.7, 1.1], [-1.2, 0.4, -2.5], [0.0, 0.0, 0.0], [2.0, 1.0, 0.3]])
+    before = optimum_module.missing_optima(params, scenario.starts, goals)
+    assert len(before) == 4
+    assert len(optimum_module.missing_optima(params, scenario.starts, goals, heading=False)) == 4
+    optimum_module.optimal_energies(params, scenario.starts, goals, workers=1)
+    assert optimum_module.missing_optima(params, scenario.starts, goals) == set()
+    assert len(optimum_module.missing_optima(params, scenario.starts, goals, heading=False)) == 4
+    starts32, goals32 = scenario.starts.astype(np.float32), goals.astype(np.float32)
+    optimum_module.optimal_energies(params, starts32.astype(np.float64), goals32.astype(np.float64), workers=1)
+    assert optimum_module.missing_optima(params, starts32, goals32) == set()
+
+
+def test_optima_are_solved_by_the_pool_asked_for_with_a_bar_counting_the_plans(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``workers`` processes (forked; spawned once jax is loaded, whose threads a fork can deadlock), each given an
+    even share of the batch; with ``address`` the Ray cluster's workers instead; the progress bar names the work and
+    counts its plans."""
+    import types
+
+    from train.evaluation import ray_pool
+
+    made: list[tuple[object, ...]] = []
+
+    class Pool:  # solves in this process, recording how it was made and used
+        workers = 3
+
+        def __init__(self, *args: object, **kwargs: object) -> None:
+            context = kwargs.get("mp_context")
+            made.append((*args, context.get_start_method() if context else None, kwargs.get("initializer")))
+
+        def map(self, function: object, jobs: object, chunksize: int = 1) -> object:
+            made.append(("chunksize", chunksize))
+            return map(function, jobs)  # type: ignore[call-overload]
+
+        def shutdown(self, **kwargs: object) -> None:
+            pass
+
+    monkeypatch.setattr(optimum_module, "ProcessPoolExecutor", Pool)
+    monkeypatch.setattr(ray_pool, "RayPool", Pool)
+    monkeypatch.setattr(optimum_module, "_solve_energy", lambda job: 1.0)
+    scenario = make_scenario("random", n=4, seed=9)  # 4 plans: the fewest a pool is made for
+    params = dwr_gym.EnvParams(**scenario.env_kwargs)
+    monkeypatch.delitem(sys.modules, "jax", raising=False)
+    for case, jax_loaded, kwargs in (("fork", False, {"workers": 2}), ("spawn", True, {"workers": 2}),
+                                     ("ray", False, {"address": "auto"})):  # fmt: skip
+        if jax_loaded:
+            monkeypatch.setitem(sys.modules, "jax", types.ModuleType("jax"))
+        monkeypatch.setenv("DWR_GYM_CACHE", str(tmp_path / case))
+        made.clear()
+        energies, _ = optimum_module.optimal_energies(params, scenario.starts, scenario.goals, progress=True,
+                                                      description=f"optimum ({case})", **kwargs)  # fmt: skip
+        assert energies.tolist() == [1.0] * 4
+        if case == "ray":
+            assert made == [("auto", None, None), ("chunksize", 2)]  # 4 plans on its 3 workers: 2, 2
+        else:
+            assert made == [(2, case, optimum_module._ignore_interrupts), ("chunksize", 2)]
+        err = capsys.readouterr().err
+        assert f"optimum ({case})" in err and "/4" in err and "plan" in err
+
+
+def test_optima_are_cached_in_the_users_cache_folder_unless_dwr_gym_cache_names_another(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    monkeypatch.setenv("HOME", str(tmp_path))
+    monkeypatch.delenv("DWR_GYM_CACHE", raising=False)
+    assert optimum_module.cache_dir() == tmp_path / ".cache" / "dwr-gym"
+    monkeypatch.setenv("DWR_GYM_CACHE", str(tmp_path / "elsewhere"))
+    assert optimum_module.cache_dir() == tmp_path / "elsewhere"

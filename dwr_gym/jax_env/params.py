@@ -125,5 +125,6 @@ def functional_params(
 ) -> FunctionalParams:
     """The parameters of ``env_id`` (v0, v1 or v2, or their JAX ids) with ``env_kwargs`` (EnvParams' keywords), validated."""
     kwargs = env_kwargs_of(env_id, env_kwargs)
-    check_no_perturbation(kwargs)
-    return FunctionalParams.from_env_params(EnvParams.from_kwargs(**kwargs), dtype)
+    check_no_perturbation(kwargs)  # what is left of the robot's keywords is empty (None, [], ()): the nominal robot
+    nominal = {key: value for key, value in kwargs.items() if key not in ROBOT_KEYWORDS}
+    return FunctionalParams.from_env_params(EnvParams.from_kwargs(**nominal), dtype)

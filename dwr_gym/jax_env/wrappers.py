@@ -79,12 +79,13 @@ class DWRJaxVectorEnv(HorizonSpec, FunctionalJaxVectorEnv, EzPickle):
     def __init__(
         self, num_envs: int = 1, render_mode: str | None = None, dtype: str = "float32", **env_kwargs: Any
     ) -> None:
-        EzPickle.__init__(self, num_envs=num_envs, render_mode=render_mode, dtype=dtype, **env_kwargs)
         num_envs = as_int("num_envs", num_envs, 1, 1 << 24)
         func_env = _func_env(render_mode, dtype, env_kwargs)
         self.params = func_env.default_params.env_params
         self._spec = None
         FunctionalJaxVectorEnv.__init__(self, func_env, num_envs, metadata=self.metadata, render_mode=render_mode)
+        # after the base class, whose __init__ reaches EzPickle's without arguments (a pickle would then have 1 robot)
+        EzPickle.__init__(self, num_envs=num_envs, render_mode=render_mode, dtype=dtype, **env_kwargs)
         self._step = jax.jit(self._next_step)  # after the base class vmapped the FuncEnv's functions
 
     def _next_step(
