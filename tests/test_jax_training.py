@@ -204,7 +204,7 @@ def test_log_std_fixed_sets_the_noise_to_its_schedule_whatever_the_gradient() ->
     """With log_std_fixed the log standard deviation is the schedule's value after every update (from log_std_init
     to log_std_final over the budget), not a cap the gradient may stay below (a large rate would move it)."""
     from dwr_gym.jax_env.gymnax import make_gymnax_env
-    from train.learning.jax_ppo import JaxPPO
+    from train.learning.jitted.ppo import JaxPPO
 
     env, env_params = make_gymnax_env("DWRPointStabilization-v1")
     settings = PPOSettings(n_envs=4, n_steps=8, batch_size=16, n_epochs=1, learning_rate=0.5, log_std_init=0.5,
@@ -219,7 +219,7 @@ def test_log_std_fixed_sets_the_noise_to_its_schedule_whatever_the_gradient() ->
 def test_env_step_reads_an_env_that_reports_only_done_and_restarts_it() -> None:
     """A gymnax env without the terminated and truncated flags in its info (gymnax's own envs): ``done`` is the
     termination, the step that ends returns the new episode's observation, and ``final_obs`` the ended one's."""
-    from train.learning.jax_ppo import env_step
+    from train.learning.jitted.ppo import env_step
 
     class Counter:  # the observation counts the steps; the episode is done at the third
         def step_env(self, key: Any, state: Any, action: Any, params: Any) -> tuple[Any, ...]:
@@ -245,7 +245,7 @@ def test_each_epoch_passes_over_the_whole_rollout_in_a_new_random_order_and_a_wa
     order that differs from epoch to epoch (consecutive steps of one robot would otherwise share a minibatch).
     Within --critic-warmup's steps (the first update here) only the critic's weights move."""
     from dwr_gym.jax_env.gymnax import make_gymnax_env
-    from train.learning.jax_ppo import JaxPPO
+    from train.learning.jitted.ppo import JaxPPO
 
     env, env_params = make_gymnax_env("DWRPointStabilization-v1")
     settings = PPOSettings(n_envs=2, n_steps=8, batch_size=8, n_epochs=2, critic_warmup=16)
@@ -275,7 +275,7 @@ def test_each_epoch_passes_over_the_whole_rollout_in_a_new_random_order_and_a_wa
 def test_the_critic_warm_up_zeroes_the_actors_gradients_only_while_frozen() -> None:
     """--critic-warmup: while frozen, the gradients of the actor (its hidden layers, mean head and log_std) are 0 and
     the critic's untouched; once not frozen, every gradient is the loss's."""
-    from train.learning.jax_ppo import actor_masked_grad
+    from train.learning.jitted.ppo import actor_masked_grad
 
     names = ("policy_0", "policy_1", "action", "log_std", "value_0", "value_1", "value")
     params = {"params": {name: {"kernel": jnp.full((2, 2), float(k + 1))} for k, name in enumerate(names)}}
@@ -292,7 +292,7 @@ def test_each_activation_is_the_one_the_exported_sb3_model_computes() -> None:
     activation it accepts, computes the same function."""
     import torch
 
-    from train.learning.jax_policy import ACTIVATIONS, activation_function
+    from train.learning.jitted.policy import ACTIVATIONS, activation_function
 
     torch_names = {"tanh": "Tanh", "relu": "ReLU", "elu": "ELU", "leakyrelu": "LeakyReLU", "silu": "SiLU",
                    "gelu": "GELU", "sigmoid": "Sigmoid"}  # fmt: skip
