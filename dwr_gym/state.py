@@ -56,7 +56,9 @@ class TaskState:
     energy: FloatArray
     initial_distance: FloatArray
     initial_orientation_error: FloatArray
-    lyapunov: FloatArray  # the progress term's potential at the current pose (:func:`shaping_potential`), kept for the next
+    lyapunov: (
+        FloatArray  # the progress term's potential at the current pose (:func:`shaping_potential`), kept for the next
+    )
     goal_cos: FloatArray  # cos(goal_psi), set with the goal by new_state so world_pose needs no trigonometry
     goal_sin: FloatArray
     T_con: FloatArray  # the episode's prescribed time [s]

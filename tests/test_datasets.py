@@ -289,7 +289,12 @@ def test_a_built_dataset_normalises_returns_with_its_reference_scores(monkeypatc
     summary = build.build_dataset(request, ptc())
     dataset = load_dataset("dwr-gym/refs-v0")
     assert {k: summary[k] for k in ("dataset_id", "policy", "env_id", "episodes", "episodes_without_optimum")} == {
-        "dataset_id": "dwr-gym/refs-v0", "policy": "ptc", "env_id": V1, "episodes": 3.0, "episodes_without_optimum": 3}
+        "dataset_id": "dwr-gym/refs-v0",
+        "policy": "ptc",
+        "env_id": V1,
+        "episodes": 3.0,
+        "episodes_without_optimum": 3,
+    }
     assert Path(summary["path"]) == Path(os.environ["MINARI_DATASETS_PATH"]) / "dwr-gym" / "refs-v0"
     assert summary["collect_seconds"] > 0.0
     assert [m["policy"] for m in episode_metadata(dataset)] == ["ptc"] * 3

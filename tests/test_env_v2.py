@@ -141,6 +141,7 @@ def test_the_vector_env_is_the_single_env_on_v2() -> None:
 def test_leaving_the_arena_never_saves_the_energy_of_the_rest_of_the_episode() -> None:
     """An exit at time t is charged the most the remaining T_con - t could cost, so standing still at the edge, or
     flailing at full commands until T_con, pays at least as much as leaving."""
+
     def exit_then(after: str) -> float:
         env = gym.make(V2)
         start = {"start": (4.99, 0.0, 0.0), "goal": (0.0, 0.0, 0.0), "T_con": 10.0}

@@ -152,7 +152,7 @@ def test_the_exported_agent_acts_as_the_evolved_policy(small_es: Any) -> None:
         *jax.device_get((es.mean_params(state), state.obs_stats.mean, state.obs_stats.var))
     )
     rng = np.random.default_rng(0)
-    obs = (rng.normal(size=(300, 10)) * [1, 1, 1, 1, 1, 1, 0.5, 20, 1, 1] + [1, 0, 0, 0, 0, 0, 0.5, 30, 1, 0])
+    obs = rng.normal(size=(300, 10)) * [1, 1, 1, 1, 1, 1, 0.5, 20, 1, 1] + [1, 0, 0, 0, 0, 0, 0.5, 30, 1, 0]
     obs = obs.astype(np.float32)
     expected = np.asarray(es.act(es.mean_params(state), obs, state.obs_stats))
     assert 0.05 < np.mean(np.abs(expected) == 1.0) < 0.95  # some actions clipped, some not

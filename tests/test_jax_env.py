@@ -160,8 +160,10 @@ def test_what_the_jax_envs_cannot_do_is_a_one_line_error_naming_it() -> None:
         (lambda: DWRJaxVectorEnv(num_envs=2**24 + 1), "num_envs=16777217 is invalid"),
         (lambda: DWRFuncEnv(params=functional_params(), u_max=0.2), "env_kwargs=['u_max'] are invalid with params"),
         (lambda: FunctionalParams.from_env_params({"u_max": 0.2}), "is invalid: expected a dwr_gym.params.EnvParams"),
-        (lambda: functional_params(disturbance_distribution=dwr_gym.randomization.DisturbanceDistribution(seed=1)),
-         "disturbance_distribution=DisturbanceDistribution("),
+        (
+            lambda: functional_params(disturbance_distribution=dwr_gym.randomization.DisturbanceDistribution(seed=1)),
+            "disturbance_distribution=DisturbanceDistribution(",
+        ),
     ]
     for make, message in cases:
         with pytest.raises(ValueError) as error:
@@ -335,7 +337,9 @@ def test_v2_on_jax_ends_at_T_con_and_pays_the_heading_and_the_miss_as_the_numpy_
         for step in range(1, 11):  # v2 steps 0.05 s: T_con is its 10th step
             state = transition_state(state, jnp.zeros((1, 2)), jax.random.PRNGKey(step), params, space)
             _, reward, terminated, truncated, info = numpy_env.step(np.zeros(2, np.float32))
-            assert bool(state.terminated[0]) == terminated == (step == 10) and not (bool(state.truncated[0]) or truncated)
+            assert bool(state.terminated[0]) == terminated == (step == 10) and not (
+                bool(state.truncated[0]) or truncated
+            )
             assert float(state.reward[0]) == pytest.approx(reward, abs=1e-12)
             for term, value in info["reward_terms"].items():
                 assert float(state.reward_terms[term][0]) == pytest.approx(value, abs=1e-12), term

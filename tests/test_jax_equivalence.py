@@ -142,7 +142,13 @@ def run_both(env_id: str, dtype: str, seed: int) -> dict[str, int]:
                 if not term.startswith("_"):
                     close(f"reward term {term}", info["reward_terms"][term], values, atol * scale, near)
         for key_name in ("distance", "orientation_error", "heading_error", "energy", "T_con", "time", "pose"):
-            close(f"info {key_name}", info[key_name], final[key_name], atol, away if key_name == "orientation_error" else None)
+            close(
+                f"info {key_name}",
+                info[key_name],
+                final[key_name],
+                atol,
+                away if key_name == "orientation_error" else None,
+            )
         close("final observation", info["final_observation"], infos["final_obs"] if ended.any() else obs, obs_atol)
         going = ~ended
         close("observation", jax_obs, obs, obs_atol, going)

@@ -63,7 +63,9 @@ def jitted_expert(name: str) -> Any:
 
 
 def inputs_of(states: list[tuple[float, ...]], xp: Any) -> ControllerInput:
-    d, alpha, psi, fraction, T_con, d0, e0 = (xp.asarray(column, dtype=xp.float64) for column in zip(*pad(states), strict=True))
+    d, alpha, psi, fraction, T_con, d0, e0 = (
+        xp.asarray(column, dtype=xp.float64) for column in zip(*pad(states), strict=True)
+    )
     return ControllerInput(d, alpha, psi, fraction * T_con, d0, e0, T_con)
 
 
@@ -264,7 +266,9 @@ def test_an_es_residual_starts_its_search_at_the_expert() -> None:
     from train.learning.jitted.residual import residual_env
 
     settings = ESSettings(population_size=4, episodes=2, net_arch=(16,))
-    config = TrainConfig(backend="jax", algo="es", residual=True, expert="pt-astolfi", env_id="DWRPointStabilization-v2")
+    config = TrainConfig(
+        backend="jax", algo="es", residual=True, expert="pt-astolfi", env_id="DWRPointStabilization-v2"
+    )
     env, env_params = make_gymnax_env("DWRPointStabilization-v2")
     obs = jax.random.normal(jax.random.PRNGKey(2), (64, 10), jnp.float32)
     actions = {}

@@ -252,7 +252,9 @@ def test_no_seeds_nothing_finite_and_a_missing_rliable_are_said_plainly(monkeypa
     assert set(summary["a"]["curves"]) == {"env_steps", "wall_time"}
     assert set(summary["a"]["curves"]["wall_time"]) == {"in_time", "energy", "final_heading"}
     monkeypatch.setitem(sys.modules, "rliable", None)
-    with pytest.raises(ImportError, match=r'^the RL benchmark aggregates with rliable: pip install "dwr-gym\[benchmark\]"$'):
+    with pytest.raises(
+        ImportError, match=r'^the RL benchmark aggregates with rliable: pip install "dwr-gym\[benchmark\]"$'
+    ):
         iqm_interval([1.0])
 
 

@@ -38,7 +38,10 @@ def test_stages_are_timed_even_when_interrupted_and_the_summary_names_the_slowes
         pass
     with pytest.raises(KeyboardInterrupt), clock.stage("random", "robust-pt", 1.0, 50):
         raise KeyboardInterrupt
-    assert [(t.scenario, t.stage, t.size) for t in clock.times] == [("random", "optimum", 12), ("random", "robust-pt", 50)]
+    assert [(t.scenario, t.stage, t.size) for t in clock.times] == [
+        ("random", "optimum", 12),
+        ("random", "robust-pt", 50),
+    ]
     line = clock.summary()
     assert line.startswith("time: ") and "optimum" in line and "12 plans" in line and "robust-pt" in line
 

@@ -73,7 +73,9 @@ def evaluate_seed(run_dir: Path, n: int) -> dict[str, Any]:
 
     _, policy = load_agent(run_dir)
     nominal = evaluate_policy(policy, n=n, sets=("random",))["random"]
-    rows = evaluate_sets({"agent": policy}, ["random"], n, EVAL_SEED, env_keywords(TASK_ENV_ID, {}), T_cons=list(T_CONS))
+    rows = evaluate_sets(
+        {"agent": policy}, ["random"], n, EVAL_SEED, env_keywords(TASK_ENV_ID, {}), T_cons=list(T_CONS)
+    )
     per_T_con = {str(row["T_con"]): metrics_of(row) for row in rows}
     state = read_state(run_dir)
     curve = [{"steps": int(r["timesteps"]), "wall_s": float(r["wall_time"]), "in_time": float(r["success_rate"]),
@@ -139,5 +141,11 @@ def main(argv: list[str] | None = None) -> int:
 
 
 #: The block of docs/evolution.md.
-BLOCKS = (fenced("es-learn", "docs/jax/es_learn.json", render,
-                 Schema({"machine": str, "n": int, "runs": dict, "load_average_1min_at_end": NUMBER})),)
+BLOCKS = (
+    fenced(
+        "es-learn",
+        "docs/jax/es_learn.json",
+        render,
+        Schema({"machine": str, "n": int, "runs": dict, "load_average_1min_at_end": NUMBER}),
+    ),
+)

@@ -31,7 +31,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = parser_for("incentives", __doc__)
     parser.add_argument("--n", type=int, default=200, help="episodes of the ranking (default: 200)")
     parser.add_argument("--n-rush", type=int, default=20, help="episodes of each rushing cell (default: 20)")
-    parser.add_argument("--sigmas", type=float, nargs="+", default=[0.0, 0.1, 0.3], help="action noise (default: 0 0.1 0.3)")
+    parser.add_argument(
+        "--sigmas", type=float, nargs="+", default=[0.0, 0.1, 0.3], help="action noise (default: 0 0.1 0.3)"
+    )
     parser.add_argument("--fractions", type=float, nargs="+", default=[0.3, 0.5, 0.8, 1.0],
                         help="arrival time / T_con of the plans (default: 0.3 0.5 0.8 1)")  # fmt: skip
     parser.add_argument("--workers", type=int, default=2, help="processes solving plans (default: 2)")
@@ -47,7 +49,9 @@ def main(argv: list[str] | None = None) -> int:
         entry = data.setdefault(env_id, {})
         if args.skip != "ranking":
             entry["ranking"] = return_ranking(env_id, n=args.n, progress=sys.stderr.isatty())
-            print(env_id, "ranking:", [(row["policy"], round(row["return_mean"], 3)) for row in entry["ranking"]["rows"]])
+            print(
+                env_id, "ranking:", [(row["policy"], round(row["return_mean"], 3)) for row in entry["ranking"]["rows"]]
+            )
         if args.skip != "rushing":
             entry["rushing"] = rushing_returns(env_id, tuple(args.fractions), tuple(args.sigmas), args.n_rush,
                                                workers=args.workers)  # fmt: skip

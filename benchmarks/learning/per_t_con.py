@@ -72,10 +72,14 @@ def render(data: dict[str, Any]) -> str:
         label = f"`{row['policy']}`" + (" (law)" if row["kind"] == "controller" else "")
         cells = [cell(row["T_con"][t]) if t in row["T_con"] else "-" for t in (str(float(x)) for x in data["T_con"])]
         lines.append(f"| {label} | {row['env_id'].rsplit('-', 1)[-1]} | " + " | ".join(cells) + " |")
-    return "\n" + "\n".join(lines) + (
-        f"\n\n*Each cell: in time / E/opt (mean over the episodes in time) / final heading [rad]; {data['n']} starts "
-        f"0.3-3 m of the benchmark's nominal set (seed 3232) per T_con; {data['machine']}; "
-        "`python -m benchmarks run per-t-con --docs`.*\n"
+    return (
+        "\n"
+        + "\n".join(lines)
+        + (
+            f"\n\n*Each cell: in time / E/opt (mean over the episodes in time) / final heading [rad]; {data['n']} starts "
+            f"0.3-3 m of the benchmark's nominal set (seed 3232) per T_con; {data['machine']}; "
+            "`python -m benchmarks run per-t-con --docs`.*\n"
+        )
     )
 
 

@@ -91,7 +91,10 @@ def main(argv: list[str] | None = None) -> int:
         print(name, json.dumps(rows[name]))
     data = {"n": args.n, "seed": EVAL_SEED, "env_id": env_id, "policies": rows}
     if args.docs:
-        write_json(JSON_PATH if env_id == TASK_ENV_ID else JSON_PATH.with_name(f"rushing_{env_id.rsplit('-', 1)[-1]}.json"), data)
+        write_json(
+            JSON_PATH if env_id == TASK_ENV_ID else JSON_PATH.with_name(f"rushing_{env_id.rsplit('-', 1)[-1]}.json"),
+            data,
+        )
     return 0
 
 

@@ -65,7 +65,12 @@ def shipped_name(entry: str) -> str:
 def main(argv: list[str] | None = None) -> int:
     parser = parser_for("ship-rl-agents", __doc__)
     parser.add_argument("out", help="the --out of dwr-gym benchmark")
-    parser.add_argument("--also", nargs="*", default=[], help="more entries to ship, as <entry>_v1, or <entry> where it ends in its env version (-v2)")
+    parser.add_argument(
+        "--also",
+        nargs="*",
+        default=[],
+        help="more entries to ship, as <entry>_v1, or <entry> where it ends in its env version (-v2)",
+    )
     args = parser.parse_args(argv)
     out = Path(args.out)
     # the best seeds of this --out's last report, and of the earlier runs that `--docs` merged into the docs' JSON

@@ -138,7 +138,9 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--repeats", type=int, default=7, help="interleaved repeats (default 7)")
     parser.add_argument("--steps", type=int, default=40, help="steps per repeat of the native env (default 40)")
     parser.add_argument("--scan", type=int, default=200, help="steps per compiled call in the scan case (default 200)")
-    parser.add_argument("--docs", action="store_true", help="write docs/jax/env_step.json (and render docs/jax.md's table)")
+    parser.add_argument(
+        "--docs", action="store_true", help="write docs/jax/env_step.json (and render docs/jax.md's table)"
+    )
     args = parser.parse_args(argv)
     if args.num_envs < 1 or args.threads < 1 or args.repeats < 1 or args.steps < 1 or args.scan < 1:
         parser.error("--num-envs, --threads, --repeats, --steps and --scan must be positive integers")

@@ -94,7 +94,9 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--n", type=int, default=100, help="optima sampled from the 1,009 (default: 100)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the sample (default: 0)")
     parser.add_argument("--no-fatrop", action="store_true", help="leave out the fatrop way")
-    parser.add_argument("--out", default=str(JSON_PATH), help=f"the JSON written (default: {JSON_PATH.relative_to(ROOT)})")
+    parser.add_argument(
+        "--out", default=str(JSON_PATH), help=f"the JSON written (default: {JSON_PATH.relative_to(ROOT)})"
+    )
     args = parser.parse_args(argv)
     if not 1 <= args.n <= 1009:
         parser.error(f"--n {args.n} is invalid: expected an integer in [1, 1009]")

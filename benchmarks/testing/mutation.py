@@ -59,8 +59,9 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
     "sb3": (["dwr_gym/sb3.py"], ["tests/test_sb3.py", "tests/test_integrations.py"]),
     "baselines": (["baselines/base.py", "baselines/controllers.py", "baselines/expert.py", "baselines/nmpc.py",
                    "baselines/optimal.py", "baselines/polar.py", "baselines/registry.py"],
-                  ["tests/test_controllers.py", "tests/test_paper_by_hand.py", "tests/test_optimal.py",
-                   "tests/test_dagger.py", "tests/test_parameter_ranges.py"]),
+                  ["tests/test_controllers.py", "tests/test_controller_parameters.py", "tests/test_paper_by_hand.py",
+                   "tests/test_optimal.py", "tests/test_optimum_cache.py", "tests/test_dagger.py",
+                   "tests/test_parameter_ranges.py"]),
     "estimation": (["baselines/estimation.py"], ["tests/test_estimation.py", "tests/test_parameter_ranges.py"]),
     "robust": (["baselines/robust.py"], ["tests/test_robust.py", "tests/test_parameter_ranges.py"]),
     "evaluation": (["train/evaluation/rollout.py", "train/evaluation/scenarios.py", "train/evaluation/evaluate.py"],
@@ -83,7 +84,7 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
     "datasets": (["train/datasets/*"], ["tests/test_datasets.py"]),
     # the first-hour tests of the optimum's cache only (the others train agents, minutes per mutant)
     "guards": (["train/threads.py", "train/evaluation/optimum.py"],
-               ["tests/test_threads.py", "tests/test_optimal.py",
+               ["tests/test_threads.py", "tests/test_optimal.py", "tests/test_optimum_cache.py",
                 *(f"tests/test_first_hour_training.py::test_{name}" for name in (
                     "the_optimum_cache_keeps_what_an_interrupted_command_solved",
                     "two_commands_caching_at_once_keep_each_others_optima",
@@ -354,21 +355,25 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--groups", nargs="+", choices=list(GROUPS), default=list(GROUPS))
     parser.add_argument("--work", type=Path, default=Path("/tmp/dwr-gym-mutation"))
     parser.add_argument("--max-children", type=int, default=1, help="mutants tested at once (default 1 core)")
-    parser.add_argument("--docs", action="store_true", help="(the JSON is always written; renders docs/testing.md's blocks)")
+    parser.add_argument(
+        "--docs", action="store_true", help="(the JSON is always written; renders docs/testing.md's blocks)"
+    )
     parser.add_argument("--collect-only", action="store_true",
                         help="only read the results of an earlier (or interrupted) run from its work copy")  # fmt: skip
     parser.add_argument("--sample", type=int, default=0,
                         help="test a seeded random sample of this many mutants per group (0: all)")  # fmt: skip
     parser.add_argument("--seed", type=int, default=0, help="seed of --sample")
-    parser.add_argument("--reuse", action="store_true",
-                        help="keep each group's earlier work copy (its mutants and test statistics), with the current tests")
+    parser.add_argument(
+        "--reuse",
+        action="store_true",
+        help="keep each group's earlier work copy (its mutants and test statistics), with the current tests",
+    )
     parser.add_argument("--recheck", action="store_true",
                         help="test only the mutants not killed last time, against the current tests")  # fmt: skip
     args = parser.parse_args(argv)
     if shutil.which("mutmut", path=str(Path(sys.executable).parent)) is None:
         raise SystemExit('mutmut is not installed: pip install "dwr-gym[mutation]"')
-    run(args.groups, args.work, args.max_children, args.recheck, args.collect_only, args.sample, args.seed,
-        args.reuse)
+    run(args.groups, args.work, args.max_children, args.recheck, args.collect_only, args.sample, args.seed, args.reuse)
 
 
 BLOCKS = (Block("mutation-score", "docs/testing/mutation.json", markdown(score_lines), Schema({"groups": dict})),

@@ -93,7 +93,9 @@ def speed(env_id: str, repeats: int, updates: int) -> dict[str, Any]:
         rounds.append(entry)
         print(f"round {index + 1}/{repeats}, steps per CPU second: "
               + ", ".join(f"{k} {v:,.0f}" for k, v in entry["cpu"].items()), flush=True)  # fmt: skip
-    median = {clock: {key: statistics.median(r[clock][key] for r in rounds) for key in runs} for clock in ("wall", "cpu")}
+    median = {
+        clock: {key: statistics.median(r[clock][key] for r in rounds) for key in runs} for clock in ("wall", "cpu")
+    }
     ratios = {clock: {key: statistics.median(r[clock][key] / r[clock]["ppo"] for r in rounds) for key in runs
                       if key != "ppo"} for clock in ("wall", "cpu")}  # fmt: skip
     return {"env_id": env_id, "machine": machine(), "load_average_1min_at_end": round(os.getloadavg()[0], 2),
@@ -127,8 +129,15 @@ def curve_row(row: dict[str, str]) -> dict[str, float]:
             "final_heading": float(row["final_heading_error_mean"]), "return": float(row["return_mean"])}  # fmt: skip
 
 
-def learn(env_id: str, time_limit: float, n: int, out: Path, experts: tuple[str, ...], critic_warmup: int = 0,
-          overrides: dict[str, Any] | None = None) -> dict[str, Any]:
+def learn(
+    env_id: str,
+    time_limit: float,
+    n: int,
+    out: Path,
+    experts: tuple[str, ...],
+    critic_warmup: int = 0,
+    overrides: dict[str, Any] | None = None,
+) -> dict[str, Any]:
     """Train a residual on each expert for ``time_limit`` seconds and evaluate it beside its expert."""
     import csv
 
@@ -234,8 +243,11 @@ def render_learn(data: dict[str, Any]) -> list[str]:
                 name, steps, rate = f"{run['expert']} alone", "", ""
             lines.append(f"{name:<40}{steps:>12}{rate:>9}{m['in_time']:>9.1%}{_number(m['energy_ratio']):>7}"
                          f"{_number(m['final_heading'], 3):>9}")  # fmt: skip
-    lines += ["", "training evaluations (100 starts of the run's own set): the return at the start, at its highest, "
-              "at the end; energy and heading at each"]
+    lines += [
+        "",
+        "training evaluations (100 starts of the run's own set): the return at the start, at its highest, "
+        "at the end; energy and heading at each",
+    ]
     for run in data["runs"]:
         curve = run["curve"]
         if "return" in curve[0]:
@@ -255,10 +267,21 @@ def render_learn(data: dict[str, Any]) -> list[str]:
     return lines
 
 
-SPEED = Schema({"env_id": str, "machine": str, "load_average_1min_at_end": (int, float), "steps_per_round": int,
-                "rounds": list, "compile_seconds": dict, "median_steps_per_second": dict, "ratio_to_ppo": dict})
-LEARN = Schema({"machine": str, "time_limit_s": (int, float), "episodes": int, "eval_seed": int, "goals": dict,
-                "runs": list})
+SPEED = Schema(
+    {
+        "env_id": str,
+        "machine": str,
+        "load_average_1min_at_end": (int, float),
+        "steps_per_round": int,
+        "rounds": list,
+        "compile_seconds": dict,
+        "median_steps_per_second": dict,
+        "ratio_to_ppo": dict,
+    }
+)
+LEARN = Schema(
+    {"machine": str, "time_limit_s": (int, float), "episodes": int, "eval_seed": int, "goals": dict, "runs": list}
+)
 TERMS = Schema({"env_id": str, "episodes": int, "laws": dict})
 #: The blocks of docs/jax-training.md.
 BLOCKS = (fenced("jax-residual-speed", "docs/jax/residual_speed.json", render_speed, SPEED),

@@ -269,9 +269,23 @@ def render_learn(data: dict[str, Any]) -> list[str]:
     return lines
 
 
-SPEED = Schema({"machine": str, "load_average_1min_at_end": (int, float), "settings": dict, "steps_per_round": int,
-                "seeds": int, "compile_seconds": dict, "rounds": list, "median_fps": dict, "ratio_to_sb3": (int, float),
-                "vmap_ratio_to_sequential": (int, float), "update_share": (int, float), "goals": dict, "met": dict})
+SPEED = Schema(
+    {
+        "machine": str,
+        "load_average_1min_at_end": (int, float),
+        "settings": dict,
+        "steps_per_round": int,
+        "seeds": int,
+        "compile_seconds": dict,
+        "rounds": list,
+        "median_fps": dict,
+        "ratio_to_sb3": (int, float),
+        "vmap_ratio_to_sequential": (int, float),
+        "update_share": (int, float),
+        "goals": dict,
+        "met": dict,
+    }
+)
 #: The blocks of docs/jax-training.md.
 BLOCKS = (fenced("jax-training-speed", "docs/jax/training_speed_1thread.json", render_speed, SPEED),
           fenced("jax-training-speed-2threads", "docs/jax/training_speed_2thread.json", render_speed, SPEED),
@@ -290,7 +304,9 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--eval-every", type=int, default=10, help="learn: updates between evaluations (default: 10)")
     parser.add_argument("--budget", type=float, default=1800.0, help="learn: wall-clock budget, s (default: 1800)")
     parser.add_argument("--hyperparams", nargs="*", default=[], metavar="KEY=VALUE", help="learn: overrides")
-    parser.add_argument("--docs", action="store_true", help="write docs/jax/*.json and render docs/jax-training.md's blocks")
+    parser.add_argument(
+        "--docs", action="store_true", help="write docs/jax/*.json and render docs/jax-training.md's blocks"
+    )
     args = parser.parse_args(argv)
     if args.what is None:
         parser.error("expected speed or learn")

@@ -171,8 +171,18 @@ def versions() -> dict[str, str | None]:
     from importlib.metadata import PackageNotFoundError, version
 
     found: dict[str, str | None] = {"python": platform.python_version()}
-    for name in ("numpy", "gymnasium", "torch", "stable-baselines3", "sb3-contrib", "jax", "jaxlib", "flax", "optax",
-                 "sbx-rl"):
+    for name in (
+        "numpy",
+        "gymnasium",
+        "torch",
+        "stable-baselines3",
+        "sb3-contrib",
+        "jax",
+        "jaxlib",
+        "flax",
+        "optax",
+        "sbx-rl",
+    ):
         try:
             found[name] = version(name)
         except PackageNotFoundError:

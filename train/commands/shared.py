@@ -281,8 +281,11 @@ def add_scenario_arguments(p: argparse.ArgumentParser, out: str, sets: Sequence[
                    "runs, the first of the n: it re-plans with CasADi whenever pushed off its plan (default: 50)")  # fmt: skip
     p.add_argument("--seed", type=count, default=0, help="seed of the random scenario set (default: 0)")
     p.add_argument("--out", default=out, help=f"output directory (default: {out})")
-    p.add_argument("--no-progress", action="store_true",
-                   help="no progress bar (where stderr is not a terminal: a plain line every 10 %% of the work)")
+    p.add_argument(
+        "--no-progress",
+        action="store_true",
+        help="no progress bar (where stderr is not a terminal: a plain line every 10 %% of the work)",
+    )
     p.add_argument("--address", default=None, metavar="ADDRESS",
                    help="solve the optima as Ray tasks on this cluster: 'auto' joins a running one (as dwr-gym sweep "
                    "does), 'local' starts one here (default: local processes; needs the sweep extra)")  # fmt: skip

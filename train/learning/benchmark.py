@@ -41,8 +41,13 @@ ENTRIES: dict[str, dict[str, Any]] = {
     # the same on v1 with an arena of 50 m: leaving v1's 5 m arena ends an episode at a cost (-10 + the start's
     # potential) that a policy which cannot yet arrive prefers to the late penalty, a trap ES falls into
     # (docs/evolution.md); the evaluation is on v1 as registered
-    "es-arena50": {"algo": "es", "backend": "jax", "eval_freq": 5_000_000, "checkpoint_freq": 5_000_000,
-                   "env_kwargs": {"arena_radius": 50.0}},
+    "es-arena50": {
+        "algo": "es",
+        "backend": "jax",
+        "eval_freq": 5_000_000,
+        "checkpoint_freq": 5_000_000,
+        "env_kwargs": {"arena_radius": 50.0},
+    },
     "es-v2": {"algo": "es", "backend": "jax", "env_id": V2, "eval_freq": 5_000_000, "checkpoint_freq": 5_000_000},
     "sac": {"algo": "sac"},
     "td3": {"algo": "td3"},
@@ -53,10 +58,20 @@ ENTRIES: dict[str, dict[str, Any]] = {
     # the residual inside the jitted PPO's compiled loop (train.learning.jitted.residual): millions of steps per run
     "residual-ppo-jax": {"algo": "ppo", "backend": "jax", "residual": True, "expert": "ptc"},
     "residual-ppo-jax-astolfi": {"algo": "ppo", "backend": "jax", "residual": True, "expert": "pt-astolfi"},
-    "residual-ppo-jax-v2": {"algo": "ppo", "backend": "jax", "residual": True, "expert": "ptc",
-                            "env_id": "DWRPointStabilization-v2"},
-    "residual-ppo-jax-astolfi-v2": {"algo": "ppo", "backend": "jax", "residual": True, "expert": "pt-astolfi",
-                                    "env_id": "DWRPointStabilization-v2"},
+    "residual-ppo-jax-v2": {
+        "algo": "ppo",
+        "backend": "jax",
+        "residual": True,
+        "expert": "ptc",
+        "env_id": "DWRPointStabilization-v2",
+    },
+    "residual-ppo-jax-astolfi-v2": {
+        "algo": "ppo",
+        "backend": "jax",
+        "residual": True,
+        "expert": "pt-astolfi",
+        "env_id": "DWRPointStabilization-v2",
+    },
     # sbx-rl, the JAX stable-baselines (issue 40): the same algorithms and settings, compiled by XLA
     "sac-sbx": {"algo": "sac", "backend": "sbx"},
     "tqc-sbx": {"algo": "tqc", "backend": "sbx"},
@@ -64,15 +79,33 @@ ENTRIES: dict[str, dict[str, Any]] = {
     # the task held to T_con (issue 40): gamma 1 (the v2 sections of train/hyperparams/), the jitted PPO with its
     # exploration noise on a fixed schedule, the off-policy learners of sbx
     "ppo-jax-v2": {"algo": "ppo", "backend": "jax", "env_id": V2},
-    "ppo-jax-fixed-noise-v2": {"algo": "ppo", "backend": "jax", "env_id": V2,
-                               "hyperparams": str(HYPERPARAMS_DIR / "ppo_jax_v2.yml")},
+    "ppo-jax-fixed-noise-v2": {
+        "algo": "ppo",
+        "backend": "jax",
+        "env_id": V2,
+        "hyperparams": str(HYPERPARAMS_DIR / "ppo_jax_v2.yml"),
+    },
     # ES on a residual (train/hyperparams/residual_es.yml): the search starts at the expert and pays nothing for
     # exploring; a generation is about 1 M env steps (sigma 0.02 and a step of 0.002: from the expert, larger steps
     # first lose the arrival, measured on one seed)
-    "es-residual-v2": {"algo": "es", "backend": "jax", "env_id": V2, "residual": True, "expert": "ptc",
-                       "eval_freq": 5_000_000, "checkpoint_freq": 5_000_000},
-    "es-residual-astolfi-v2": {"algo": "es", "backend": "jax", "env_id": V2, "residual": True, "expert": "pt-astolfi",
-                               "eval_freq": 5_000_000, "checkpoint_freq": 5_000_000},
+    "es-residual-v2": {
+        "algo": "es",
+        "backend": "jax",
+        "env_id": V2,
+        "residual": True,
+        "expert": "ptc",
+        "eval_freq": 5_000_000,
+        "checkpoint_freq": 5_000_000,
+    },
+    "es-residual-astolfi-v2": {
+        "algo": "es",
+        "backend": "jax",
+        "env_id": V2,
+        "residual": True,
+        "expert": "pt-astolfi",
+        "eval_freq": 5_000_000,
+        "checkpoint_freq": 5_000_000,
+    },
     "sac-sbx-v2": {"algo": "sac", "backend": "sbx", "env_id": V2},
     "tqc-sbx-v2": {"algo": "tqc", "backend": "sbx", "env_id": V2},
     "crossq-sbx-v2": {"algo": "crossq", "backend": "sbx", "env_id": V2},

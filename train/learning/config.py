@@ -99,7 +99,8 @@ class TrainConfig:
         metavar="RUN_DIR|ZIP",
     )
     critic_warmup: int = option(
-        0, "with --init-from or --residual: env steps at the start during which only the value function learns (PPO)",
+        0,
+        "with --init-from or --residual: env steps at the start during which only the value function learns (PPO)",
         metavar="N",
     )
     overwrite: bool = option(False, "delete the outputs of an earlier run in --run-dir and start afresh")

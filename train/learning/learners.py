@@ -159,4 +159,14 @@ def options_help() -> tuple[str, str]:
     return algo, "training library: " + ", ".join(backends)
 
 
-__all__ = ["ALGORITHMS", "BACKENDS", "BACKEND_NOTES", "KINDS", "LEARNERS", "Learner", "describe", "find_learner", "options_help"]
+__all__ = [
+    "ALGORITHMS",
+    "BACKENDS",
+    "BACKEND_NOTES",
+    "KINDS",
+    "LEARNERS",
+    "Learner",
+    "describe",
+    "find_learner",
+    "options_help",
+]

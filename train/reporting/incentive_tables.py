@@ -54,8 +54,10 @@ def rushing_table(data: dict[str, Any]) -> str:
                          + f" | {verdict} |")  # fmt: skip
     episodes = {data[env]["rushing"]["episodes"] for env in env_ids}
     lines.append("")
-    lines.append(f"Mean discounted return ± its standard error over {', '.join(map(str, sorted(episodes)))} random "
-                 "episodes (in time in brackets), the same episodes and noise draws in every cell of a row.")
+    lines.append(
+        f"Mean discounted return ± its standard error over {', '.join(map(str, sorted(episodes)))} random "
+        "episodes (in time in brackets), the same episodes and noise draws in every cell of a row."
+    )
     return "\n".join(lines) + "\n"
 
 

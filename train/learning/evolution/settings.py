@@ -67,7 +67,9 @@ class ESSettings:
                               f"{', '.join(ES_DEFAULTS)}, policy_kwargs")  # fmt: skip
         unknown = sorted(set(policy) - set(POLICY_KEYS))
         if unknown:
-            raise ConfigError(f"policy_kwargs {unknown} are not implemented by ES; it implements {', '.join(POLICY_KEYS)}")
+            raise ConfigError(
+                f"policy_kwargs {unknown} are not implemented by ES; it implements {', '.join(POLICY_KEYS)}"
+            )
         values = {**ES_DEFAULTS, **kwargs}
         if algo_kwargs.get("policy", "MlpPolicy") != "MlpPolicy":
             raise ConfigError(f"policy={algo_kwargs['policy']!r} is invalid: expected 'MlpPolicy'")

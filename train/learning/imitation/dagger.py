@@ -386,7 +386,11 @@ def main(argv: list[str] | None = None) -> None:
     if args.handover_only:
         add_handover(Path(args.run_dir), args.handover_expert, args.eval_episodes)
         return
-    run(DaggerConfig(**values), Path(args.run_dir), ["python", "-m", "train.learning.imitation.dagger", *(argv or sys.argv[1:])])
+    run(
+        DaggerConfig(**values),
+        Path(args.run_dir),
+        ["python", "-m", "train.learning.imitation.dagger", *(argv or sys.argv[1:])],
+    )
 
 
 def add_handover(run_dir: Path, expert: str, eval_episodes: int) -> None:

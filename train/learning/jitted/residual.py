@@ -90,4 +90,11 @@ def start_near_expert(runner: Any) -> Any:
     return runner.replace(params=near_zero_head(runner.params))
 
 
-__all__ = ["ResidualGymnaxEnv", "check_residual_expert", "near_zero_head", "residual_action", "residual_env", "start_near_expert"]
+__all__ = [
+    "ResidualGymnaxEnv",
+    "check_residual_expert",
+    "near_zero_head",
+    "residual_action",
+    "residual_env",
+    "start_near_expert",
+]

@@ -1,0 +1,142 @@
+"""The optimum cache (train.evaluation.optimum): padded problems, the solvers and the pools that solve the default
+sets' optima, what is missing, and where the cache lives."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import dwr_gym
+from baselines.optimal import (
+    solve_minimum_energy,
+)
+from train.evaluation import optimum as optimum_module
+from train.evaluation.scenarios import make_scenario
+
+ca = pytest.importorskip("casadi")
+LIMITS = {"dt": 0.05, "u_max": 0.5, "omega_max": 2.0}
+
+
+@pytest.mark.parametrize("start", [(-1.2, 0.7, 2.5), (0.9, -0.4, -0.3)])
+def test_the_cache_solves_padded_problems_to_the_same_energy_to_1e_6(start: tuple[float, float, float]) -> None:
+    """The optimum cache pads every problem to a multiple of PAD_TO intervals (fewer solvers to build): the energy is
+    the unpadded problem's to 1e-6 relative, the goal python -m benchmarks run optimum-speed measures on compare's episodes."""
+    plain = solve_minimum_energy(start, 10.37, **LIMITS)  # type: ignore[arg-type]
+    padded = solve_minimum_energy(start, 10.37, **LIMITS, pad_to=optimum_module.PAD_TO)  # type: ignore[arg-type]
+    assert plain.intervals == padded.intervals == 207  # padded to 220 and cut back
+    assert padded.energy == pytest.approx(plain.energy, rel=1e-6)
+
+
+@pytest.mark.skipif(not ca.has_nlpsol("fatrop"), reason="this CasADi ships no fatrop")
+def test_fatrop_finds_ipopts_plan_in_the_callers_layout() -> None:
+    """fatrop sees the unknowns in stage order; the plan it returns is IPOPT's, in the states-then-commands layout."""
+    start = (-1.2, 0.7, 2.5)
+    ipopt = solve_minimum_energy(start, 10.0, **LIMITS)  # type: ignore[arg-type]
+    fatrop = solve_minimum_energy(start, 10.0, **LIMITS, solver="fatrop")  # type: ignore[arg-type]
+    assert fatrop.energy == pytest.approx(ipopt.energy, rel=1e-8)
+    np.testing.assert_allclose(fatrop.states, ipopt.states, atol=1e-5)
+    np.testing.assert_allclose(fatrop.commands, ipopt.commands, atol=1e-5)
+
+
+@pytest.mark.slow
+def test_the_optima_solved_as_ray_tasks_on_a_local_cluster_are_the_local_processes(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    """``--address`` solves the optima as Ray tasks (here a cluster started for the test): the same energies, cached."""
+    pytest.importorskip("ray")
+    from dwr_gym.params import EnvParams
+
+    monkeypatch.setenv("RAY_raylet_start_wait_time_s", "300")  # a loaded machine starts Ray slowly
+    scenario = make_scenario("random", n=4, seed=11, env_kwargs={"T_con": 10.0})
+    params = EnvParams(T_con=10.0)
+    monkeypatch.setenv("DWR_GYM_CACHE", str(tmp_path / "ray"))
+    on_ray, _ = optimum_module.optimal_energies(params, scenario.starts, scenario.goals, address="local")
+    monkeypatch.setenv("DWR_GYM_CACHE", str(tmp_path / "local"))
+    local, _ = optimum_module.optimal_energies(params, scenario.starts, scenario.goals, workers=1)
+    np.testing.assert_array_equal(on_ray, local)
+    (cached,) = (tmp_path / "ray").glob("optimal-energy-*.json")
+    assert len(json.loads(cached.read_text())) == 4
+
+
+def test_missing_optima_are_what_optimal_energies_solves_and_nothing_once_cached(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: object
+) -> None:
+    """A command sums the optima its sets will solve from ``missing_optima``: before solving, every episode (once per
+    start and T_con, pose and position apart); after, none; starts given in float32 are the same episodes."""
+    monkeypatch.setenv("DWR_GYM_CACHE", str(tmp_path))
+    monkeypatch.setattr(optimum_module, "_solve_energy", lambda job: 1.0)
+    scenario = make_scenario("random", n=4, seed=8)
+    params = dwr_gym.EnvParams(**scenario.env_kwargs)
+    goals = np.array([[0.3, -0.7, 1.1], [-1.2, 0.4, -2.5], [0.0, 0.0, 0.0], [2.0, 1.0, 0.3]])
+    before = optimum_module.missing_optima(params, scenario.starts, goals)
+    assert len(before) == 4
+    assert len(optimum_module.missing_optima(params, scenario.starts, goals, heading=False)) == 4
+    optimum_module.optimal_energies(params, scenario.starts, goals, workers=1)
+    assert optimum_module.missing_optima(params, scenario.starts, goals) == set()
+    assert len(optimum_module.missing_optima(params, scenario.starts, goals, heading=False)) == 4
+    starts32, goals32 = scenario.starts.astype(np.float32), goals.astype(np.float32)
+    optimum_module.optimal_energies(params, starts32.astype(np.float64), goals32.astype(np.float64), workers=1)
+    assert optimum_module.missing_optima(params, starts32, goals32) == set()
+
+
+def test_optima_are_solved_by_the_pool_asked_for_with_a_bar_counting_the_plans(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``workers`` processes (forked; spawned once jax is loaded, whose threads a fork can deadlock), each given an
+    even share of the batch; with ``address`` the Ray cluster's workers instead; the progress bar names the work and
+    counts its plans."""
+    import types
+
+    from train.evaluation import ray_pool
+
+    made: list[tuple[object, ...]] = []
+
+    class Pool:  # solves in this process, recording how it was made and used
+        workers = 3
+
+        def __init__(self, *args: object, **kwargs: object) -> None:
+            context = kwargs.get("mp_context")
+            made.append((*args, context.get_start_method() if context else None, kwargs.get("initializer")))
+
+        def map(self, function: object, jobs: object, chunksize: int = 1) -> object:
+            made.append(("chunksize", chunksize))
+            return map(function, jobs)  # type: ignore[call-overload]
+
+        def shutdown(self, **kwargs: object) -> None:
+            pass
+
+    monkeypatch.setattr(optimum_module, "ProcessPoolExecutor", Pool)
+    monkeypatch.setattr(ray_pool, "RayPool", Pool)
+    monkeypatch.setattr(optimum_module, "_solve_energy", lambda job: 1.0)
+    scenario = make_scenario("random", n=4, seed=9)  # 4 plans: the fewest a pool is made for
+    params = dwr_gym.EnvParams(**scenario.env_kwargs)
+    monkeypatch.delitem(sys.modules, "jax", raising=False)
+    for case, jax_loaded, kwargs in (("fork", False, {"workers": 2}), ("spawn", True, {"workers": 2}),
+                                     ("ray", False, {"address": "auto"})):  # fmt: skip
+        if jax_loaded:
+            monkeypatch.setitem(sys.modules, "jax", types.ModuleType("jax"))
+        monkeypatch.setenv("DWR_GYM_CACHE", str(tmp_path / case))
+        made.clear()
+        energies, _ = optimum_module.optimal_energies(params, scenario.starts, scenario.goals, progress=True,
+                                                      description=f"optimum ({case})", **kwargs)  # fmt: skip
+        assert energies.tolist() == [1.0] * 4
+        if case == "ray":
+            assert made == [("auto", None, None), ("chunksize", 2)]  # 4 plans on its 3 workers: 2, 2
+        else:
+            assert made == [(2, case, optimum_module._ignore_interrupts), ("chunksize", 2)]
+        err = capsys.readouterr().err
+        assert f"optimum ({case})" in err and "/4" in err and "plan" in err
+
+
+def test_optima_are_cached_in_the_users_cache_folder_unless_dwr_gym_cache_names_another(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    monkeypatch.setenv("HOME", str(tmp_path))
+    monkeypatch.delenv("DWR_GYM_CACHE", raising=False)
+    assert optimum_module.cache_dir() == tmp_path / ".cache" / "dwr-gym"
+    monkeypatch.setenv("DWR_GYM_CACHE", str(tmp_path / "elsewhere"))
+    assert optimum_module.cache_dir() == tmp_path / "elsewhere"
