@@ -30,7 +30,7 @@ def test_every_benchmark_module_is_an_entry_and_every_entry_has_a_main() -> None
 def test_each_recipe_is_an_entry_beside_its_script() -> None:
     scripts = {path.stem for path in ROOT.glob("benchmarks/recipes/*.sh")}
     entries = {module.rsplit(".", 1)[1] for module in registry.SUITE.values() if ".recipes." in module}
-    assert scripts == entries and len(scripts) == 6
+    assert scripts == entries and len(scripts) >= 6  # each shell recipe is an entry, and none is lost
 
 
 def test_list_prints_one_line_per_entry() -> None:
