@@ -181,11 +181,16 @@ def run_both(env_id: str, dtype: str, seed: int) -> dict[str, int]:
     return counts
 
 
-def check(env_id: str, dtype: str, seed: int) -> None:
+def check(env_id: str, dtype: str, seed: int) -> int:
+    """Compare the two envs over one draw; returns its count of late arrivals."""
     counts = run_both(env_id, dtype, seed)
     if env_id == dwr_gym.ENV_ID_V2:  # held to T_con: nothing is late and nothing truncates
         assert counts.pop("late arrivals") == counts.pop("truncations") == 0, counts
-    assert all(counts.values()), counts  # every kind of episode end happened, and was compared
+    # every kind of episode end happened, and was compared; late arrivals (a short T_con, the pursuit law arriving
+    # between T_con and 1.5 T_con) do not happen in every draw of 48 robots (seed 44627 on v0 has none)
+    late = counts.pop("late arrivals", 1)
+    assert all(counts.values()), counts
+    return late
 
 
 @settings(max_examples=2, **SETTINGS)
@@ -209,6 +214,11 @@ def test_v2_steps_equal_the_numpy_env_in_float64_and_float32(seed: int) -> None:
     with jax.enable_x64(True):
         check(dwr_gym.ENV_ID_V2, "float64", seed)
     check(dwr_gym.ENV_ID_V2, "float32", seed)
+
+
+def test_late_arrivals_are_compared_too() -> None:
+    """A fixed draw with late arrivals (7 of them), where the random draws above may have none."""
+    assert check(dwr_gym.ENV_ID_V1, "float32", 0) > 0
 
 
 @pytest.mark.slow
