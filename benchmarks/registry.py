@@ -51,6 +51,7 @@ SUITE: dict[str, str] = {
     "compare": "benchmarks.quality.compare",
     "reproduce": "benchmarks.quality.reproduce",
     "optimal": "benchmarks.quality.optimal",
+    "ship-optima": "benchmarks.quality.ship_optima",
     # testing: how good the tests are
     "fuzz": "benchmarks.testing.fuzz",
     "reliability": "benchmarks.testing.reliability",

@@ -13,6 +13,8 @@ os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 # The tests never read or write the user's cache of optimal energies (~/.cache/dwr-gym).
 os.environ.setdefault("DWR_GYM_CACHE", tempfile.mkdtemp(prefix="dwr-gym-test-cache-"))
+# Nor the optima shipped for the default sets: the tests solve what they measure (test_shipped_optima.py reads them).
+os.environ.setdefault("DWR_GYM_SHIPPED_OPTIMA", "0")
 # Nor the user's Minari datasets (~/.minari/datasets): the docs' snippets write one.
 os.environ.setdefault("MINARI_DATASETS_PATH", tempfile.mkdtemp(prefix="dwr-gym-test-minari-"))
 

@@ -10,12 +10,12 @@ from __future__ import annotations
 import sys
 from collections.abc import Sequence
 
-from train.commands import benchmark, compare, dataset, evaluate, imitate, info, reproduce, robustness, sweep
+from train.commands import benchmark, compare, dataset, evaluate, imitate, info, optimum, reproduce, robustness, sweep
 from train.commands import train as train_command
 from train.commands.shared import Parser, UsageError
 
 #: The commands in the order ``dwr-gym --help`` lists them.
-COMMANDS = (info, evaluate, reproduce, train_command, compare, imitate, sweep, robustness, benchmark, dataset)
+COMMANDS = (info, evaluate, reproduce, train_command, compare, imitate, sweep, robustness, benchmark, dataset, optimum)
 
 
 def build_parser() -> Parser:

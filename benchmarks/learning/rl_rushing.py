@@ -9,6 +9,9 @@ controllers:
 
     python -m benchmarks run rl-rushing train/pretrained/ppo_jax_v1 --controllers ptc pt-astolfi --n 50 --docs
     python -m benchmarks run rl-rushing train/pretrained/es_residual_v2 --env DWRPointStabilization-v2 --docs
+    python -m benchmarks run rl-rushing train/pretrained/es_arena50_v1 --controllers --add --docs   # one row more
+
+``--add`` keeps the rows already in the JSON (same n, seed and env) and adds or replaces this run's.
 
 On v2 (``--env``, written to rushing_v2.json) the energy counts until T_con and "in time" is at the goal at T_con;
 the arrival is the first time at the goal, so ``motion`` includes what the robot spends holding the goal.
@@ -61,6 +64,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--env", default=None, help="env id (default: the task's, DWRPointStabilization-v1)")
     parser.add_argument("--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} (rushing_v2.json "
                         "with --env DWRPointStabilization-v2) and its table")  # fmt: skip
+    parser.add_argument("--add", action="store_true",
+                        help="keep the JSON's other rows (same --n and env), adding or replacing this run's")  # fmt: skip
     args = parser.parse_args(argv)
     if args.n < 1:
         parser.error(f"--n {args.n} is invalid: expected >= 1")
@@ -77,10 +82,16 @@ def main(argv: list[str] | None = None) -> int:
         env_kwargs = env_keywords(env_id, {})
     except ValueError as error:
         parser.error(str(error))
+    path = JSON_PATH if env_id == TASK_ENV_ID else JSON_PATH.with_name(f"rushing_{env_id.rsplit('-', 1)[-1]}.json")
+    earlier = json.loads(path.read_text()) if args.add and path.is_file() else None
+    if earlier is not None:
+        if (earlier["n"], earlier["seed"], earlier.get("env_id", TASK_ENV_ID)) != (args.n, EVAL_SEED, env_id):
+            parser.error(f"--add: {path.name} holds n={earlier['n']} on {earlier.get('env_id', TASK_ENV_ID)}, "
+                         f"not n={args.n} on {env_id}")  # fmt: skip
     scenario = make_scenario("random", n=args.n, seed=EVAL_SEED, env_kwargs=env_kwargs)
     policies: dict[str, Any] = {name: name for name in args.controllers}
-    for path in args.agents:
-        policies[Path(path).name] = load_agent(path)[1]
+    for agent in args.agents:
+        policies[Path(agent).name] = load_agent(agent)[1]
     results = evaluate(policies, scenario, optimum="pose", progress=True)
     rows: dict[str, Any] = {}
     for name, result in results.items():
@@ -89,12 +100,11 @@ def main(argv: list[str] | None = None) -> int:
                                          description=f"optimum by {name}'s arrival")  # fmt: skip
         rows[name] = decomposition(result, at_arrival)
         print(name, json.dumps(rows[name]))
+    if earlier is not None:
+        rows = {**earlier["policies"], **rows}
     data = {"n": args.n, "seed": EVAL_SEED, "env_id": env_id, "policies": rows}
     if args.docs:
-        write_json(
-            JSON_PATH if env_id == TASK_ENV_ID else JSON_PATH.with_name(f"rushing_{env_id.rsplit('-', 1)[-1]}.json"),
-            data,
-        )
+        write_json(path, data)
     return 0
 
 

@@ -2,8 +2,12 @@
 
     nice -n 10 python -m benchmarks run compare-time --cache cold --busy 0 --docs   # a fresh clone, a quiet machine
     nice -n 10 python -m benchmarks run compare-time --cache warm --busy 2 --docs   # the optima cached, 2 busy processes
+    nice -n 10 python -m benchmarks run compare-time --cache cold --no-shipped --busy 0 --docs   # every optimum solved
 
-Each run adds (or replaces) its measurement, keyed by the cache's state and the busy processes, in
+A fresh clone's user cache is empty, but dwr-gym ships the optima of the default sets (train/optima/, read where the
+user's cache has none): ``--no-shipped`` turns them off (``DWR_GYM_SHIPPED_OPTIMA=0``), so that every optimum is solved.
+
+Each run adds (or replaces) its measurement, keyed by the cache's state, the shipped optima and the busy processes, in
 docs/compare/timing.json; the block renders every measurement there, one row each.
 
 A page shows the block where it holds the pair ``<!-- generated: compare-time by compare-time (python -m benchmarks
@@ -46,9 +50,10 @@ def cached_optima(env: dict[str, str]) -> int:
     return total
 
 
-def measure(busy: int, cache: str) -> dict[str, Any]:
+def measure(busy: int, cache: str, shipped: bool = True) -> dict[str, Any]:
     with background_load(busy, 6 * 3600.0), tempfile.TemporaryDirectory() as tmp:
         env = checkout_env(DWR_GYM_CACHE=f"{tmp}/cache") if cache == "cold" else checkout_env()
+        env["DWR_GYM_SHIPPED_OPTIMA"] = "1" if shipped else "0"
         before_cache = cached_optima(env)
         before = resource.getrusage(resource.RUSAGE_CHILDREN)
         began = time.perf_counter()
@@ -65,14 +70,19 @@ def measure(busy: int, cache: str) -> dict[str, Any]:
         "cpu_seconds": round((after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime), 1),
         "load_average_1min_at_end": load,
         "cache": cache,
+        "shipped_optima": shipped,
         "optima_cached_before": before_cache,
         "optima_solved": solved,
     }
 
 
 def render_one(result: dict[str, Any]) -> str:
-    cache = "a warm optimum cache (none solved)" if result["optima_solved"] == 0 else (
-        f"an empty optimum cache ({result['optima_solved']:,} optima solved and cached)")  # fmt: skip
+    shipped = result.get("shipped_optima", False)  # the runs before the optima were shipped: none read
+    if result["cache"] == "cold":
+        cache = (f"a fresh clone: an empty cache, the shipped optima read ({result['optima_solved']:,} solved)"
+                 if shipped else f"an empty cache, no shipped optima ({result['optima_solved']:,} optima solved)")  # fmt: skip
+    else:
+        cache = f"a warm optimum cache ({result['optima_solved']:,} solved)"
     return (
         f"| {cache} | {result['busy_processes']} | {result['wall_seconds'] / 60:.1f} | "
         f"{result['cpu_seconds'] / 60:.1f} | {result['load_average_1min_at_end']:g} |"
@@ -80,7 +90,8 @@ def render_one(result: dict[str, Any]) -> str:
 
 
 def render(results: dict[str, Any]) -> str:
-    runs = sorted(results["runs"], key=lambda r: (r["cache"] != "cold", r["busy_processes"]))
+    runs = sorted(results["runs"], key=lambda r: (r["cache"] != "cold", r.get("shipped_optima", False),
+                                                  r["busy_processes"]))  # fmt: skip
     machine = runs[0]["machine"] if runs else "no run"
     return "\n".join([
         "",
@@ -88,15 +99,20 @@ def render(results: dict[str, Any]) -> str:
         "|---|---:|---:|---:|---:|",
         *(render_one(r) for r in runs),
         "",
-        f"*{machine}; `python -m benchmarks run compare-time --cache cold|warm --busy N --docs`, `docs/compare/timing.json`.*",
+        f"*{machine}; `python -m benchmarks run compare-time --cache cold|warm [--no-shipped] --busy N --docs`, "
+        "`docs/compare/timing.json`.*",
         "",
     ])  # fmt: skip
 
 
 def merged(previous: dict[str, Any] | None, result: dict[str, Any]) -> dict[str, Any]:
-    """``previous``'s runs with ``result`` added, replacing the run of the same cache state and busy processes."""
-    runs = [r for r in (previous or {}).get("runs", [])
-            if (r.get("cache"), r.get("busy_processes")) != (result["cache"], result["busy_processes"])]  # fmt: skip
+    """``previous``'s runs with ``result`` added, replacing the run of the same cache state, shipped optima and busy
+    processes."""
+
+    def key(run: dict[str, Any]) -> tuple[Any, ...]:
+        return run.get("cache"), run.get("shipped_optima", False), run.get("busy_processes")
+
+    runs = [r for r in (previous or {}).get("runs", []) if key(r) != key(result)]
     return {"runs": [*runs, result]}
 
 
@@ -105,13 +121,15 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--busy", type=int, default=2, help="busy background processes (default: 2)")
     parser.add_argument("--cache", choices=("cold", "warm"), default="warm",
                         help="cold: an empty optimum cache (a fresh clone); warm: the shared one (default)")  # fmt: skip
+    parser.add_argument("--no-shipped", action="store_true",
+                        help="do not read the optima shipped for the default sets (every missing one is solved)")  # fmt: skip
     parser.add_argument(
         "--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} (and render the block)"
     )
     args = parser.parse_args(argv)
     if args.busy < 0:
         parser.error(f"--busy={args.busy} is invalid: expected an integer >= 0")
-    result = measure(args.busy, args.cache)
+    result = measure(args.busy, args.cache, shipped=not args.no_shipped)
     previous = json.loads(JSON_PATH.read_text()) if JSON_PATH.exists() else None
     results = merged(previous if previous and "runs" in previous else None, result)
     print(render({"runs": [result]}))

@@ -36,6 +36,7 @@ try:
 except ImportError:  # not POSIX: no lock and no claims (see _locked)
     fcntl = None  # type: ignore[assignment]
 from dwr_gym.params import EnvParams
+from train.evaluation.shipped_optima import problem_record, shipped_energies
 
 #: Bump when the problem or the solver settings change, so that stale optima are not reused.
 CACHE_VERSION = 2
@@ -67,6 +68,14 @@ def casadi_available() -> bool:
 def _cache_file(params: EnvParams, heading: bool) -> Path:
     key = json.dumps([CACHE_VERSION, params.dt, params.u_max, params.omega_max, heading])
     return cache_dir() / f"optimal-energy-{hashlib.sha256(key.encode()).hexdigest()[:16]}.json"
+
+
+def _known(params: EnvParams, heading: bool) -> tuple[Path, dict[str, float | str]]:
+    """The user's cache file for this problem and what is known of it: the shipped optima of the default sets
+    (:mod:`train.evaluation.shipped_optima`), then the user's cache, which wins where both hold a key."""
+    path = _cache_file(params, heading)
+    problem = problem_record(CACHE_VERSION, params.dt, params.u_max, params.omega_max, heading)
+    return path, {**shipped_energies(path.name, problem), **_read_cache(path)}
 
 
 def _start_key(start: NDArray[np.float64], T_con: float) -> str:
@@ -114,8 +123,7 @@ def optimal_energies(
     (:class:`train.evaluation.ray_pool.RayPool`) instead.
     """
     local, T_cons, keys = _keys(params, starts, goals, T_cons)
-    path = _cache_file(params, heading)
-    cache = _read_cache(path)
+    path, cache = _known(params, heading)
     missing = sorted({k: i for i, k in enumerate(keys) if k not in cache}.values())
     if missing:
         # the longest problems first, neighbours together: each process builds few solvers, none waits at the end
@@ -138,6 +146,20 @@ def _keys(
     return local, T_cons, [_start_key(s, T) for s, T in zip(local, T_cons, strict=True)]
 
 
+def cache_keys(
+    params: EnvParams,
+    starts: NDArray[np.float64],
+    goals: NDArray[np.float64],
+    T_cons: NDArray[np.float64] | None = None,
+    *,
+    heading: bool = True,
+) -> tuple[str, dict[str, Any], list[str]]:
+    """The name of the cache file of these episodes' problem, the problem (:func:`problem_record`) and each episode's
+    key in it: what ``python -m benchmarks run ship-optima`` ships."""
+    problem = problem_record(CACHE_VERSION, params.dt, params.u_max, params.omega_max, heading)
+    return _cache_file(params, heading).name, problem, _keys(params, starts, goals, T_cons)[2]
+
+
 def missing_optima(
     params: EnvParams,
     starts: NDArray[np.float64],
@@ -148,8 +170,7 @@ def missing_optima(
 ) -> set[tuple[str, str]]:
     """The optima :func:`optimal_energies` would solve (not cached yet), as (cache file, key) pairs: what a command
     will solve is the union of its sets' (the disturbed sets share the random set's starts)."""
-    path = _cache_file(params, heading)
-    cache = _read_cache(path)
+    path, cache = _known(params, heading)
     return {(path.name, k) for k in _keys(params, starts, goals, T_cons)[2] if k not in cache}
 
 
@@ -330,6 +351,27 @@ def _solve_and_cache(
     return found
 
 
+def solve_uncached(
+    jobs: list[tuple[tuple[float, float, float], float, float, float, float, bool]],
+    workers: int = 0,
+    on_solved: Callable[[int], None] | None = None,
+) -> list[float | str]:
+    """Solve each job (start in the goal's frame, T_con, dt, u_max, omega_max, heading) afresh in ``workers``
+    processes (0: every core, at most 8), reading and writing no cache: the energy, or why there is none.
+    ``on_solved`` receives the number solved so far (what ``dwr-gym optimum verify`` re-solves)."""
+    workers = workers or min(os.cpu_count() or 1, 8)
+    results: list[float | str] = []
+    method = "fork" if sys.platform.startswith("linux") and "jax" not in sys.modules else "spawn"
+    context = multiprocessing.get_context(method)
+    with ProcessPoolExecutor(workers, mp_context=context, initializer=_ignore_interrupts) as pool:
+        # in order, a few per task: neighbours share their padded problem's solver
+        for result in pool.map(_solve_energy, jobs, chunksize=max(1, min(BATCH_PER_WORKER, len(jobs) // workers))):
+            results.append(result)
+            if on_solved is not None:
+                on_solved(len(results))
+    return results
+
+
 def _ignore_interrupts() -> None:
     """Solver processes leave Ctrl-C to the parent, which keeps what they solved and stops them."""
     import signal
@@ -341,8 +383,10 @@ __all__ = [
     "OPTIMA",
     "PAD_TO",
     "cache_dir",
+    "cache_keys",
     "casadi_available",
     "goal_frame_starts",
     "missing_optima",
     "optimal_energies",
+    "solve_uncached",
 ]

@@ -1,0 +1,124 @@
+"""The optima shipped for the default scenario sets: a cache with a check (train.evaluation.shipped_optima).
+
+A fresh clone's `dwr-gym compare` reads them instead of solving some 1,000 plans, so they must be right (a random
+sample is solved again here; `dwr-gym optimum verify` solves them all), complete (exactly the keys the commands'
+defaults read), read only where the user's cache has none, and never read for another problem."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from train.cli import main as cli
+from train.evaluation import optimum as optimum_module
+from train.evaluation import shipped_optima
+from train.evaluation.optimum import casadi_available, optimal_energies
+from train.evaluation.verify_optima import verify_shipped
+
+needs_casadi = pytest.mark.skipif(not casadi_available(), reason="needs the optimal extra (CasADi)")
+
+
+@pytest.fixture
+def shipped_on(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> Path:
+    """The shipped optima read, an empty user cache (a fresh clone); returns the cache directory."""
+    monkeypatch.setenv(shipped_optima.SWITCH, "1")
+    monkeypatch.setenv("DWR_GYM_CACHE", str(tmp_path / "cache"))
+    return tmp_path / "cache"
+
+
+def test_the_shipped_files_hold_exactly_the_optima_the_default_sets_read() -> None:
+    from benchmarks.quality.ship_optima import default_keys
+
+    wanted = default_keys()
+    files = {path.name: shipped_optima.read_shipped(path) for path in shipped_optima.shipped_files()}
+    assert set(files) == set(wanted), "a default changed: python -m benchmarks run ship-optima"
+    for name, (problem, keys) in wanted.items():
+        assert files[name][0] == problem
+        assert set(files[name][1]) == keys, f"{name}: python -m benchmarks run ship-optima"
+
+
+@needs_casadi
+def test_a_random_sample_of_the_shipped_optima_solves_again_to_the_same_energy() -> None:
+    seed = int(np.random.default_rng().integers(1 << 16))  # a new sample each run: over runs, all of them
+    report = verify_shipped(sample=3, seed=seed, workers=1)
+    assert report.checked == 3 * len(shipped_optima.shipped_files()) and report.checked > 0
+    assert report.ok, f"seed {seed}: {report.mismatches}"
+    assert report.largest <= 1e-6
+
+
+def test_a_fresh_clone_reads_the_default_random_sets_optima_without_solving(
+    shipped_on: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from benchmarks.quality.ship_optima import default_scenarios
+
+    monkeypatch.setattr(optimum_module, "_solve_energy", lambda job: pytest.fail("solved a shipped optimum"))
+    scenario, params, optimum = next(s for s in default_scenarios() if s[0].name == "random")
+    energies, failures = optimal_energies(params, scenario.starts, scenario.goals, scenario.T_cons,
+                                          heading=optimum == "pose")  # fmt: skip
+    name, _, keys = optimum_module.cache_keys(params, scenario.starts, scenario.goals, scenario.T_cons)
+    shipped = shipped_optima.read_shipped(shipped_optima.SHIPPED_DIR / name)[1]
+    assert failures == [] and len(energies) == scenario.size
+    assert energies.tolist() == [shipped[k] for k in keys]
+    assert not shipped_on.exists() or not list(
+        shipped_on.glob("optimal-energy-*.json")
+    )  # nothing solved, so nothing cached
+
+
+def test_the_users_cache_wins_and_other_episodes_are_solved(shipped_on: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from benchmarks.quality.ship_optima import default_scenarios
+
+    scenario, params, _ = next(s for s in default_scenarios() if s[0].name == "random")
+    name, _, keys = optimum_module.cache_keys(params, scenario.starts[:2], scenario.goals[:2], scenario.T_cons[:2])
+    shipped_on.mkdir(parents=True)
+    (shipped_on / name).write_text(json.dumps({keys[0]: 123.0}))
+    solved: list[object] = []
+    monkeypatch.setattr(optimum_module, "_solve_energy", lambda job: solved.append(job) or 7.0)
+    starts = np.vstack([scenario.starts[:2], [[2.0, 1.0, 0.5]]])  # an episode of no default set
+    goals = np.vstack([scenario.goals[:2], [[0.0, 0.0, 0.0]]])
+    T_cons = np.append(scenario.T_cons[:2], 17.0)
+    energies, _ = optimal_energies(params, starts, goals, T_cons, workers=1)
+    shipped = shipped_optima.read_shipped(shipped_optima.SHIPPED_DIR / name)[1]
+    assert energies.tolist() == [123.0, shipped[keys[1]], 7.0]
+    assert len(solved) == 1
+    monkeypatch.setenv(shipped_optima.SWITCH, "0")  # turned off: the shipped one is solved instead
+    energies, _ = optimal_energies(params, starts[1:2], goals[1:2], T_cons[1:2], workers=1)
+    assert energies.tolist() == [7.0] and len(solved) == 2
+
+
+def test_a_shipped_file_for_another_problem_or_with_a_bad_energy_is_refused(tmp_path: Path, shipped_on: Path) -> None:
+    problem = shipped_optima.problem_record(2, 0.05, 1.0, 2.0, True)
+    path = tmp_path / "optimal-energy-0123456789abcdef.json"
+    shipped_optima.write_shipped(path, problem, {"1,2,3,10": 0.5})
+    assert shipped_optima.read_shipped(path) == (problem, {"1,2,3,10": 0.5})
+    for energy in ("NaN", "-1.0", '"failed"'):
+        path.write_text(f'{{"problem": {json.dumps(problem)}, "energies": {{"1,2,3,10": {energy}}}}}')
+        with pytest.raises(shipped_optima.ShippedOptimaError, match="is not an optimum"):
+            shipped_optima.read_shipped(path)
+    real = shipped_optima.shipped_files()[0]
+    other = {**shipped_optima.read_shipped(real)[0], "u_max": 9.0}
+    with pytest.raises(shipped_optima.ShippedOptimaError, match="solved for"):
+        shipped_optima.shipped_energies(real.name, other)
+
+
+@needs_casadi
+def test_verify_fails_on_a_planted_wrong_energy(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys) -> None:
+    real = shipped_optima.shipped_files()[0]
+    problem, energies = shipped_optima.read_shipped(real)
+    key = sorted(energies)[0]
+    shipped_optima.write_shipped(tmp_path / real.name, problem, {key: energies[key] * (1 + 1e-4)})
+    monkeypatch.setattr(shipped_optima, "SHIPPED_DIR", tmp_path)
+    assert cli(["optimum", "verify", "--no-progress", "--workers", "1"]) == 1
+    out = capsys.readouterr().out
+    assert "verified 1 shipped optima" in out and f"mismatch: {real.name} {key}" in out
+    shipped_optima.write_shipped(tmp_path / real.name, problem, {key: energies[key]})
+    assert cli(["optimum", "verify", "--no-progress", "--workers", "1"]) == 0
+
+
+@pytest.mark.parametrize("argv, message", [(["--rtol", "0"], "--rtol=0.0 is invalid"),
+                                           (["--rtol", "nan"], "--rtol=nan is invalid")])  # fmt: skip
+def test_verify_refuses_a_bad_tolerance(argv: list[str], message: str, capsys) -> None:
+    assert cli(["optimum", "verify", *argv]) == 2
+    assert message in capsys.readouterr().err
