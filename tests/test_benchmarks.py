@@ -77,3 +77,25 @@ def test_each_entry_says_how_to_run_it(name: str, capsys: pytest.CaptureFixture[
     except SystemExit as exit_:
         code = exit_.code
     assert code in (0, None) and capsys.readouterr().out.strip(), name
+
+
+def test_compare_time_says_where_the_time_went_and_keeps_a_run_per_cache_state() -> None:
+    from benchmarks.speed.compare_time import merged, render, stage_seconds
+
+    nan = float("nan")
+    rows = [  # two sets; each set's rows repeat its optima's seconds
+        {"scenario": "random", "T_con": nan, "policy": "ptc", "seconds": 2.0, "optimum_seconds": 30.0},
+        {"scenario": "random", "T_con": nan, "policy": "optimal", "seconds": 50.0, "optimum_seconds": 30.0},
+        {"scenario": "fault", "T_con": nan, "policy": "ptc", "seconds": 3.0, "optimum_seconds": 0.0},
+        {"scenario": "fault", "T_con": nan, "policy": "optimal", "seconds": 20.0, "optimum_seconds": 0.0},
+    ]
+    assert stage_seconds(rows) == {"optimal": 70.0, "optimum": 30.0, "ptc": 5.0}
+    assert list(stage_seconds(rows)) == ["optimal", "optimum", "ptc"]  # slowest first
+    run = {"machine": "m", "busy_processes": 0, "wall_seconds": 600.0, "cpu_seconds": 900.0,
+           "load_average_1min_at_end": 1.5, "cache": "cold", "optima_solved": 0, "stages": stage_seconds(rows)}  # fmt: skip
+    unshipped = {**run, "shipped_optima": False, "optima_solved": 1009}
+    runs = merged(merged(merged(None, unshipped), {**run, "shipped_optima": True}), {**run, "shipped_optima": True})
+    assert len(runs["runs"]) == 2  # one per (cache, shipped, busy): the same again replaces it
+    table = render(runs)
+    assert "no shipped optima (1,009 optima solved)" in table and "the shipped optima read (0 solved)" in table
+    assert "optimal 1.2, optimum 0.5, ptc 0.1" in table

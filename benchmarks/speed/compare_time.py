@@ -62,6 +62,7 @@ def measure(busy: int, cache: str, shipped: bool = True) -> dict[str, Any]:
         after = resource.getrusage(resource.RUSAGE_CHILDREN)
         load = load_average()
         solved = cached_optima(env) - before_cache
+        rows = json.loads(Path(f"{tmp}/out/comparison.json").read_text())
     return {
         "machine": torch_machine(),
         "command": "dwr-gym compare",
@@ -73,7 +74,19 @@ def measure(busy: int, cache: str, shipped: bool = True) -> dict[str, Any]:
         "shipped_optima": shipped,
         "optima_cached_before": before_cache,
         "optima_solved": solved,
+        "stages": stage_seconds(rows),
     }
+
+
+def stage_seconds(rows: list[dict[str, Any]]) -> dict[str, float]:
+    """Where the time went: the wall seconds of each policy over every set, and of the optima, slowest first."""
+    totals: dict[str, float] = {}
+    for row in rows:
+        totals[row["policy"]] = totals.get(row["policy"], 0.0) + float(row.get("seconds", 0.0))
+    # each set's rows repeat its optimum's seconds: once per (set, T_con)
+    optimum = {(row["scenario"], str(row["T_con"])): float(row.get("optimum_seconds", 0.0)) for row in rows}
+    totals["optimum"] = float(sum(optimum.values()))
+    return {k: round(v, 1) for k, v in sorted(totals.items(), key=lambda kv: -kv[1])}
 
 
 def render_one(result: dict[str, Any]) -> str:
@@ -83,9 +96,11 @@ def render_one(result: dict[str, Any]) -> str:
                  if shipped else f"an empty cache, no shipped optima ({result['optima_solved']:,} optima solved)")  # fmt: skip
     else:
         cache = f"a warm optimum cache ({result['optima_solved']:,} solved)"
+    stages = result.get("stages")
+    slowest = ", ".join(f"{k} {v / 60:.1f}" for k, v in list(stages.items())[:4]) if stages else "-"
     return (
         f"| {cache} | {result['busy_processes']} | {result['wall_seconds'] / 60:.1f} | "
-        f"{result['cpu_seconds'] / 60:.1f} | {result['load_average_1min_at_end']:g} |"
+        f"{result['cpu_seconds'] / 60:.1f} | {result['load_average_1min_at_end']:g} | {slowest} |"
     )
 
 
@@ -95,8 +110,8 @@ def render(results: dict[str, Any]) -> str:
     machine = runs[0]["machine"] if runs else "no run"
     return "\n".join([
         "",
-        "| `dwr-gym compare`, defaults | busy processes beside it | wall time (min) | CPU time (min) | load (1 min, at the end) |",
-        "|---|---:|---:|---:|---:|",
+        "| `dwr-gym compare`, defaults | busy processes beside it | wall time (min) | CPU time (min) | load (1 min, at the end) | slowest stages (min) |",
+        "|---|---:|---:|---:|---:|---|",
         *(render_one(r) for r in runs),
         "",
         f"*{machine}; `python -m benchmarks run compare-time --cache cold|warm [--no-shipped] --busy N --docs`, "
