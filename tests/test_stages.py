@@ -46,6 +46,23 @@ def test_stages_are_timed_even_when_interrupted_and_the_summary_names_the_slowes
     assert line.startswith("time: ") and "optimum" in line and "12 plans" in line and "robust-pt" in line
 
 
+def test_stages_of_a_second_process_count_once_in_the_wall_time(ticking_clock: object, monkeypatch) -> None:
+    from train.evaluation import stages
+
+    monkeypatch.setattr(stages.time, "perf_counter", lambda: ticking_clock.time())  # type: ignore[attr-defined]
+    clock = StageClock(progress=False)  # read at 10
+    clock.plan(3.0)
+    with clock.stage("random", "optimal", 1.0, 40):  # 20 to 30: 10 s here
+        pass
+    # ptc (25 s) and astolfi (5 s) ran in the second process beside it; 6 s more were waited for them afterwards
+    clock.record("random", "ptc", 25.0, 40, 1.0, waited=6.0)
+    clock.record("random", "astolfi", 5.0, 40, 1.0)
+    assert clock.seconds("random", "ptc") == 25.0
+    line = clock.summary()  # read at 40: 30 s in all, of which 16 s of policies' wall time, 14 s the rest
+    assert "policies 16 s (ptc 25 s, optimal 10 s, astolfi 5 s each; some in a second process)" in line
+    assert line.endswith("the rest (loading, figures, files) 14 s")
+
+
 def test_seconds_read_as_a_person_would_say_them() -> None:
     assert [format_seconds(s) for s in (42.0, 210.0, 7200.0, float("nan"))] == ["42 s", "3.5 min", "2.0 h", "?"]
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Callable
 from typing import Any
 
@@ -12,6 +13,7 @@ from dwr_gym.params import EnvParams
 from train.evaluation.optimum import OPTIMA, missing_optima, optimal_energies
 from train.evaluation.rollout import Policy, RolloutResult, rollout
 from train.evaluation.scenarios import Scenario, controller_for, make_scenario
+from train.evaluation.side_process import PLANNERS, SideProcess, side_process_usable
 from train.evaluation.stages import PLAN_SECONDS, StageClock, estimated_seconds
 
 
@@ -49,24 +51,61 @@ def evaluate(
                 progress=progress and not clock.shown, description=f"{scenario.name}: optimum",
                 on_solved=lambda done: advance(done / max(todo, 1)), address=address,
             )  # fmt: skip
+    plain = {label: policy for label, policy in policies.items() if label not in PLANNERS}
+    side = None
+    if plain and len(plain) < len(policies) and side_process_usable():  # the planners here, the others beside them
+        side = SideProcess(
+            {label: (_rollout_one, (label, policy, params, scenario, record, seed)) for label, policy in plain.items()}
+        )
     results = {}
-    for label, policy in policies.items():
-        if isinstance(policy, str):
-            policy = ExpertPolicy(controller_for(policy, scenario, params), params.u_max, params.omega_max)
-        weight = estimated_seconds(label, scenario.size, max_steps(scenario, params))
-        with clock.stage(stage_scenario, label, weight, scenario.size) as advance:
-            result = rollout(
-                policy, params, scenario.starts, scenario.goals, record=record, seed=seed,
-                progress=progress and not clock.shown, description=f"{scenario.name}: {label}", T_con=scenario.T_cons,
-                env_kwargs=scenario.env_kwargs, on_step=advance,
-            )  # fmt: skip
+    try:
+        for label, policy in policies.items():
+            if side is not None and label in plain:
+                continue
+            weight = estimated_seconds(label, scenario.size, max_steps(scenario, params))
+            with clock.stage(stage_scenario, label, weight, scenario.size) as advance:
+                results[label] = _rollout_one(label, policy, params, scenario, record, seed,
+                                              progress and not clock.shown, advance)  # fmt: skip
+        if side is not None:
+            began = time.perf_counter()
+            finished = side.results()
+            waited = time.perf_counter() - began
+            for label, (result, seconds) in finished.items():
+                clock.record(stage_scenario, label, seconds, scenario.size,
+                             estimated_seconds(label, scenario.size, max_steps(scenario, params)), waited)  # fmt: skip
+                waited = 0.0
+                results[label] = result
+    finally:
+        if side is not None:
+            side.close()
+    for result in results.values():
         result.optimal_energy, result.optimum_failures = optimal_energy, optimum_failures
-        controller = getattr(policy, "controller", None)
-        result.planner_failures = len(getattr(controller, "failures", ()))
-        if hasattr(controller, "close"):
-            controller.close()
-        results[label] = result
-    return results
+    return {label: results[label] for label in policies}
+
+
+def _rollout_one(
+    label: str,
+    policy: Policy | str,
+    params: EnvParams,
+    scenario: Scenario,
+    record: bool,
+    seed: int,
+    progress: bool = False,
+    on_step: Callable[[float], None] | None = None,
+) -> RolloutResult:
+    """One policy (a controller's name makes it) on the scenario, its planner's failures counted."""
+    if isinstance(policy, str):
+        policy = ExpertPolicy(controller_for(policy, scenario, params), params.u_max, params.omega_max)
+    result = rollout(
+        policy, params, scenario.starts, scenario.goals, record=record, seed=seed, progress=progress,
+        description=f"{scenario.name}: {label}", T_con=scenario.T_cons, env_kwargs=scenario.env_kwargs,
+        on_step=on_step,
+    )  # fmt: skip
+    controller = getattr(policy, "controller", None)
+    result.planner_failures = len(getattr(controller, "failures", ()))
+    if hasattr(controller, "close"):
+        controller.close()
+    return result
 
 
 def evaluate_sets(

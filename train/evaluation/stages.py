@@ -44,6 +44,7 @@ class StageTime:
     stage: str  # "optimum" or a policy's label
     seconds: float
     size: int  # the plans solved, or the episodes run
+    beside: bool = False  # ran in another process at the same time as this one's stages: not in the wall total
 
 
 class StageClock:
@@ -58,6 +59,7 @@ class StageClock:
         self.began = time.perf_counter()
         self._file = file or sys.stderr
         self._done = 0.0
+        self._waited = 0.0  # for stages of another process, after this one's own
         self._total = 0.0
         self._logged = 0  # tenths of the work already written to a redirected log
         self._description = description
@@ -97,6 +99,13 @@ class StageClock:
             self.times.append(StageTime(scenario, name, time.perf_counter() - began, size))
         self._move(start + weight)
 
+    def record(self, scenario: str, name: str, seconds: float, size: int, weight: float, waited: float = 0.0) -> None:
+        """A stage that ran elsewhere (another process, beside this one's): its wall time, and its share of the bar,
+        done; ``waited``, the wall seconds this process waited for it after its own stages (a policies' time)."""
+        self._waited += waited
+        self.times.append(StageTime(scenario, name, seconds, size, beside=True))
+        self._move(self._done + weight)
+
     def _label(self, text: str) -> None:
         if self._bar is not None:
             self._bar.set_postfix_str(text, refresh=False)
@@ -131,7 +140,8 @@ class StageClock:
         total = time.perf_counter() - self.began
         optimum = [t for t in self.times if t.stage == "optimum"]
         policies = [t for t in self.times if t.stage != "optimum" and t.scenario != FIGURES]
-        other = total - sum(t.seconds for t in optimum) - sum(t.seconds for t in policies)
+        waited = self._waited + sum(t.seconds for t in policies if not t.beside)  # the policies' wall time
+        other = total - sum(t.seconds for t in optimum) - waited
         parts = []
         solved = sum(t.size for t in optimum)
         optimum_seconds = sum(t.seconds for t in optimum)
@@ -145,9 +155,8 @@ class StageClock:
             by_policy[t.stage] = by_policy.get(t.stage, 0.0) + t.seconds
         slowest = sorted(by_policy.items(), key=lambda item: -item[1])[:3]
         named = ", ".join(f"{name} {format_seconds(seconds)}" for name, seconds in slowest)
-        parts.append(
-            f"policies {format_seconds(sum(by_policy.values()))} ({named}{', ...' if len(by_policy) > 3 else ''})"
-        )
+        beside = " each; some in a second process" if any(t.beside for t in policies) else ""
+        parts.append(f"policies {format_seconds(waited)} ({named}{', ...' if len(by_policy) > 3 else ''}{beside})")
         parts.append(f"the rest (loading, figures, files) {format_seconds(other)}")
         return f"time: {format_seconds(total)}: " + "; ".join(parts)
 

@@ -1,0 +1,69 @@
+"""compare's second process (train.evaluation.side_process): the policies without a planner run beside the planners,
+and the numbers are those of the policies run one after the other, to the last digit."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from train.evaluation import evaluate as evaluate_module
+from train.evaluation import side_process
+from train.evaluation.evaluate import evaluate
+from train.evaluation.scenarios import make_scenario
+from train.evaluation.stages import StageClock
+
+needs_fork = pytest.mark.skipif(not side_process.side_process_usable(), reason="needs Linux, 2 cores and no JAX")
+
+
+def results_of(monkeypatch: pytest.MonkeyPatch, switch: str) -> tuple[dict, StageClock]:
+    monkeypatch.setenv(side_process.SWITCH, switch)
+    # 'astolfi' stands in for a planner here (the real ones solve CasADi problems: too slow for a test)
+    monkeypatch.setattr(evaluate_module, "PLANNERS", frozenset({"astolfi"}))
+    clock = StageClock(progress=False)
+    scenario = make_scenario("random", n=12, seed=5)
+    policies = {"ptc": "ptc", "astolfi": "astolfi", "fixed-time": "fixed-time"}
+    return evaluate(policies, scenario, record=True, seed=3, clock=clock), clock
+
+
+@needs_fork
+def test_the_side_process_gives_the_same_results_in_the_same_order(monkeypatch: pytest.MonkeyPatch) -> None:
+    alone, alone_clock = results_of(monkeypatch, "0")
+    beside, beside_clock = results_of(monkeypatch, "1")
+    assert list(beside) == list(alone) == ["ptc", "astolfi", "fixed-time"]
+    for label in alone:
+        for field in dataclasses.fields(alone[label]):
+            a, b = getattr(alone[label], field.name), getattr(beside[label], field.name)
+            if isinstance(a, np.ndarray):
+                np.testing.assert_array_equal(a, b, err_msg=f"{label}.{field.name}")
+            elif isinstance(a, dict):
+                for key in a:
+                    np.testing.assert_array_equal(a[key], b[key], err_msg=f"{label}.trajectory[{key}]")
+            else:
+                assert a == b, f"{label}.{field.name}"
+    # every policy's stage is timed, whichever process ran it
+    assert sorted(t.stage for t in beside_clock.times) == sorted(t.stage for t in alone_clock.times)
+    assert all(t.seconds > 0 and t.size == 12 for t in beside_clock.times)
+
+
+@needs_fork
+def test_an_error_in_the_side_process_reaches_the_command(monkeypatch: pytest.MonkeyPatch) -> None:
+    real = evaluate_module._rollout_one
+
+    def broken(label: str, *args: object) -> object:
+        if label == "ptc":  # a policy of the side process (the planner, 'astolfi' here, runs in this one)
+            raise RuntimeError("a policy failed in the side process")
+        return real(label, *args)
+
+    monkeypatch.setattr(evaluate_module, "_rollout_one", broken)
+    with pytest.raises(RuntimeError, match="failed in the side process"):
+        results_of(monkeypatch, "1")
+
+
+def test_the_side_process_is_off_when_asked_or_where_a_fork_is_unsafe(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv(side_process.SWITCH, "0")
+    assert not side_process.side_process_usable()
+    monkeypatch.setenv(side_process.SWITCH, "1")
+    monkeypatch.setitem(__import__("sys").modules, "jax", object())  # JAX's threads do not survive a fork
+    assert not side_process.side_process_usable()
