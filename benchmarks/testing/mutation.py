@@ -60,7 +60,7 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
     "baselines": (["baselines/base.py", "baselines/controllers.py", "baselines/expert.py", "baselines/nmpc.py",
                    "baselines/optimal.py", "baselines/polar.py", "baselines/registry.py"],
                   ["tests/test_controllers.py", "tests/test_controller_parameters.py", "tests/test_paper_by_hand.py",
-                   "tests/test_optimal.py", "tests/test_optimum_cache.py", "tests/test_dagger.py",
+                   "tests/test_optimal.py", "tests/test_optimum_cache.py", "tests/test_planner.py", "tests/test_dagger.py",
                    "tests/test_parameter_ranges.py"]),
     "estimation": (["baselines/estimation.py"], ["tests/test_estimation.py", "tests/test_parameter_ranges.py"]),
     "robust": (["baselines/robust.py"], ["tests/test_robust.py", "tests/test_parameter_ranges.py"]),
