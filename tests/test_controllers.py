@@ -225,6 +225,11 @@ def test_pt_astolfi_is_astolfi_on_the_time_scale_of_eq_12() -> None:
     plain = AstolfiController(AstolfiParams(k_rho=1.5, k_alpha=4.7, k_beta=-1.7))(inputs)
     for a, b in zip(scaled, plain, strict=True):  # rate 1 / (T - t) with T = 0.5 * 20 s, t = 4 s
         np.testing.assert_allclose(a, b / 6.0, rtol=1e-12)
+    # at and past T = 10 s the rate 1 / (T - t) is capped at max_gain / T (eq. (12)'s guard): finite commands
+    late = ControllerInput.from_pose([1.0, -0.5], [0.3, 0.8], [2.0, -1.0], [10.0, 12.0], (1.0, 0.5))
+    capped = PrescribedTimeAstolfiController(T_con=20.0, arrival_fraction=0.5, max_gain=30.0)(late)
+    for a, b in zip(capped, AstolfiController(AstolfiParams(k_rho=1.5, k_alpha=4.7, k_beta=-1.7))(late), strict=True):
+        np.testing.assert_allclose(a, b * 3.0, rtol=1e-12)
 
 
 class FullSpeedAhead:

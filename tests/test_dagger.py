@@ -215,6 +215,7 @@ def test_handover_only_chooses_the_handover_of_a_trained_run_and_writes_it(
     )
     saved = yaml.safe_load((run_dir / "config.yaml").read_text())
     assert saved["handover"] == chosen and saved["handover_tried"] == [{"tried": 1}]
+    assert saved["learned_from"] == "expert" and saved["runtime"] == ["handover: pt-astolfi"]  # beside the network
     assert asked[0][:2] == ("pt-astolfi", 9) and asked[0][2] is not None  # the run's own env (v1: T_con drawn)
     with pytest.raises(SystemExit, match="--handover-expert 'nope' is invalid"):
         dagger.main(["--run-dir", str(run_dir), "--handover-only", "--handover-expert", "nope"])
@@ -229,7 +230,8 @@ def test_select_handover_takes_the_least_energy_among_those_in_time_and_on_headi
     from train.learning.imitation import dagger
 
     def fake(table):  # type: ignore[no-untyped-def]
-        def evaluate(policy, params, T_cons, n, seed):  # type: ignore[no-untyped-def]
+        def evaluate(policy, evaluated_on, T_cons, n, seed):  # type: ignore[no-untyped-def]
+            assert evaluated_on is params  # the run's own env, not a default one
             success, heading, energy = table(policy.time_fraction, policy.speed_margin)
             return [{"T_con": T, "success": success, "heading": heading, "energy": energy / T} for T in T_cons]
 
@@ -294,3 +296,27 @@ def test_plans_solved_in_worker_processes_are_those_solved_in_order() -> None:
     for a, b in zip(serial[:2], parallel[:2], strict=True):
         np.testing.assert_allclose(a[0], b[0], atol=1e-9)
         np.testing.assert_allclose(a[1], b[1], atol=1e-9)
+
+
+def test_fit_regresses_the_actors_mean_action_onto_the_demonstrated_commands() -> None:
+    """Behaviour cloning's step: after fit the network's deterministic actions are much closer to the demonstrated
+    commands (here an affine law of the observation) than before, and the loss it returns is a mean squared error."""
+    import torch
+
+    from train.learning.imitation.dagger import fit, make_model
+
+    config = DaggerConfig(epochs=30, batch_size=32, net_arch=[32], learning_rate=3e-3)
+    rng = np.random.default_rng(0)
+    obs = rng.uniform(-1.0, 1.0, (256, 10)).astype(np.float32)
+    target = (np.float32([0.3, -0.2]) + 0.4 * obs[:, 1:3]).astype(np.float32)
+    torch.manual_seed(0)
+    model = make_model(config)
+
+    def error() -> float:
+        return float(np.mean((model.predict(obs, deterministic=True)[0] - target) ** 2))
+
+    before = error()
+    loss = fit(model, (obs, target), config, rng)
+    after = error()
+    assert after < 0.1 * before
+    assert 0.0 <= loss < 0.2 * before

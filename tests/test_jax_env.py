@@ -345,3 +345,34 @@ def test_v2_on_jax_ends_at_T_con_and_pays_the_heading_and_the_miss_as_the_numpy_
                 assert float(state.reward_terms[term][0]) == pytest.approx(value, abs=1e-12), term
         assert info["reward_terms"]["heading"] < 0 and info["reward_terms"]["late"] < 0
         assert info["reward_terms"]["arrival"] == 0
+
+
+def test_actuation_noise_on_jax_steps_under_jit_and_moves_a_robot_told_to_stand_still() -> None:
+    """v1's actuation noise on JAX, jitted: the command is the action plus sigma x a standard-normal draw (the numpy
+    env's one place, core.transition), so a robot told to stand still moves, within the limits; the same key, the
+    same move."""
+    env, params = make_gymnax_env(dwr_gym.ENV_ID, T_con=5.0, actuation_noise=0.2)
+    _, state = jax.jit(env.reset)(jax.random.PRNGKey(0), params)
+    step = jax.jit(env.step)
+    _, _, _, _, info = step(jax.random.PRNGKey(1), state, jnp.zeros(2), params)
+    _, _, _, _, again = step(jax.random.PRNGKey(1), state, jnp.zeros(2), params)
+    u, omega = float(info["linear_velocity"]), float(info["angular_velocity"])
+    assert 0.0 < abs(u) < params.u_max and 0.0 < abs(omega) < params.omega_max
+    assert (u, omega) == (float(again["linear_velocity"]), float(again["angular_velocity"]))
+
+
+def test_the_jax_observation_at_the_goal_and_at_one_metre_is_the_numpy_envs() -> None:
+    """The bearing features -x/d and -y/d hold at every distance, exactly 1 m included (straight below the goal: (0, 1)),
+    and at the goal itself, where the division is guarded, they are the numpy env's (1, 0): no NaN."""
+    from dwr_gym.jax_env.func_env import initial_state, observation_space
+
+    with jax.enable_x64(True):
+        params = functional_params(dwr_gym.ENV_ID, dtype="float64")
+        start = (np.array([0.0, 0.0]), np.array([-1.0, 0.0]), np.array([0.3, 0.3]))
+        state = initial_state(start, np.array([10.0, 10.0]), jax.random.PRNGKey(0), params, observation_space(params))
+        observed = np.asarray(state.observation)
+    numpy_env = gym.make(dwr_gym.ENV_ID).unwrapped
+    for robot, pose in enumerate([(0.0, -1.0, 0.3), (0.0, 0.0, 0.3)]):
+        reference, _ = numpy_env.reset(options={"start": pose, "goal": (0.0, 0.0, 0.0), "T_con": 10.0})
+        np.testing.assert_allclose(observed[robot], reference, rtol=1e-6, atol=1e-7)
+    np.testing.assert_array_equal(observed[:, 1:3], [[0.0, 1.0], [1.0, 0.0]])

@@ -53,3 +53,18 @@ def test_the_residual_scale_is_in_0_to_2() -> None:
     for bad in (0.0, 2.0000001, -1.0):
         with pytest.raises(ValueError, match=r"^residual_scale=.* is invalid: expected a finite number in \(0, 2\]$"):
             check_scale(bad)
+
+
+def test_the_residual_vec_env_reports_the_expert_and_residual_parts_and_wants_a_reset_first() -> None:
+    """Each step's infos carry the expert's action and the residual (scale x the clipped action), the parts a user
+    reads to see what the network adds; a step before reset() says so."""
+    from dwr_gym.sb3 import make_sb3_vec_env
+    from train.learning.residual import ResidualVecEnv
+
+    venv = ResidualVecEnv(make_sb3_vec_env(2, seed=0), Recorder((0.5, -0.25)), scale=0.5)  # type: ignore[arg-type]
+    with pytest.raises(AssertionError, match=r"^call reset\(\) before step\(\)$"):
+        venv.step_async(np.zeros((2, 2), np.float32))
+    venv.reset()
+    _, _, _, infos = venv.step(np.float32([[3.0, 0.2], [-0.4, -2.0]]))
+    assert [info["expert_action"].tolist() for info in infos] == [[0.5, -0.25]] * 2
+    np.testing.assert_allclose([info["residual_action"] for info in infos], [[0.5, 0.1], [-0.2, -0.5]], atol=1e-7)

@@ -180,6 +180,7 @@ def test_docs_keep_the_agents_of_earlier_runs_and_take_this_runs_rows(tmp_path: 
         "sac-utd:algo=sac,hyperparams=train/hyperparams/sac_tuned.yml,hyperparam_overrides={gradient_steps: 8}",
         "ppo-x:backend=jax,hyperparams={log_std_final: -2.5, gamma: 1.0, learning_rate: lin_3e-4},action_repeat=2",
         "res:algo=ppo,residual=true,expert=ptc,hyperparams={policy_kwargs: 'dict(net_arch=[64, 64], log_std_init=-3.0)'}",
+        "ppo-ckpt:checkpoint_freq=500",  # the benchmark's evaluations set the checkpoints: 2048, not 500
     ],
 )
 def test_a_runs_recorded_recipe_trains_the_same_configuration(
@@ -192,13 +193,15 @@ def test_a_runs_recorded_recipe_trains_the_same_configuration(
     from train.learning.benchmark import train_command, train_config
 
     entry = parse_entry(text)
-    config = train_config(entry, 1, tmp_path / "run", {"env_steps": 4096, "eval_freq": 2048, "eval_episodes": 4})
+    budget = {"env_steps": 4096, "eval_freq": 2048, "eval_episodes": 4, "time_limit": 600.0}
+    config = train_config(entry, 1, tmp_path / "run", budget)
     captured = []
     monkeypatch.setattr(training, "train", lambda cfg, command=None: captured.append(cfg))
     command = train_command(entry, config)
     assert command[:2] == ["dwr-gym", "train"] and main(command[1:]) == 0
     (again,) = captured
-    for name in ("algo", "backend", "residual", "expert", "action_repeat", "hyperparams", "total_timesteps", "seed"):
+    for name in ("algo", "backend", "residual", "expert", "action_repeat", "hyperparams", "total_timesteps", "seed",
+                 "eval_freq", "checkpoint_freq", "eval_episodes", "eval_seed", "time_limit"):  # fmt: skip
         assert getattr(again, name) == getattr(config, name), name
     assert again.algo_kwargs == config.algo_kwargs
 

@@ -258,11 +258,20 @@ def test_no_seeds_nothing_finite_and_a_missing_rliable_are_said_plainly(monkeypa
         iqm_interval([1.0])
 
 
-def test_the_learning_curves_figure_draws_each_entry_and_its_band(tmp_path: Path) -> None:
+def test_the_learning_curves_figure_draws_each_entry_and_its_band(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     pytest.importorskip("matplotlib")
     from matplotlib import image as mpimg
+    from matplotlib.figure import Figure
 
     from train.reporting.rl_benchmark import plot_curves
+
+    saved: list[Figure] = []
+    real_savefig = Figure.savefig
+    monkeypatch.setattr(
+        Figure, "savefig", lambda fig, *args, **kwargs: saved.append(fig) or real_savefig(fig, *args, **kwargs)
+    )
 
     curve = [{"env_steps": 0.0, "wall_time": 0.0, "in_time": 0.0, "energy": 9.0, "final_heading": 1.0},
              {"env_steps": 100.0, "wall_time": 5.0, "in_time": 0.5, "energy": 3.0, "final_heading": 0.5}]  # fmt: skip
@@ -274,6 +283,8 @@ def test_the_learning_curves_figure_draws_each_entry_and_its_band(tmp_path: Path
         image = mpimg.imread(path)
         assert image.shape[:2] == (324, 900)  # 10 x 3.6 inches at 90 dpi: the docs' width
         assert len(np.unique(image.reshape(-1, image.shape[2]), axis=0)) > 20  # lines and a translucent band
+        legend = saved[-1].axes[0].get_legend()
+        assert [text.get_text() for text in legend.get_texts()] == ["a (2 seeds)"]  # which line is whose, from how many
 
 
 def test_the_table_shows_every_entry_evaluated_on_the_set_asked_for() -> None:
@@ -290,3 +301,65 @@ def test_the_table_shows_every_entry_evaluated_on_the_set_asked_for() -> None:
     metrics = result("x", 0, 1.0, 2.0)["sets"]["random"]
     references = {"pt-astolfi": {"delay": metrics}, "ptc": {"random": metrics}}  # the first without the set
     assert table(summary, references).splitlines()[-1].startswith("| ptc (controller) | - | - | - | 1.000 | 2.00 |")
+
+
+def test_the_tables_show_each_entrys_env_and_a_dash_for_what_is_missing() -> None:
+    """Each entry on its own env (a v2 agent is not shown as v1); a prescribed time an entry was not evaluated at, a
+    law without an optimum there (E/opt None) and an entry recorded without its env steps (an earlier run's, kept
+    from the docs) read '-', not a crash."""
+    from train.reporting.rl_benchmark import per_T_con_table, table
+
+    metrics = result("x", 0, 0.9, 1.2)["sets"]["random"]
+    agent = {**result("v2-agent", 0, 0.9, 1.2), "env_id": "DWRPointStabilization-v2"}
+    agent["sets"] = {"random": metrics, "T_con=10": metrics}
+    summary = aggregate([agent])
+    law = {"ptc": {"T_con=20": {**metrics, "energy_ratio": None}}}
+    rows = [row.split(" | ") for row in per_T_con_table(summary, law).splitlines()[2:]]
+    assert rows[0][:2] == ["| v2-agent", "v2"] and rows[0][2].startswith("0.90") and rows[0][3:] == ["-", "-", "- |"]
+    assert rows[1] == ["| ptc (controller)", "v1", "-", "0.90, -", "-", "- |"]
+    del summary["v2-agent"]["env_steps"]
+    assert table(summary).splitlines()[2].split(" | ")[:3] == ["| v2-agent", "1", "-"]
+
+
+def test_parallel_seeds_train_in_spawned_processes_and_come_back_in_order(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """jobs > 1 trains the (entry, seed) runs in processes started by spawn (a forked process of torch's or JAX's
+    threads can deadlock), and returns their results in the order of the entries, then the seeds."""
+    import concurrent.futures
+
+    import train.learning.benchmark as benchmark
+
+    pools: list[tuple[int, str]] = []
+
+    class InProcess:
+        def __init__(self, workers: int, mp_context: Any) -> None:
+            pools.append((workers, mp_context.get_start_method()))
+
+        def __enter__(self) -> InProcess:
+            return self
+
+        def __exit__(self, *error: object) -> None:
+            return None
+
+        def submit(self, function: Any, *args: Any) -> concurrent.futures.Future:
+            future: concurrent.futures.Future = concurrent.futures.Future()
+            future.set_result(function(*args))
+            return future
+
+    monkeypatch.setattr(concurrent.futures, "ProcessPoolExecutor", InProcess)
+    monkeypatch.setattr(benchmark, "run_one", lambda entry, seed, out, budget: {"entry": entry.name, "seed": seed})
+    results = run_benchmark([Entry("a"), Entry("b")], [3, 1], tmp_path, {}, jobs=2)
+    assert pools == [(2, "spawn")]
+    assert [(r["entry"], r["seed"]) for r in results] == [("a", 3), ("a", 1), ("b", 3), ("b", 1)]
+
+
+def test_an_entrys_own_budget_and_a_repeats_share_of_the_evaluations_are_whole_numbers_kept(tmp_path: Path) -> None:
+    """An entry's own total_timesteps beats its YAML's n_timesteps (1e6 for sac_tuned.yml) as it beats the benchmark's;
+    with an action repeat of 3 the evaluations come every 2048 // 3 = 682 agent decisions, a whole number."""
+    own = parse_entry("sac-own:algo=sac,hyperparams=train/hyperparams/sac_tuned.yml,total_timesteps=3000")
+    assert train_config(own, 0, tmp_path / "own", {}).total_timesteps == 3000
+    repeat = parse_entry("ppo-rep3:action_repeat=3")
+    config = train_config(repeat, 0, tmp_path / "rep", {"env_steps": 6144, "eval_freq": 2048})
+    assert (config.total_timesteps, config.eval_freq, config.checkpoint_freq) == (2048, 682, 682)
+    assert all(type(v) is int for v in (config.eval_freq, config.checkpoint_freq))

@@ -222,10 +222,11 @@ def test_past_its_re_plans_or_too_far_to_plan_the_robot_is_handed_to_the_finish_
 
 
 class Cruise:
-    """A learned cruise that always answers (0.5, -0.25)."""
+    """A learned cruise whose mean action is (0.5, -0.25); a sampled one (deterministic=False) is 0.1 off: the cruise
+    must drive on the mean, as a deployed agent does (reproducible, no sampling noise in the commands)."""
 
     def predict(self, obs, state=None, episode_start=None, deterministic=True):  # type: ignore[no-untyped-def]
-        return np.tile(np.float32([0.5, -0.25]), (len(obs), 1)), state
+        return np.tile(np.float32([0.5, -0.25]) + (0.0 if deterministic else 0.1), (len(obs), 1)), state
 
 
 def test_a_learned_cruise_drives_until_handover_time_or_until_the_robot_falls_behind() -> None:
@@ -289,3 +290,51 @@ def test_the_cruise_tracks_its_reference_with_kanayamas_law_by_hand() -> None:
         assert u[i] == pytest.approx(u_r * np.cos(e_psi) + 1.3 * e_x, abs=1e-12)
         assert omega[i] == pytest.approx(omega_r + 3.0 * u_r * e_y + 2.5 * abs(u_r) * np.sin(e_psi), abs=1e-12)
         assert error[i] == pytest.approx(np.hypot(dx, dy), abs=1e-12)
+
+
+@pytest.mark.parametrize("bias", [-0.1, 0.1])
+def test_behind_schedule_the_plan_takes_the_least_time_at_the_speed_the_robot_keeps_at_least(
+    bias: float, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """With 0.5 s left of its 0.8 T_con for 1.08 m, the robot is planned to arrive in 1.1 x the least time at the
+    speed its estimated response keeps whichever way it turns: a u_max - |b_u| = 0.5 - 0.1 = 0.4 m/s, for a bias
+    forward as for one backward (a bias that helps in one direction hinders in the other)."""
+    controller = make_controller("robust-pt", T_con=T_CON, estimator=None, workers=1)
+    monkeypatch.setattr(controller, "_responses", lambda index: np.tile([bias, 0.0, 1.0, 0.0], (index.size, 1)))
+    jobs: list[dict] = []
+    real = controller._pool.map  # type: ignore[attr-defined]
+    monkeypatch.setattr(controller._pool, "map", lambda batch: jobs.extend(batch) or real(batch))  # type: ignore[attr-defined]
+    one_step(controller, -1.0, 0.4, 0.3, 0.8 * T_CON - 0.5)
+    assert jobs[0]["arrival_time"] == pytest.approx(1.1 * np.hypot(-1.0, 0.4) / 0.4, rel=1e-12)
+    assert jobs[0]["response"] == (bias, 0.0, 1.0, 0.0)
+
+
+class WeakActuators:
+    """A pose filter that estimates the measured pose and a robot whose actuators give half the commanded velocities."""
+
+    response = np.array([[0.0, 0.0, 0.5, 0.0]])
+
+    def update(self, measured: np.ndarray, command: np.ndarray) -> np.ndarray:
+        return measured
+
+    def reset(self, index: object = None) -> None:
+        pass
+
+
+class TightTurn:
+    """A learned cruise asking for (0.25 m/s, -1.8 rad/s): half the speed limit, 90 % of the turn rate's."""
+
+    def predict(self, obs, state=None, episode_start=None, deterministic=True):  # type: ignore[no-untyped-def]
+        return np.tile(np.float32([0.5, -0.9]), (len(obs), 1)), state
+
+
+def test_a_compensation_beyond_the_limits_slows_the_robot_on_the_arc_asked_for() -> None:
+    """With half-strength actuators the cruise's (0.25, -1.8) would need the commands (0.5, -3.6): past omega_max, so
+    both are scaled by 2 / 3.6 and the robot drives the arc asked for (omega / u = -7.2), slower; clipping the turn
+    rate alone would bend it to -2 / 0.5."""
+    from baselines.robust import RobustPTController, RobustPTParams
+
+    controller = RobustPTController(RobustPTParams(T_con=T_CON, estimator=None, workers=1), cruise=TightTurn())
+    controller._filter = WeakActuators()  # type: ignore[assignment]
+    u, omega = one_step(controller, -1.0, 0.4, 0.3, 0.0)
+    assert omega == pytest.approx(-2.0, rel=1e-12) and omega / u == pytest.approx(-7.2, rel=1e-6)

@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 import pytest
 import yaml
+from stable_baselines3 import PPO
 
 pytest.importorskip("casadi")
 
@@ -70,6 +71,8 @@ def test_a_tiny_robust_dagger_run_aggregates_disturbed_rollouts_and_leaves_a_rob
         )
     saved = yaml.safe_load((run_dir / "config.yaml").read_text())
     assert saved["robust_agent"] == {"plan_arrival": 0.8} and saved["robust_dagger"]["dagger_rounds"] == 1
+    model = yaml.safe_load((run_dir / "config.yaml").read_text())["config"]
+    assert model["num_envs"] == PPO.load(run_dir / "model.zip", device="cpu").n_envs  # the record is the model's
     label, agent = load_agent(run_dir)
     assert label == "robust" and isinstance(agent.controller, RobustPTController)
     assert agent.controller.cruise is not None  # the network drives the cruise
@@ -102,3 +105,20 @@ def test_a_bad_distribution_keyword_fails_before_any_work(tmp_path: Path) -> Non
     with pytest.raises(TypeError, match="nope"):
         run(tiny(distribution={"nope": 1}), tmp_path / "bad", ["test"])
     assert not (tmp_path / "bad").exists()
+
+
+def test_the_rollouts_run_each_episode_with_the_T_con_they_return() -> None:
+    """v1 draws T_con per episode: each rollout episode runs to the T_con returned with it (the samples' labels and the
+    learning curve read it), whether the robot is disturbed or not."""
+    from dwr_gym.params import EnvParams
+
+    class Still:
+        def predict(self, observation: Any, *args: Any, **kwargs: Any) -> Any:
+            return np.zeros((len(observation), 2), np.float32), None
+
+    params = EnvParams.from_kwargs(**{**ENV_KWARGS, "T_con_range": (5.0, 15.0)})
+    for disturbed in (False, True):
+        result, starts, T_con = robust_dagger.rollouts(Still(), params, RobustDaggerConfig(), 3,
+                                                       np.random.default_rng(1), disturbed)  # fmt: skip
+        assert len(set(T_con.tolist())) == 3 and starts.shape == (3, 3)
+        np.testing.assert_array_equal(result.T_con, T_con)

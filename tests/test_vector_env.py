@@ -353,3 +353,33 @@ def test_the_pose_in_the_info_is_the_world_pose_whatever_the_goal(goal: tuple[fl
     starts = np.array([[0.3, 0.2, 0.1], [-0.4, 0.5, -2.0]])
     _, info = env.reset(seed=0, options={"start": starts, "goal": np.tile(goal, (2, 1))})
     np.testing.assert_allclose(info["pose"], starts, atol=1e-12)
+
+
+def test_float32_mode_ends_an_episode_at_the_step_float64_counts() -> None:
+    """An episode's step counts come from its float64 T_con, as EnvParams counts them, whatever the state's dtype: a
+    T_con of 26.400000537472387 s is truncated at step ceil(1.5 T_con / dt) = 793 in float32 mode too (its float32
+    rounding would give 792)."""
+    T_con = 26.400000537472387
+    for dtype in ("float64", "float32"):
+        envs = gym.make_vec(ENV_ID, num_envs=1, dtype=dtype, T_con=T_con, T_con_range=None)
+        envs.reset(seed=0)
+        steps, ended = 0, False
+        while not ended and steps < 800:
+            _, _, terminated, truncated, _ = envs.step(np.zeros((1, 2), np.float32))  # standing still: no arrival
+            steps, ended = steps + 1, bool(terminated[0] or truncated[0])
+        assert (steps, bool(truncated[0])) == (793, True), dtype
+        envs.close()
+
+
+def test_the_world_pose_of_a_state_is_a_copy_unless_asked_otherwise() -> None:
+    """TaskState.world_pose() returns copies: an autoreset that writes into the state's arrays in place leaves a pose
+    taken before it as it was; copy=False may hand out the state's own arrays."""
+    envs = gym.make_vec(ENV_ID, num_envs=2)
+    envs.reset(seed=0)
+    state = envs.unwrapped._state
+    x, y, psi = state.world_pose()
+    before = (x.copy(), y.copy(), psi.copy())
+    state.x[:], state.y[:], state.psi[:] = 5.0, 5.0, 1.0
+    for taken, kept in zip((x, y, psi), before, strict=True):
+        np.testing.assert_array_equal(taken, kept)
+    assert state.world_pose(copy=False)[0] is state.x

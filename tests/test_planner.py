@@ -1,0 +1,146 @@
+"""The minimum-energy planner's edges (baselines.optimal, baselines.nmpc): what a failed or infeasible solve reports,
+the fallbacks (fatrop to IPOPT, an infeasible re-plan to a late plan), the re-plan tolerance and the worker processes."""
+
+from __future__ import annotations
+
+import sys
+import types
+from collections import OrderedDict
+from typing import Any
+
+import gymnasium as gym
+import pytest
+
+from baselines import ExpertPolicy, make_controller
+from baselines.optimal import (
+    InfeasibleArrivalTimeError,
+    OptimalControlError,
+    Plan,
+    default_solver,
+    least_arrival_time,
+    solve_minimum_energy,
+)
+
+ca = pytest.importorskip("casadi")
+LIMITS = {"dt": 0.05, "u_max": 0.5, "omega_max": 2.0}
+
+
+@pytest.mark.parametrize("solver", ["ipopt", "fatrop"])
+def test_a_failed_solve_is_an_optimal_control_error_naming_the_solver_the_time_and_the_status(solver: str) -> None:
+    """A solve that does not converge is a scenario's failure (OptimalControlError, which the planners catch), never
+    another exception that would stop a whole evaluation; fatrop's failure falls back to IPOPT first. The message
+    names the time the plan had (16 intervals of 0.25 s) and why the solver stopped."""
+    if solver == "fatrop" and not ca.has_nlpsol("fatrop"):
+        pytest.skip("this CasADi ships no fatrop")
+    with pytest.raises(OptimalControlError, match=rf"^{solver} found no plan from start=\(-1.0, 0.5, 0.0\) in 4 s "
+                       r"\(last status: Maximum_Iterations_Exceeded\)$"):  # fmt: skip
+        solve_minimum_energy((-1.0, 0.5, 0.0), 4.0, **LIMITS, hold_steps=5, max_iter=1, solver=solver)  # type: ignore[arg-type]
+
+
+def test_a_turn_longer_than_the_time_is_infeasible_when_the_heading_counts() -> None:
+    """From 0.1 m with the heading 3 rad off, the turn alone takes 3 / omega_max = 1.5 s: 1 s is refused up front for
+    the full pose, while the position alone is reachable in it."""
+    with pytest.raises(InfeasibleArrivalTimeError, match=r"T_con=1 s is infeasible.*needs at least 1.5 s"):
+        solve_minimum_energy((0.1, 0.0, 3.0), 1.0, **LIMITS)  # type: ignore[arg-type]
+    assert solve_minimum_energy((0.1, 0.0, 3.0), 1.0, **LIMITS, heading=False).intervals == 20  # type: ignore[arg-type]
+
+
+def test_without_fatrop_the_default_solver_is_ipopt(monkeypatch: pytest.MonkeyPatch) -> None:
+    """An older CasADi without fatrop still plans: the default falls back to IPOPT, which every CasADi ships."""
+    monkeypatch.setattr(ca, "has_nlpsol", lambda name: name != "fatrop")
+    assert default_solver() == "ipopt"
+    monkeypatch.setattr(ca, "has_nlpsol", lambda name: True)
+    assert default_solver() == "fatrop"
+
+
+def drive(controller: Any, start: tuple[float, float, float], steps: int, **env_kwargs: Any) -> float:
+    """Run the expert of ``controller`` from ``start`` (T_con 5 s) for up to ``steps``; the final distance [m]."""
+    env = gym.make("DWRPointStabilization-v1", **env_kwargs)
+    expert = ExpertPolicy(controller, 0.5, 2.0)
+    observation, info = env.reset(seed=0, options={"start": start, "T_con": 5.0})
+    for _ in range(steps):
+        observation, _, terminated, truncated, info = env.step(expert.predict(observation)[0])
+        if terminated or truncated:
+            break
+    env.close()
+    return float(info["distance"])
+
+
+def test_a_replan_found_infeasible_becomes_a_late_plan_from_where_the_robot_is(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Noise can leave too little time on the plan's grid: such a re-plan is infeasible, and the robot then gets a new
+    plan from where it is, arriving in 1.5 times the least time plus one interval, instead of a failure (a robot
+    whose planner failed stands still)."""
+    import baselines.nmpc as nmpc
+
+    real = nmpc.solve_minimum_energy
+    late: list[dict[str, Any]] = []
+
+    def infeasible_replans(**job: Any) -> Plan:
+        if job.get("warm_start") is not None:  # every shrinking-horizon re-plan
+            raise InfeasibleArrivalTimeError("too little time left (injected)")
+        if job.get("intervals", 0) is None:
+            late.append(job)
+        return real(**job)
+
+    monkeypatch.setattr(nmpc, "solve_minimum_energy", infeasible_replans)
+    monkeypatch.setattr(nmpc, "_MEMO", OrderedDict())
+    controller = make_controller("optimal", workers=1)
+    distance = drive(controller, (-1.0, 0.3, 0.0), 60, actuation_noise=0.05)
+    assert late and not controller.failures
+    for job in late:
+        least = least_arrival_time(job["start"], 0.5, 2.0, True)
+        assert job["arrival_time"] == pytest.approx(1.5 * least + 0.05 * 5, rel=1e-12)
+        assert job["frozen"] == 0 and job["warm_start"] is None
+    assert distance < 0.6  # it drove on (from 1.04 m) on the late plans
+
+
+def test_a_zero_replan_tolerance_replans_on_schedule_and_the_default_spares_an_exact_robot() -> None:
+    """replan_tolerance 0 re-plans at every scheduled re-plan; the default skips the re-plans of a noise-free robot,
+    which is where its plan puts it (to the solver's tolerance)."""
+    always = make_controller("optimal", workers=1, replan_tolerance=0.0, replan_every=20)
+    drive(always, (-1.0, 0.3, 0.0), 60)
+    spared = make_controller("optimal", workers=1, replan_every=20)
+    drive(spared, (-1.0, 0.3, 0.0), 60)
+    assert spared.solves == 1
+    assert always.solves == 3  # the first plan, then at steps 20 and 40
+
+
+def test_planners_of_one_size_share_their_worker_processes(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The worker processes (and the solvers each one built) are kept from one planner to the next of the same size and
+    start method, and a broken pool (a worker killed) is replaced. No process starts until a batch is submitted."""
+    import baselines.nmpc as nmpc
+
+    monkeypatch.setattr(nmpc, "_EXECUTORS", {})
+    first = nmpc._shared_executor(2, "spawn")
+    assert nmpc._shared_executor(2, "spawn") is first
+    assert nmpc._shared_executor(3, "spawn") is not first
+    first._broken = True  # type: ignore[attr-defined]
+    assert nmpc._shared_executor(2, "spawn") is not first
+
+
+def test_a_batch_is_solved_in_forked_processes_unless_jax_runs_here(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Forking a process that runs JAX's threads can deadlock the child: once JAX is imported the batch's processes
+    are spawned; otherwise forked (fast, and no `if __name__` guard needed). The plans come back in the jobs' order."""
+    import baselines.nmpc as nmpc
+
+    methods: list[str] = []
+
+    class InProcess:
+        def map(self, function: Any, jobs: list[dict[str, Any]], chunksize: int) -> Any:
+            return map(function, jobs)
+
+    def executor(workers: int, method: str) -> InProcess:
+        methods.append(method)
+        return InProcess()
+
+    monkeypatch.setattr(nmpc, "_shared_executor", executor)
+    jobs = [{"start": (-0.2 - 0.05 * k, 0.1, 0.0), "arrival_time": 2.0, "hold_steps": 5, **LIMITS} for k in range(8)]
+    for jax in (None, types.ModuleType("jax")):
+        monkeypatch.setattr(nmpc, "_MEMO", OrderedDict())
+        if jax is None:
+            monkeypatch.delitem(sys.modules, "jax", raising=False)
+        else:
+            monkeypatch.setitem(sys.modules, "jax", jax)
+        plans = nmpc.PlanPool(workers=2).map(jobs)
+        assert [plan.states[0].tolist() for plan in plans] == [list(job["start"]) for job in jobs]  # type: ignore[union-attr]
+    assert methods == ["fork", "spawn"]
