@@ -321,7 +321,7 @@ def test_the_tables_show_each_entrys_env_and_a_dash_for_what_is_missing() -> Non
     assert table(summary).splitlines()[2].split(" | ")[:3] == ["| v2-agent", "1", "-"]
 
 
-def test_parallel_seeds_train_in_spawned_processes_and_come_back_in_order(
+def test_parallel_seeds_train_in_fresh_worker_processes_and_come_back_in_order(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """jobs > 1 trains the (entry, seed) runs in processes started by spawn (a forked process of torch's or JAX's
