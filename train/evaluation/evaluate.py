@@ -58,11 +58,12 @@ def evaluate(
             {label: (_rollout_one, (label, policy, params, scenario, record, seed)) for label, policy in plain.items()}
         )
     results = {}
+    steps = max_steps(scenario, params)
     try:
         for label, policy in policies.items():
             if side is not None and label in plain:
                 continue
-            weight = estimated_seconds(label, scenario.size, max_steps(scenario, params))
+            weight = estimated_seconds(label, scenario.size, steps)
             with clock.stage(stage_scenario, label, weight, scenario.size) as advance:
                 results[label] = _rollout_one(label, policy, params, scenario, record, seed,
                                               progress and not clock.shown, advance)  # fmt: skip
@@ -72,7 +73,7 @@ def evaluate(
             waited = time.perf_counter() - began
             for label, (result, seconds) in finished.items():
                 clock.record(stage_scenario, label, seconds, scenario.size,
-                             estimated_seconds(label, scenario.size, max_steps(scenario, params)), waited)  # fmt: skip
+                             estimated_seconds(label, scenario.size, steps), waited)  # fmt: skip
                 waited = 0.0
                 results[label] = result
     finally:

@@ -70,12 +70,16 @@ def _cache_file(params: EnvParams, heading: bool) -> Path:
     return cache_dir() / f"optimal-energy-{hashlib.sha256(key.encode()).hexdigest()[:16]}.json"
 
 
+def _problem(params: EnvParams, heading: bool) -> dict[str, Any]:
+    """The problem a cache file holds optima of (:func:`problem_record`), as a shipped file records it."""
+    return problem_record(CACHE_VERSION, params.dt, params.u_max, params.omega_max, heading)
+
+
 def _known(params: EnvParams, heading: bool) -> tuple[Path, dict[str, float | str]]:
     """The user's cache file for this problem and what is known of it: the shipped optima of the default sets
     (:mod:`train.evaluation.shipped_optima`), then the user's cache, which wins where both hold a key."""
     path = _cache_file(params, heading)
-    problem = problem_record(CACHE_VERSION, params.dt, params.u_max, params.omega_max, heading)
-    return path, {**shipped_energies(path.name, problem), **_read_cache(path)}
+    return path, {**shipped_energies(path.name, _problem(params, heading)), **_read_cache(path)}
 
 
 def _start_key(start: NDArray[np.float64], T_con: float) -> str:
@@ -156,8 +160,7 @@ def cache_keys(
 ) -> tuple[str, dict[str, Any], list[str]]:
     """The name of the cache file of these episodes' problem, the problem (:func:`problem_record`) and each episode's
     key in it: what ``python -m benchmarks run ship-optima`` ships."""
-    problem = problem_record(CACHE_VERSION, params.dt, params.u_max, params.omega_max, heading)
-    return _cache_file(params, heading).name, problem, _keys(params, starts, goals, T_cons)[2]
+    return _cache_file(params, heading).name, _problem(params, heading), _keys(params, starts, goals, T_cons)[2]
 
 
 def missing_optima(
@@ -311,9 +314,7 @@ def _solve_and_cache(
             pool = RayPool(address)
             workers = pool.workers
         elif workers > 1 and len(jobs) >= 4:
-            # fork is fast, but forking a process that runs JAX's threads can deadlock the child: spawn then
-            method = "fork" if sys.platform.startswith("linux") and "jax" not in sys.modules else "spawn"
-            pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(method),
+            pool = ProcessPoolExecutor(workers, mp_context=_pool_context(),
                                        initializer=_ignore_interrupts)  # fmt: skip
         while todo:
             size, batch, others = BATCH_PER_WORKER * workers, [], set()
@@ -361,15 +362,21 @@ def solve_uncached(
     ``on_solved`` receives the number solved so far (what ``dwr-gym optimum verify`` re-solves)."""
     workers = workers or min(os.cpu_count() or 1, 8)
     results: list[float | str] = []
-    method = "fork" if sys.platform.startswith("linux") and "jax" not in sys.modules else "spawn"
-    context = multiprocessing.get_context(method)
-    with ProcessPoolExecutor(workers, mp_context=context, initializer=_ignore_interrupts) as pool:
+    with ProcessPoolExecutor(workers, mp_context=_pool_context(), initializer=_ignore_interrupts) as pool:
         # in order, a few per task: neighbours share their padded problem's solver
         for result in pool.map(_solve_energy, jobs, chunksize=max(1, min(BATCH_PER_WORKER, len(jobs) // workers))):
             results.append(result)
             if on_solved is not None:
                 on_solved(len(results))
     return results
+
+
+def _pool_context() -> Any:
+    """Fork where it is safe (Linux, and no JAX threads in this process, which a forked child can deadlock on),
+    else spawn."""
+    return multiprocessing.get_context(
+        "fork" if sys.platform.startswith("linux") and "jax" not in sys.modules else "spawn"
+    )
 
 
 def _ignore_interrupts() -> None:

@@ -66,9 +66,10 @@ def read_shipped(path: Path) -> tuple[dict[str, Any], dict[str, float]]:
 
 
 @functools.cache
-def _shipped(name: str) -> dict[str, float]:
+def _shipped(name: str) -> tuple[dict[str, Any], dict[str, float]]:
+    """The shipped file ``name``'s problem and energies, read and checked once per process (empty where none)."""
     path = SHIPPED_DIR / name
-    return read_shipped(path)[1] if path.is_file() else {}
+    return read_shipped(path) if path.is_file() else ({}, {})
 
 
 def shipped_energies(cache_name: str, problem: dict[str, Any]) -> dict[str, float]:
@@ -76,11 +77,9 @@ def shipped_energies(cache_name: str, problem: dict[str, Any]) -> dict[str, floa
     turned off), checked to be for ``problem`` (:func:`problem_record`)."""
     if not shipped_enabled():
         return {}
-    energies = _shipped(cache_name)
-    if energies:
-        recorded = read_shipped(SHIPPED_DIR / cache_name)[0]
-        if recorded != problem:  # the same file name for another problem: a hash collision or a hand edit
-            raise ShippedOptimaError(f"{SHIPPED_DIR / cache_name}: solved for {recorded}, not for {problem}")
+    recorded, energies = _shipped(cache_name)
+    if energies and recorded != problem:  # the same file name for another problem: a hash collision or a hand edit
+        raise ShippedOptimaError(f"{SHIPPED_DIR / cache_name}: solved for {recorded}, not for {problem}")
     return energies
 
 
