@@ -16,6 +16,8 @@ beside wall time shows the cores used. Compilation is timed apart.
 
 from __future__ import annotations
 
+import argparse
+import json
 import os
 import platform
 import statistics
@@ -113,6 +115,22 @@ def measure(repeats: int, updates: int) -> dict[str, Any]:
             "goals": GOALS, "met": {k: ratios[k] >= v for k, v in GOALS.items()}}  # fmt: skip
 
 
+def pinned_one_core(repeats: int, updates: int) -> dict[str, float]:
+    """The one-device generation's median env steps/s and CPU/wall in a child process pinned to one core (XLA's
+    threads and all): the one-core reference, since a one-device generation still runs XLA's threads on both."""
+    import subprocess
+    import sys
+
+    argv = [sys.executable, "-m", "benchmarks", "run", "es-speed", "--pinned-child", "--repeats", str(repeats),
+            "--updates", str(updates)]  # fmt: skip
+    out = subprocess.run(argv, check=True, capture_output=True, text=True, cwd=ROOT)
+    data = json.loads(out.stdout.strip().splitlines()[-1])
+    return {
+        "steps_per_s": data["median_steps_per_s"]["es_1_device"],
+        "cpu_per_wall": data["median_cpu_per_wall"]["es_1_device"],
+    }
+
+
 def render(data: dict[str, Any]) -> list[str]:
     s, fps, cores, ratios = data["es_settings"], data["median_steps_per_s"], data["median_cpu_per_wall"], data["ratios"]
     names = {f"es_{DEVICES}_device": f"ES generation, candidates on {DEVICES} devices",
@@ -125,13 +143,21 @@ def render(data: dict[str, Any]) -> list[str]:
              "", f"{'run':<50}{'env steps/s':>12}{'CPU/wall':>10}"]  # fmt: skip
     for key, name in names.items():
         lines.append(f"{name:<50}{fps[key]:>12,.0f}{cores[key]:>10.2f}")
+    pinned = data.get("one_core")
+    if pinned:
+        lines.append(f"{'ES generation, one device pinned to one core (*)':<50}{pinned['steps_per_s']:>12,.0f}"
+                     f"{pinned['cpu_per_wall']:>10.2f}")  # fmt: skip
     met = {k: "met" if v else "NOT met" for k, v in data["met"].items()}
     compile_s = ", ".join(f"{k} {v:.0f} s" for k, v in data["compile_seconds"].items())
     lines += ["", f"compilation (apart from the rates): {compile_s}",
               f"goal ES generation >= {data['goals']['es_over_ppo']:g}x the jitted PPO: {ratios['es_over_ppo']:.1f}x, "
               f"{met['es_over_ppo']} (one device: {ratios['es_one_device_over_ppo']:.1f}x)",
               f"goal {DEVICES} cores >= {data['goals']['two_cores_over_one']:g}x one: "
-              f"{ratios['two_cores_over_one']:.2f}x, {met['two_cores_over_one']}"]  # fmt: skip
+              f"{ratios['two_cores_over_one']:.2f}x, {met['two_cores_over_one']} (one device runs XLA's threads on both "
+              "cores: its CPU/wall)"]  # fmt: skip
+    if pinned:
+        lines.append(f"2 devices over the one-core reference (*): {fps[f'es_{DEVICES}_device'] / pinned['steps_per_s']:.2f}x "
+                     "(* a child process pinned with sched_setaffinity, measured after the rounds above)")  # fmt: skip
     return lines
 
 
@@ -140,11 +166,20 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--repeats", type=int, default=5, help="alternating rounds (default: 5)")
     parser.add_argument("--updates", type=int, default=8, help="PPO updates per round (default: 8)")
     parser.add_argument("--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} (and its block)")
+    parser.add_argument("--no-pinned", action="store_true", help="skip the one-core reference (a pinned child process)")
+    parser.add_argument("--pinned-child", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.repeats < 1 or args.updates < 1:
         parser.error(f"--repeats {args.repeats} and --updates {args.updates}: expected both >= 1")
+    if args.pinned_child:  # before jax starts its threads, which inherit the one core
+        os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
     ask_for_devices()
     data = measure(args.repeats, args.updates)
+    if args.pinned_child:
+        print(json.dumps(data))
+        return 0
+    if not args.no_pinned:
+        data["one_core"] = pinned_one_core(args.repeats, args.updates)
     print("\n".join(render(data)))
     if args.docs:
         write_json(JSON_PATH, data)
