@@ -4,7 +4,8 @@
     nice -n 5 python -m benchmarks run sbx-learn v2-long --docs     # one of them
 
 The suite's name for the three ``dwr-gym benchmark`` commands behind docs/rl-libraries.md's tables ``sbx-v1``,
-``sbx-v2`` (one seed each, 300 s of training per run) and ``sbx-v2-long`` (1200 s each, three jobs side by side).
+``sbx-v2`` (one seed each, 300 s of training per run), ``sbx-v2-long`` (1200 s each, three jobs side by side) and
+``sbx-v2-seeds`` (five seeds of 300 s each, one job at a time).
 Each writes ``results/sbx-<run>/`` (a run already finished there is only aggregated again); ``--docs`` copies its
 benchmark.json to ``docs/rl_benchmark/sbx_<run>.json``, from which the tables are rendered.
 """
@@ -24,11 +25,14 @@ BRIEF = ["--seeds", "1", "--time-limit", "300", "--eval-freq", "50000", "--eval-
 LONG = ["--seeds", "1", "--jobs", "3", "--time-limit", "1200", "--eval-freq", "200000", "--eval-episodes", "200",
         "--disturbed-episodes", "20", "--optimum-episodes", "50", "--references"]  # fmt: skip
 
+SEEDS = ["--seeds", "5", "--jobs", "1", *BRIEF[2:]]
+
 #: run -> the agents of its ``dwr-gym benchmark`` and their options (its table is ``sbx-<run>``).
 RUNS: dict[str, list[str]] = {
     "v1": ["--agents", "sac", "sac-sbx", "tqc-sbx", "crossq-sbx", *BRIEF],
     "v2": ["--agents", f"sac-v2:env_id={V2}", "sac-sbx-v2", "tqc-sbx-v2", "crossq-sbx-v2", *BRIEF],
     "v2-long": ["--agents", "sac-sbx-v2", "tqc-sbx-v2", "crossq-sbx-v2", *LONG],
+    "v2-seeds": ["--agents", "sac-sbx-v2", "tqc-sbx-v2", "crossq-sbx-v2", *SEEDS],
 }
 
 
