@@ -59,7 +59,7 @@ def test_stages_of_a_second_process_count_once_in_the_wall_time(ticking_clock: o
     clock.record("random", "astolfi", 5.0, 40, 1.0)
     assert clock.seconds("random", "ptc") == 25.0
     line = clock.summary()  # read at 40: 30 s in all, of which 16 s of policies' wall time, 14 s the rest
-    assert "policies 16 s (ptc 25 s, optimal 10 s, astolfi 5 s each; some in a second process)" in line
+    assert "policies 16 s (ptc 25 s, optimal 10 s, astolfi 5 s each; some in another process)" in line
     assert line.endswith("the rest (loading, figures, files) 14 s")
 
 

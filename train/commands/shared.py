@@ -287,8 +287,9 @@ def add_scenario_arguments(p: argparse.ArgumentParser, out: str, sets: Sequence[
         help="no progress bar (where stderr is not a terminal: a plain line every 10 %% of the work)",
     )
     p.add_argument("--address", default=None, metavar="ADDRESS",
-                   help="solve the optima as Ray tasks on this cluster: 'auto' joins a running one (as dwr-gym sweep "
-                   "does), 'local' starts one here (default: local processes; needs the sweep extra)")  # fmt: skip
+                   help="solve the optima, and run each policy on each set, as Ray tasks on this cluster: 'auto' "
+                   "joins a running one (as dwr-gym sweep does), 'local' starts one here (default: local processes; "
+                   "needs the sweep extra)")  # fmt: skip
     add_threads_argument(p)
     add_env_arguments(p)
 

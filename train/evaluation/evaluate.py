@@ -35,7 +35,8 @@ def evaluate(
     each episode to the goal pose (or position) by T_con, for the energy / optimal ratios. With ``clock`` each
     stage (the optimum, each policy) is timed and advances its one bar (:mod:`train.evaluation.stages`); then
     ``progress`` is ignored; the stages are timed under the scenario's name, or ``stage_scenario``. With ``address``
-    the optima are solved as Ray tasks on that cluster (:func:`optimal_energies`).
+    the optima are solved as Ray tasks on that cluster (:func:`optimal_energies`), and each policy's rollout is one Ray
+    task there (:meth:`RayPool.run_each`: the same rollout as here, so the same numbers).
     """
     if optimum not in OPTIMA:
         raise ValueError(f"optimum={optimum!r} is invalid: expected one of {', '.join(OPTIMA)}")
@@ -51,6 +52,11 @@ def evaluate(
                 progress=progress and not clock.shown, description=f"{scenario.name}: optimum",
                 on_solved=lambda done: advance(done / max(todo, 1)), address=address,
             )  # fmt: skip
+    if address is not None:  # each policy's rollout one Ray task (its wall time the worker's)
+        results = _rollouts_on_ray(policies, params, scenario, record, seed, address, clock, stage_scenario)
+        for result in results.values():
+            result.optimal_energy, result.optimum_failures = optimal_energy, optimum_failures
+        return results
     plain = {label: policy for label, policy in policies.items() if label not in PLANNERS}
     side = None
     if plain and len(plain) < len(policies) and side_process_usable():  # the planners here, the others beside them
@@ -82,6 +88,37 @@ def evaluate(
     for result in results.values():
         result.optimal_energy, result.optimum_failures = optimal_energy, optimum_failures
     return {label: results[label] for label in policies}
+
+
+def _rollouts_on_ray(
+    policies: dict[str, Policy | str],
+    params: EnvParams,
+    scenario: Scenario,
+    record: bool,
+    seed: int,
+    address: str,
+    clock: StageClock,
+    stage_scenario: str,
+) -> dict[str, RolloutResult]:
+    """Every policy's rollout of ``scenario`` as one Ray task on the cluster at ``address``, all at once."""
+    from train.evaluation.ray_pool import RayPool
+
+    steps = max_steps(scenario, params)
+    pool = RayPool(address)
+    try:
+        began = time.perf_counter()
+        finished = pool.run_each(_rollout_one, [(label, policy, params, scenario, record, seed)
+                                                for label, policy in policies.items()])  # fmt: skip
+        waited = time.perf_counter() - began
+    finally:
+        pool.shutdown()
+    results = {}
+    for label, (result, seconds) in zip(policies, finished, strict=True):
+        clock.record(stage_scenario, label, seconds, scenario.size, estimated_seconds(label, scenario.size, steps),
+                     waited)  # fmt: skip
+        waited = 0.0
+        results[label] = result
+    return results
 
 
 def _rollout_one(
@@ -222,5 +259,5 @@ def evaluate_subset(
     others = evaluate({k: v for k, v in policies.items() if k != "optimal"}, scenario, seed=seed, progress=progress,
                       optimum=optimum, clock=clock, address=address)  # fmt: skip
     optimal = evaluate({"optimal": policies["optimal"]}, head, seed=seed, progress=progress, optimum=optimum,
-                       clock=clock)  # fmt: skip
+                       clock=clock, address=address)  # fmt: skip
     return {label: optimal["optimal"] if label == "optimal" else others[label] for label in policies}

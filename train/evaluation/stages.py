@@ -155,7 +155,7 @@ class StageClock:
             by_policy[t.stage] = by_policy.get(t.stage, 0.0) + t.seconds
         slowest = sorted(by_policy.items(), key=lambda item: -item[1])[:3]
         named = ", ".join(f"{name} {format_seconds(seconds)}" for name, seconds in slowest)
-        beside = " each; some in a second process" if any(t.beside for t in policies) else ""
+        beside = " each; some in another process" if any(t.beside for t in policies) else ""
         parts.append(f"policies {format_seconds(waited)} ({named}{', ...' if len(by_policy) > 3 else ''}{beside})")
         parts.append(f"the rest (loading, figures, files) {format_seconds(other)}")
         return f"time: {format_seconds(total)}: " + "; ".join(parts)
