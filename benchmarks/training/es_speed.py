@@ -66,7 +66,9 @@ def timed(run: Any) -> tuple[float, float, Any]:
     return time.perf_counter() - wall, time.process_time() - cpu, result
 
 
-def measure(repeats: int, updates: int) -> dict[str, Any]:
+def measure(repeats: int, updates: int, population: int | None = None, ppo_envs: int | None = None) -> dict[str, Any]:
+    import jax
+
     from train.learning.config import TrainConfig
     from train.learning.evolution.settings import ESSettings
     from train.learning.evolution.strategies import JaxES
@@ -76,10 +78,14 @@ def measure(repeats: int, updates: int) -> dict[str, Any]:
     from train.learning.jitted.trainer import make_jax_env
 
     es_config = resolve_hyperparams(TrainConfig(algo="es", backend="jax"), set())
+    if population is not None:
+        es_config.algo_kwargs["population_size"] = population
     settings = ESSettings.from_algo_kwargs(es_config.algo_kwargs)
     env, env_params = make_jax_env(es_config)
-    candidates = {f"es_{n}_device": JaxES(settings, env, env_params, devices=n) for n in (DEVICES, 1)}
-    ppo_config = resolve_hyperparams(TrainConfig(backend="jax"), set())
+    # on an accelerator, its one device (the host's device count is the CPU's alone)
+    counts = (DEVICES, 1) if jax.default_backend() == "cpu" else (1,)
+    candidates = {f"es_{n}_device": JaxES(settings, env, env_params, devices=n) for n in counts}
+    ppo_config = resolve_hyperparams(TrainConfig(backend="jax", num_envs=ppo_envs), {"num_envs"} if ppo_envs else set())
     ppo_settings = PPOSettings.from_algo_kwargs(ppo_config.algo_kwargs, int(ppo_config.num_envs))
     ppo = JaxPPO(ppo_settings, *make_jax_env(ppo_config))
     runner = ppo.init(0)
@@ -103,6 +109,14 @@ def measure(repeats: int, updates: int) -> dict[str, Any]:
     median = {name: statistics.median(r[name]["steps_per_s"] for r in rounds) for name in runs}
     cores = {name: statistics.median(r[name]["cpu_per_wall"] for r in rounds) for name in runs}
     two = f"es_{DEVICES}_device"
+    if two not in runs:  # an accelerator: its one device
+        ratios = {"es_one_device_over_ppo": statistics.median(r["es_1_device"]["steps_per_s"] / r["jax_ppo"]["steps_per_s"]
+                                                              for r in rounds)}  # fmt: skip
+        return {"machine": machine(), "backend": jax.default_backend(), "device": str(jax.devices()[0]),
+                "es_settings": settings.as_dict(), "ppo_steps_per_round": steps["jax_ppo"],
+                "ppo_num_envs": ppo_config.num_envs,
+                "es_steps_per_generation": steps["es_1_device"], "compile_seconds": compile_s, "rounds": rounds,
+                "median_steps_per_s": median, "median_cpu_per_wall": cores, "ratios": ratios}  # fmt: skip
     ratios = {"es_over_ppo": statistics.median(r[two]["steps_per_s"] / r["jax_ppo"]["steps_per_s"] for r in rounds),
               "es_one_device_over_ppo": statistics.median(r["es_1_device"]["steps_per_s"] / r["jax_ppo"]["steps_per_s"]
                                                           for r in rounds),
@@ -168,13 +182,22 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} (and its block)")
     parser.add_argument("--no-pinned", action="store_true", help="skip the one-core reference (a pinned child process)")
     parser.add_argument("--pinned-child", action="store_true", help=argparse.SUPPRESS)
+    parser.add_argument("--population", type=int, default=None, help="candidates per generation (default: es.yml's)")
+    parser.add_argument("--ppo-envs", type=int, default=None, help="the jitted PPO's robots (default: ppo.yml's)")
+    parser.add_argument("--json", default=None, metavar="PATH", help="write the measurement here (any backend)")
     args = parser.parse_args(argv)
     if args.repeats < 1 or args.updates < 1:
         parser.error(f"--repeats {args.repeats} and --updates {args.updates}: expected both >= 1")
     if args.pinned_child:  # before jax starts its threads, which inherit the one core
         os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
     ask_for_devices()
-    data = measure(args.repeats, args.updates)
+    data = measure(args.repeats, args.updates, args.population, args.ppo_envs)
+    if args.json is not None:
+        write_json(Path(args.json), data)
+    if "es_2_device" not in data["median_steps_per_s"]:  # an accelerator's measurement: no CPU goals, no docs block
+        print(json.dumps({k: data[k] for k in ("machine", "device", "es_settings", "median_steps_per_s", "ratios",
+                                               "compile_seconds")}, indent=1))  # fmt: skip
+        return 0
     if args.pinned_child:
         print(json.dumps(data))
         return 0
