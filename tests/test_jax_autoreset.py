@@ -32,14 +32,17 @@ def test_reset_ratio_1_is_the_vmapped_adapter_step_bit_for_bit() -> None:
     vmapped = jax.jit(jax.vmap(env.step, in_axes=(0, 0, 0, None)))
     step = jax.jit(batched.step)
     obs, state = jax.jit(batched.reset)(jax.random.PRNGKey(0), params)
-    expected_state = state
+    want_obs, expected_state = jax.vmap(env.reset, in_axes=(0, None))(
+        jax.random.split(jax.random.PRNGKey(0), N), params
+    )
+    np.testing.assert_array_equal(np.asarray(obs), np.asarray(want_obs))
     for t in range(40):
         key = jax.random.PRNGKey(t)
         got = step(key, state, actions(t), params)
         want = vmapped(jax.random.split(key, N), expected_state, actions(t), params)
         for a, b in zip(jax.tree.leaves(got), jax.tree.leaves(want), strict=True):
             np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
-        obs, state, *_ = got
+        state = got[1]
         expected_state = want[1]
 
 
@@ -87,10 +90,10 @@ def test_every_ended_robot_starts_a_valid_new_episode_and_the_others_step_as_the
 def test_more_ended_robots_than_new_episodes_share_them_in_turn() -> None:
     env, params = make_gymnax_env(dwr_gym.ENV_ID, T_con=0.5)  # every episode ends at step 15 together
     batched = OptimisticResetVecEnv(env, N, reset_ratio=8)  # 4 new episodes for 32 ended robots
-    obs, state = batched.reset(jax.random.PRNGKey(0), params)
+    _obs, state = batched.reset(jax.random.PRNGKey(0), params)
     step = jax.jit(batched.step)
     for t in range(15):
-        obs, state, _reward, done, _info = step(jax.random.PRNGKey(t), state, jnp.zeros((N, 2)), params)
+        _obs, state, _reward, done, _info = step(jax.random.PRNGKey(t), state, jnp.zeros((N, 2)), params)
     assert bool(done.all())
     x = np.asarray(state.x)
     np.testing.assert_array_equal(x, np.tile(x[:4], N // 4))  # robot i starts new episode i mod 4
