@@ -32,7 +32,7 @@ def test_reset_ratio_1_is_the_vmapped_adapter_step_bit_for_bit() -> None:
     vmapped = jax.jit(jax.vmap(env.step, in_axes=(0, 0, 0, None)))
     step = jax.jit(batched.step)
     obs, state = jax.jit(batched.reset)(jax.random.PRNGKey(0), params)
-    want_obs, expected_state = jax.vmap(env.reset, in_axes=(0, None))(
+    want_obs, expected_state = jax.jit(jax.vmap(env.reset, in_axes=(0, None)))(
         jax.random.split(jax.random.PRNGKey(0), N), params
     )
     np.testing.assert_array_equal(np.asarray(obs), np.asarray(want_obs))
