@@ -10,7 +10,8 @@ case), each with the same fixed random actions (as ``throughput``), episodes end
 - the native vector env (``gymnasium.make_vec("DWRPointStabilization-v1", num_envs=N)``), float64 and float32;
 - the gymnax adapter's step with auto-reset, ``jax.jit(jax.vmap(env.step))``, one Python call per step
   (dispatch included, what a Python training loop over the JAX env pays), float64 (``jax_enable_x64``) and float32;
-- the same step inside ``jax.lax.scan`` over ``--scan`` steps in one compiled call (how PureJaxRL runs an env), and
+- the same step inside ``jax.lax.scan`` over ``--scan`` steps in one compiled call (how PureJaxRL runs an env),
+  the same with optimistic resets (``OptimisticResetVecEnv``: ``N // --reset-ratio`` new episodes per step), and
   the FuncEnv's ``transition`` alone so (no auto-reset: gymnax's computes a new episode for every robot each step).
 
 ``--threads`` sets OMP_NUM_THREADS, torch's threads and XLA's CPU thread pool before anything is imported.
