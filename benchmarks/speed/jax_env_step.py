@@ -10,7 +10,8 @@ case), each with the same fixed random actions (as ``throughput``), episodes end
 - the native vector env (``gymnasium.make_vec("DWRPointStabilization-v1", num_envs=N)``), float64 and float32;
 - the gymnax adapter's step with auto-reset, ``jax.jit(jax.vmap(env.step))``, one Python call per step
   (dispatch included, what a Python training loop over the JAX env pays), float64 (``jax_enable_x64``) and float32;
-- the same step inside ``jax.lax.scan`` over ``--scan`` steps in one compiled call (how PureJaxRL runs an env), and
+- the same step inside ``jax.lax.scan`` over ``--scan`` steps in one compiled call (how PureJaxRL runs an env),
+  the same with optimistic resets (``OptimisticResetVecEnv``: ``N // --reset-ratio`` new episodes per step), and
   the FuncEnv's ``transition`` alone so (no auto-reset: gymnax's computes a new episode for every robot each step).
 
 ``--threads`` sets OMP_NUM_THREADS, torch's threads and XLA's CPU thread pool before anything is imported.
@@ -56,14 +57,18 @@ def native_case(num_envs: int, dtype: str, actions: Any) -> Callable[[int], None
     return run
 
 
-def jax_cases(num_envs: int, dtype: str, actions: Any, scan: int) -> dict[str, Callable[[int], None]]:
+def jax_cases(
+    num_envs: int, dtype: str, actions: Any, scan: int, reset_ratio: int
+) -> dict[str, Callable[[int], None]]:
     """(one call per step, ``scan`` steps per call) for the gymnax adapter in ``dtype`` (x64 already set)."""
     import jax
     import jax.numpy as jnp
 
     from dwr_gym.jax_env import make_gymnax_env
+    from dwr_gym.jax_env.autoreset import OptimisticResetVecEnv
 
     env, params = make_gymnax_env(ENV_ID, dtype)
+    optimistic = OptimisticResetVecEnv(env, num_envs, reset_ratio)
     action = jnp.asarray(actions)
     vmapped = jax.vmap(env.step, in_axes=(0, 0, 0, None))
 
@@ -72,6 +77,12 @@ def jax_cases(num_envs: int, dtype: str, actions: Any, scan: int) -> dict[str, C
         """One step of every robot, the keys split inside: one compiled call."""
         key, step_key = jax.random.split(key)
         _, state, _reward, _, _ = vmapped(jax.random.split(step_key, num_envs), state, action, params)
+        return state, key
+
+    def optimistic_step(state: Any, key: jax.Array) -> tuple[Any, jax.Array]:
+        """:func:`step` with optimistic resets: ``num_envs // reset_ratio`` new episodes per step."""
+        key, step_key = jax.random.split(key)
+        _, state, _reward, _, _ = optimistic.step(step_key, state, action, params)
         return state, key
 
     transition = jax.vmap(env.func_env.transition, in_axes=(0, 0, 0, None))
@@ -93,7 +104,8 @@ def jax_cases(num_envs: int, dtype: str, actions: Any, scan: int) -> dict[str, C
     keys = jax.random.split(jax.random.PRNGKey(0), num_envs)
     _, state = jax.jit(jax.vmap(env.reset, in_axes=(0, None)))(keys, params)
     carry = {"state": state, "key": jax.random.PRNGKey(1)}
-    rollouts = {"scan": scanned_call(step), "scan, no auto-reset": scanned_call(transition_only)}
+    rollouts = {"scan": scanned_call(step), f"scan, optimistic auto-reset, reset_ratio {reset_ratio}":
+                scanned_call(optimistic_step), "scan, no auto-reset": scanned_call(transition_only)}  # fmt: skip
     jax.block_until_ready(step(state, carry["key"]))  # compile them
     for rollout in rollouts.values():
         jax.block_until_ready(rollout(state, carry["key"]))
@@ -139,11 +151,16 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--steps", type=int, default=40, help="steps per repeat of the native env (default 40)")
     parser.add_argument("--scan", type=int, default=200, help="steps per compiled call in the scan case (default 200)")
     parser.add_argument(
+        "--reset-ratio", type=int, default=16, help="robots per new episode drawn, optimistic case (default 16)"
+    )
+    parser.add_argument(
         "--docs", action="store_true", help="write docs/jax/env_step.json (and render docs/jax.md's table)"
     )
     args = parser.parse_args(argv)
-    if args.num_envs < 1 or args.threads < 1 or args.repeats < 1 or args.steps < 1 or args.scan < 1:
-        parser.error("--num-envs, --threads, --repeats, --steps and --scan must be positive integers")
+    if min(args.num_envs, args.threads, args.repeats, args.steps, args.scan, args.reset_ratio) < 1:
+        parser.error("--num-envs, --threads, --repeats, --steps, --scan and --reset-ratio must be positive integers")
+    if args.reset_ratio > args.num_envs:
+        parser.error(f"--reset-ratio {args.reset_ratio} is invalid: expected at most --num-envs ({args.num_envs})")
     limit_threads(args.threads)
     import jax
     import numpy as np
@@ -156,7 +173,7 @@ def main(argv: list[str] | None = None) -> None:
     for dtype in ("float64", "float32"):  # x64 set for the whole block: toggling it per call costs a re-trace check
         jax.config.update("jax_enable_x64", dtype == "float64")
         cases = {f"numpy vector env, {dtype}": (native_case(args.num_envs, dtype, actions), args.steps)}
-        for how, run in jax_cases(args.num_envs, dtype, actions, args.scan).items():
+        for how, run in jax_cases(args.num_envs, dtype, actions, args.scan, args.reset_ratio).items():
             steps = args.scan * max(1, 2 * args.steps // args.scan) if how.startswith("scan") else args.steps
             cases[f"JAX env {how}, {dtype}"] = (run, steps)
         seconds.update(measure(cases, args.repeats))
@@ -169,6 +186,7 @@ def main(argv: list[str] | None = None) -> None:
         print(f"{name:<36} {wall * 1e6:9.1f} us/step {args.num_envs / wall:13,.0f} env-steps/s {ref_wall / wall:6.2f}x "
               f"the numpy env's; CPU {cpu * 1e6:9.1f} us/step, {ref_cpu / cpu:6.2f}x")  # fmt: skip
     record = {"num_envs": args.num_envs, "threads": args.threads, "repeats": args.repeats, "scan": args.scan,
+              "reset_ratio": args.reset_ratio,
               "env_id": ENV_ID, "rows": rows, "machine": f"{platform.machine()}, {os.cpu_count()} cores",
               "jax": jax.__version__, "numpy": np.__version__, "device": str(jax.devices()[0].platform),
               "load_average": [round(load_before, 1), round(os.getloadavg()[0], 1)]}  # fmt: skip
