@@ -55,19 +55,26 @@ def evaluate(
     plain = {label: policy for label, policy in policies.items() if label not in PLANNERS}
     side = None
     if plain and len(plain) < len(policies) and side_process_usable():  # the planners here, the others beside them
+        # the agents first (a network's call per step: the costlier), the laws last: this process takes from the end
+        order = sorted(plain, key=lambda label: isinstance(plain[label], str))
         side = SideProcess(
-            {label: (_rollout_one, (label, policy, params, scenario, record, seed)) for label, policy in plain.items()}
+            {label: (_rollout_one, (label, plain[label], params, scenario, record, seed)) for label in order}
         )
     results = {}
     steps = max_steps(scenario, params)
+
+    def run_here(label: str) -> None:
+        weight = estimated_seconds(label, scenario.size, steps)
+        with clock.stage(stage_scenario, label, weight, scenario.size) as advance:
+            results[label] = _rollout_one(label, policies[label], params, scenario, record, seed,
+                                          progress and not clock.shown, advance)  # fmt: skip
+
     try:
-        for label, policy in policies.items():
-            if side is not None and label in plain:
-                continue
-            weight = estimated_seconds(label, scenario.size, steps)
-            with clock.stage(stage_scenario, label, weight, scenario.size) as advance:
-                results[label] = _rollout_one(label, policy, params, scenario, record, seed,
-                                              progress and not clock.shown, advance)  # fmt: skip
+        for label in policies:
+            if side is None or label not in plain:
+                run_here(label)
+        while side is not None and (label := side.take()) is not None:  # the side process's jobs not started yet
+            run_here(label)
         if side is not None:
             began = time.perf_counter()
             finished = side.results()
