@@ -161,18 +161,24 @@ def clear_memo() -> None:
 class PlanPool:
     """Solves batches of plans, in worker processes when a batch is large enough; errors are returned, not raised.
     The processes are shared by every pool of the same size in this process and outlive it (see ``_EXECUTORS``);
-    a plan solved before in this process is not solved again (:data:`_MEMO`)."""
+    a plan solved before in this process is not solved again (:data:`_MEMO`), nor one stored on disk by an earlier
+    command while a :mod:`baselines.plan_store` is open."""
 
     def __init__(self, workers: int = 0) -> None:
         self.workers = workers or min(os.cpu_count() or 1, 8)
 
     def map(self, jobs: list[dict[str, Any]]) -> list[Plan | Exception]:
         """:func:`baselines.optimal.solve_minimum_energy` of each job's keywords, in order."""
+        from baselines import plan_store
+
         keys = [job_key(job) for job in jobs]
+        store = plan_store.current()
         todo: dict[bytes, dict[str, Any]] = {}
         for key, job in zip(keys, jobs, strict=True):
             if key in _MEMO:
                 _MEMO.move_to_end(key)
+            elif store is not None and (stored := store.get(key)) is not None:
+                _MEMO[key] = stored
             else:
                 todo[key] = job
         # the largest problems first, neighbours together: a worker process builds fewer solvers (one per size)
@@ -181,6 +187,8 @@ class PlanPool:
         results = [solved[key] if key in solved else _MEMO[key] for key in keys]
         for key, result in solved.items():
             _MEMO[key] = result
+            if store is not None:
+                store.add(key, result)
         while len(_MEMO) > MEMO_SIZE:
             _MEMO.popitem(last=False)
         return results

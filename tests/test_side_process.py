@@ -67,3 +67,51 @@ def test_the_side_process_is_off_when_asked_or_where_a_fork_is_unsafe(monkeypatc
     monkeypatch.setenv(side_process.SWITCH, "1")
     monkeypatch.setitem(__import__("sys").modules, "jax", object())  # JAX's threads do not survive a fork
     assert not side_process.side_process_usable()
+
+
+def _slow_pid(seconds: float) -> int:
+    import os
+    import time
+
+    time.sleep(seconds)
+    return os.getpid()
+
+
+@needs_fork
+def test_the_command_takes_the_jobs_the_side_process_has_not_started() -> None:
+    """Whichever process is free runs the next job: each job runs once, the side process from the first on, the
+    command's from the last on."""
+    import os
+
+    jobs = {f"job{i}": (_slow_pid, (0.3,)) for i in range(6)}
+    side = side_process.SideProcess(jobs)
+    try:
+        taken = []
+        while (label := side.take()) is not None:
+            taken.append(label)
+            _slow_pid(0.3)
+        beside = side.results()
+    finally:
+        side.close()
+    assert sorted(taken + list(beside)) == sorted(jobs)
+    assert "job0" in beside and taken[0] == "job5"  # the side process starts at the front, this one at the end
+    assert all(pid != os.getpid() for pid, _ in beside.values())
+    assert 1 <= len(taken) < len(jobs)
+
+
+@needs_fork
+def test_plain_policies_give_the_same_results_whichever_process_runs_them(monkeypatch: pytest.MonkeyPatch) -> None:
+    """With no planner to wait for, the command's process runs plain policies too: the same numbers."""
+    monkeypatch.setenv(side_process.SWITCH, "1")
+    monkeypatch.setattr(evaluate_module, "PLANNERS", frozenset({"fixed-time"}))
+    scenario = make_scenario("random", n=12, seed=5)
+    policies = {"fixed-time": "fixed-time", "ptc": "ptc", "astolfi": "astolfi", "fabregas": "fabregas"}
+    clock = StageClock(progress=False)
+    shared = evaluate(policies, scenario, seed=3, clock=clock)
+    monkeypatch.setenv(side_process.SWITCH, "0")
+    alone = evaluate(policies, scenario, seed=3)
+    assert list(shared) == list(policies)
+    for label in policies:
+        for field in ("energy", "final_distance", "final_heading_error", "episode_return", "arrival_time"):
+            assert getattr(shared[label], field).tobytes() == getattr(alone[label], field).tobytes(), (label, field)
+    assert sorted(t.stage for t in clock.times) == sorted(policies)

@@ -6,6 +6,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+from baselines import plan_store
 from dwr_gym.disturbances import split_env_kwargs
 from dwr_gym.params import EnvParams
 from train.evaluation.evaluate import evaluate, evaluate_sets, max_steps
@@ -46,9 +47,10 @@ def compare(
     steps = max_steps(trajectory_scenario, EnvParams.from_kwargs(**split_env_kwargs(trajectory_scenario.env_kwargs)[0]))
     clock.plan(sum(estimated_seconds(label, trajectory_scenario.size, steps) for label in policies))
     try:
-        rows = evaluate_sets(policies, scenarios, n, seed, env_kwargs or {}, progress, optimum=optimum,
-                             T_cons=T_cons, n_optimal=n_optimal, on_rows=on_rows, clock=clock, address=address)  # fmt: skip
-        recorded = evaluate(policies, trajectory_scenario, record=True, clock=clock, stage_scenario=FIGURES)
+        with plan_store.opened():  # the planners' plans, kept for the next command (what they solved, also on Ctrl-C)
+            rows = evaluate_sets(policies, scenarios, n, seed, env_kwargs or {}, progress, optimum=optimum,
+                                 T_cons=T_cons, n_optimal=n_optimal, on_rows=on_rows, clock=clock, address=address)  # fmt: skip
+            recorded = evaluate(policies, trajectory_scenario, record=True, clock=clock, stage_scenario=FIGURES)
     finally:
         if own:
             clock.close()

@@ -7,6 +7,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+from baselines import plan_store
 from baselines.expert import ExpertPolicy
 from dwr_gym.disturbances import split_env_kwargs
 from dwr_gym.params import EnvParams
@@ -60,19 +61,26 @@ def evaluate(
     plain = {label: policy for label, policy in policies.items() if label not in PLANNERS}
     side = None
     if plain and len(plain) < len(policies) and side_process_usable():  # the planners here, the others beside them
+        # the agents first (a network's call per step: the costlier), the laws last: this process takes from the end
+        order = sorted(plain, key=lambda label: isinstance(plain[label], str))
         side = SideProcess(
-            {label: (_rollout_one, (label, policy, params, scenario, record, seed)) for label, policy in plain.items()}
+            {label: (_rollout_one, (label, plain[label], params, scenario, record, seed)) for label in order}
         )
     results = {}
     steps = max_steps(scenario, params)
+
+    def run_here(label: str) -> None:
+        weight = estimated_seconds(label, scenario.size, steps)
+        with clock.stage(stage_scenario, label, weight, scenario.size) as advance:
+            results[label] = _rollout_one(label, policies[label], params, scenario, record, seed,
+                                          progress and not clock.shown, advance)  # fmt: skip
+
     try:
-        for label, policy in policies.items():
-            if side is not None and label in plain:
-                continue
-            weight = estimated_seconds(label, scenario.size, steps)
-            with clock.stage(stage_scenario, label, weight, scenario.size) as advance:
-                results[label] = _rollout_one(label, policy, params, scenario, record, seed,
-                                              progress and not clock.shown, advance)  # fmt: skip
+        for label in policies:
+            if side is None or label not in plain:
+                run_here(label)
+        while side is not None and (label := side.take()) is not None:  # the side process's jobs not started yet
+            run_here(label)
         if side is not None:
             began = time.perf_counter()
             finished = side.results()
@@ -183,22 +191,27 @@ def evaluate_sets(
     clock.plan(planned_seconds(policies, chosen, optimum, n_optimal))
     rows = []
     try:
-        for scenario in chosen:
-            before = {stage: clock.seconds(scenario.name, stage) for stage in ("optimum", *policies)}
-            results = evaluate_subset(policies, scenario, seed, progress, optimum, n_optimal, clock, address)
-            took = {stage: round(clock.seconds(scenario.name, stage) - seconds, 2) for stage, seconds in before.items()}
-            for label, result in results.items():
-                note = result.optimum_failures[0] if result.optimum_failures else ""
-                drawn = scenario.T_cons is not None
-                T_row = float("nan") if drawn else result.params.T_con  # nan: drawn per episode, in T_con_range
-                T_range = (
-                    list(result.params.T_con_range or (min(scenario.T_cons), max(scenario.T_cons))) if drawn else None
-                )
-                rows.append({"scenario": scenario.name, "T_con": T_row, "policy": label, **result.summary(),
-                             "optimum_note": note, "T_con_range": T_range, "seconds": took[label],
-                             "optimum_seconds": took["optimum"]})  # fmt: skip
-            if on_rows is not None:
-                on_rows(list(rows))
+        with plan_store.opened():  # the planners' plans, kept for the next command (what they solved, also on Ctrl-C)
+            for scenario in chosen:
+                before = {stage: clock.seconds(scenario.name, stage) for stage in ("optimum", *policies)}
+                results = evaluate_subset(policies, scenario, seed, progress, optimum, n_optimal, clock, address)
+                took = {
+                    stage: round(clock.seconds(scenario.name, stage) - seconds, 2) for stage, seconds in before.items()
+                }
+                for label, result in results.items():
+                    note = result.optimum_failures[0] if result.optimum_failures else ""
+                    drawn = scenario.T_cons is not None
+                    T_row = float("nan") if drawn else result.params.T_con  # nan: drawn per episode, in T_con_range
+                    T_range = (
+                        list(result.params.T_con_range or (min(scenario.T_cons), max(scenario.T_cons)))
+                        if drawn
+                        else None
+                    )
+                    rows.append({"scenario": scenario.name, "T_con": T_row, "policy": label, **result.summary(),
+                                 "optimum_note": note, "T_con_range": T_range, "seconds": took[label],
+                                 "optimum_seconds": took["optimum"]})  # fmt: skip
+                if on_rows is not None:
+                    on_rows(list(rows))
     finally:
         if own:
             clock.close()

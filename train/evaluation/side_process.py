@@ -3,8 +3,10 @@
 ``compare`` evaluates each policy on each scenario set in turn. Most of its wall time goes to the three policies that
 solve CasADi problems while they drive (``optimal``, ``robust-pt`` and the ``robust`` agent: ``PLANNERS``), and the
 others (the laws, the agents: one batched rollout each) wait for them on one core. :class:`SideProcess` runs those
-others in one forked process at the same time, on the second core: the same rollouts with the same seeds, so the
-same numbers to the last digit; each returns its result and its own wall time. Where a fork is not safe (not Linux,
+others in one forked process at the same time, on the second core, and the command's process takes those the side
+process has not started once its planners are done (their plans solved before, :mod:`baselines.plan_store`, leave it
+little to do): the same rollouts with the same seeds in either process, so the same numbers to the last digit; each
+returns its result and its own wall time. Where a fork is not safe (not Linux,
 JAX's threads in the process) or the machine has one core, :func:`side_process_usable` says no and everything runs in
 turn, as before.
 """
@@ -15,7 +17,9 @@ import multiprocessing
 import os
 import signal
 import sys
+import threading
 import time
+from collections import deque
 from typing import Any
 
 #: The policies that plan with CasADi while they drive (their labels in ``compare``): they stay in the command's process.
@@ -49,22 +53,45 @@ def _run(label: str) -> tuple[Any, float]:
 
 
 class SideProcess:
-    """One forked process that runs ``function(*args)`` for each label given at construction, in order; results by
-    label with their wall seconds (:meth:`results`); :meth:`close` ends the process."""
+    """One forked process that runs ``function(*args)`` for the labels given at construction, from the first on, while
+    this process may take the others from the last on (:meth:`take`) to run them itself once its own work is done:
+    whichever process is free runs the next job, so both cores stay busy to the end. Results by label with their wall
+    seconds (:meth:`results`); :meth:`close` ends the process."""
 
     def __init__(self, jobs: dict[str, tuple[Any, tuple[Any, ...]]]):
         _JOBS.clear()
         _JOBS.update(jobs)
         self._pool = multiprocessing.get_context("fork").Pool(1, initializer=_ignore_interrupts)
-        self._pending = {label: self._pool.apply_async(_run, (label,)) for label in jobs}
         _JOBS.clear()  # the child has its copy: the parent keeps no reference to the jobs
+        self._lock = threading.Lock()
+        self._waiting = deque(jobs)  # not started yet
+        self._pending: dict[str, Any] = {}
+        self._closed = False
+        self._next()
+
+    def _next(self, _: Any = None) -> None:
+        """Start the next waiting job in the process (as the one before ends: called by the pool's result thread)."""
+        with self._lock:
+            if self._waiting and not self._closed:
+                label = self._waiting.popleft()
+                self._pending[label] = self._pool.apply_async(_run, (label,), callback=self._next)
+
+    def take(self) -> str | None:
+        """A job the process has not started, which the caller runs itself instead (the last waiting), or None."""
+        with self._lock:
+            return self._waiting.pop() if self._waiting else None
 
     def results(self) -> dict[str, tuple[Any, float]]:
-        """Each job's result and wall seconds, waiting for those not done (an error in one is raised here)."""
-        return {label: pending.get() for label, pending in self._pending.items()}
+        """The result and wall seconds of each job the process ran or runs, waiting for those not done (an error in one
+        is raised here); call it once :meth:`take` has returned None (no job waits: none will start any more)."""
+        with self._lock:
+            pending = dict(self._pending)
+        return {label: result.get() for label, result in pending.items()}
 
     def close(self) -> None:
         """End the process (at once: what it still runs is not wanted after an error or Ctrl-C)."""
+        with self._lock:
+            self._closed = True
         self._pool.terminate()
         self._pool.join()
 
