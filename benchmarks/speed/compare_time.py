@@ -95,7 +95,7 @@ def render_one(result: dict[str, Any]) -> str:
         cache = (f"a fresh clone: an empty cache, the shipped optima read ({result['optima_solved']:,} solved)"
                  if shipped else f"an empty cache, no shipped optima ({result['optima_solved']:,} optima solved)")  # fmt: skip
     else:
-        cache = f"a warm optimum cache ({result['optima_solved']:,} solved)"
+        cache = f"a second run: the optima and the planners' plans of an earlier one cached ({result['optima_solved']:,} optima solved)"
     stages = result.get("stages")
     slowest = ", ".join(f"{k} {v / 60:.1f}" for k, v in list(stages.items())[:4]) if stages else "-"
     return (
