@@ -57,9 +57,7 @@ def native_case(num_envs: int, dtype: str, actions: Any) -> Callable[[int], None
     return run
 
 
-def jax_cases(
-    num_envs: int, dtype: str, actions: Any, scan: int, reset_ratio: int
-) -> dict[str, Callable[[int], None]]:
+def jax_cases(num_envs: int, dtype: str, actions: Any, scan: int, reset_ratio: int) -> dict[str, Callable[[int], None]]:
     """(one call per step, ``scan`` steps per call) for the gymnax adapter in ``dtype`` (x64 already set)."""
     import jax
     import jax.numpy as jnp
