@@ -2,34 +2,18 @@
 
 from __future__ import annotations
 
-import dataclasses
 import json
 from typing import Any
 
-import numpy as np
 import pytest
 
+from tests.test_side_process import assert_same_results
 from train.evaluation import ray_pool
 from train.evaluation.evaluate import evaluate, evaluate_sets
-from train.evaluation.rollout import RolloutResult
 from train.evaluation.scenarios import make_scenario
 from train.evaluation.stages import StageClock
 
 POLICIES = {"ptc": "ptc", "astolfi": "astolfi", "fixed-time": "fixed-time"}
-
-
-def assert_same(a: dict[str, RolloutResult], b: dict[str, RolloutResult]) -> None:
-    assert list(a) == list(b)
-    for label in a:
-        for field in dataclasses.fields(a[label]):
-            x, y = getattr(a[label], field.name), getattr(b[label], field.name)
-            if isinstance(x, np.ndarray):
-                np.testing.assert_array_equal(x, y, err_msg=f"{label}.{field.name}")
-            elif isinstance(x, dict):
-                for key in x:
-                    np.testing.assert_array_equal(x[key], y[key], err_msg=f"{label}.trajectory[{key}]")
-            else:
-                assert x == y, f"{label}.{field.name}"
 
 
 class FakeRay:
@@ -61,7 +45,7 @@ def test_with_an_address_every_policy_is_one_task_and_the_numbers_are_a_local_ru
     local = evaluate(POLICIES, scenario, record=True, seed=2)
     clock = StageClock(progress=False)
     on_ray = evaluate(POLICIES, scenario, record=True, seed=2, clock=clock, address="auto")
-    assert_same(local, on_ray)
+    assert_same_results(local, on_ray)
     assert FakeRay.made == ["auto"] and FakeRay.calls == list(POLICIES) and FakeRay.shut >= 1
     # each task's time is its stage's, and the bar moves for every one
     assert [(t.stage, t.seconds, t.size) for t in clock.times] == [(label, 0.25, 6) for label in POLICIES]

@@ -4,6 +4,7 @@ and the numbers are those of the policies run one after the other, to the last d
 from __future__ import annotations
 
 import dataclasses
+from typing import Any
 
 import numpy as np
 import pytest
@@ -15,6 +16,21 @@ from train.evaluation.scenarios import make_scenario
 from train.evaluation.stages import StageClock
 
 needs_fork = pytest.mark.skipif(not side_process.side_process_usable(), reason="needs Linux, 2 cores and no JAX")
+
+
+def assert_same_results(a: dict[str, Any], b: dict[str, Any]) -> None:
+    """Every field of every policy's RolloutResult equal to the last bit (trajectories too), in the same order."""
+    assert list(a) == list(b)
+    for label in a:
+        for field in dataclasses.fields(a[label]):
+            x, y = getattr(a[label], field.name), getattr(b[label], field.name)
+            if isinstance(x, np.ndarray):
+                np.testing.assert_array_equal(x, y, err_msg=f"{label}.{field.name}")
+            elif isinstance(x, dict):
+                for key in x:
+                    np.testing.assert_array_equal(x[key], y[key], err_msg=f"{label}.trajectory[{key}]")
+            else:
+                assert x == y, f"{label}.{field.name}"
 
 
 def results_of(monkeypatch: pytest.MonkeyPatch, switch: str) -> tuple[dict, StageClock]:
@@ -32,16 +48,7 @@ def test_the_side_process_gives_the_same_results_in_the_same_order(monkeypatch: 
     alone, alone_clock = results_of(monkeypatch, "0")
     beside, beside_clock = results_of(monkeypatch, "1")
     assert list(beside) == list(alone) == ["ptc", "astolfi", "fixed-time"]
-    for label in alone:
-        for field in dataclasses.fields(alone[label]):
-            a, b = getattr(alone[label], field.name), getattr(beside[label], field.name)
-            if isinstance(a, np.ndarray):
-                np.testing.assert_array_equal(a, b, err_msg=f"{label}.{field.name}")
-            elif isinstance(a, dict):
-                for key in a:
-                    np.testing.assert_array_equal(a[key], b[key], err_msg=f"{label}.trajectory[{key}]")
-            else:
-                assert a == b, f"{label}.{field.name}"
+    assert_same_results(alone, beside)
     # every policy's stage is timed, whichever process ran it
     assert sorted(t.stage for t in beside_clock.times) == sorted(t.stage for t in alone_clock.times)
     assert all(t.seconds > 0 and t.size == 12 for t in beside_clock.times)

@@ -84,12 +84,9 @@ def evaluate(
         if side is not None:
             began = time.perf_counter()
             finished = side.results()
-            waited = time.perf_counter() - began
-            for label, (result, seconds) in finished.items():
-                clock.record(stage_scenario, label, seconds, scenario.size,
-                             estimated_seconds(label, scenario.size, steps), waited)  # fmt: skip
-                waited = 0.0
-                results[label] = result
+            results.update(
+                _recorded(finished, time.perf_counter() - began, clock, stage_scenario, scenario.size, steps)
+            )
     finally:
         if side is not None:
             side.close()
@@ -120,10 +117,18 @@ def _rollouts_on_ray(
         waited = time.perf_counter() - began
     finally:
         pool.shutdown()
+    return _recorded(dict(zip(policies, finished, strict=True)), waited, clock, stage_scenario, scenario.size, steps)
+
+
+def _recorded(
+    finished: dict[str, tuple[RolloutResult, float]], waited: float, clock: StageClock, stage_scenario: str,
+    size: int, steps: int,
+) -> dict[str, RolloutResult]:  # fmt: skip
+    """The results of rollouts that ran in another process (each with its wall seconds there), their stages recorded
+    on ``clock``; ``waited``, the seconds this process waited for them, counted once."""
     results = {}
-    for label, (result, seconds) in zip(policies, finished, strict=True):
-        clock.record(stage_scenario, label, seconds, scenario.size, estimated_seconds(label, scenario.size, steps),
-                     waited)  # fmt: skip
+    for label, (result, seconds) in finished.items():
+        clock.record(stage_scenario, label, seconds, size, estimated_seconds(label, size, steps), waited)
         waited = 0.0
         results[label] = result
     return results
