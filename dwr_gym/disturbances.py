@@ -157,6 +157,15 @@ Disturbance = (
 DISTURBANCE_TYPES: tuple[type, ...] = (VelocityBias, VelocitySinusoid, VelocityRandomWalk, WheelSlip, ActuatorFault,
                                        InputDelay, MeasurementDropout)  # fmt: skip
 _RANDOM = (VelocityRandomWalk, MeasurementDropout)
+#: Values a random disturbance draws per robot and period.
+_DRAW_SIZE = {VelocityRandomWalk: 2, MeasurementDropout: 1}
+#: Periods of random values drawn at once per robot (:meth:`Perturbation._draw`).
+DRAW_BLOCK = 64
+
+
+def _sample(rng: np.random.Generator, item: Any, count: int) -> FloatArray:
+    """The next ``count`` values of a random disturbance's generator: standard normal (random walk) or uniform."""
+    return rng.standard_normal(count) if isinstance(item, VelocityRandomWalk) else rng.random(count)
 
 
 def split_env_kwargs(kwargs: dict[str, Any]) -> tuple[dict[str, Any], DifferentialDrive | None, tuple[Any, ...]]:
@@ -229,6 +238,7 @@ class Perturbation:
         self._buffer = np.zeros((n, self.delay, 2))  # the last `delay` commands, oldest first
         self._walk = {i: np.zeros((n, 2)) for i, d in enumerate(disturbances) if isinstance(d, VelocityRandomWalk)}
         self._rngs: dict[int, list[np.random.Generator]] = {}
+        self._drawn: dict[int, list[Any]] = {}  # disturbance i: [values (n, width) drawn ahead, columns used]
         self._held = np.zeros((n, POSE_FEATURES), dtype=np.float32)
         self.last: dict[str, NDArray[Any]] = {
             "commanded_linear_velocity": np.zeros(n), "commanded_angular_velocity": np.zeros(n),
@@ -244,8 +254,11 @@ class Perturbation:
         for i, item in enumerate(self.disturbances):
             if isinstance(item, _RANDOM):
                 rngs = self._rngs.setdefault(i, [np.random.default_rng(0)] * self.n)
+                drawn = self._drawn.get(i)
                 for robot, key in zip(index, keys, strict=True):
                     rngs[robot] = np.random.Generator(np.random.PCG64(np.random.SeedSequence([item.seed, *key])))
+                    if drawn is not None and drawn[1] < drawn[0].shape[1]:  # its values ahead: from its new stream
+                        drawn[0][robot, drawn[1] :] = _sample(rngs[robot], item, drawn[0].shape[1] - drawn[1])
 
     def reset(self, index: NDArray[np.intp] | slice, observation: NDArray[np.float32]) -> None:
         """Start new episodes for the robots ``index`` whose first observation is ``observation``."""
@@ -259,11 +272,19 @@ class Perturbation:
         for value in self.last.values():
             value[index] = 0
 
-    def _draw(self, i: int, kind: str, size: int) -> FloatArray:
-        rngs = self._rngs[i]
-        if kind == "normal":
-            return np.array([rng.standard_normal(size) for rng in rngs]).reshape(self.n, size)
-        return np.array([rng.random() for rng in rngs])
+    def _draw(self, i: int) -> FloatArray:
+        """The next values of disturbance i's generators, (n, size): drawn DRAW_BLOCK periods ahead, one call per robot,
+        the same numbers as one call per robot and period (a generator's stream does not depend on how it is cut)."""
+        item, rngs = self.disturbances[i], self._rngs[i]
+        size = _DRAW_SIZE[type(item)]
+        drawn = self._drawn.get(i)
+        if drawn is None or drawn[1] + size > drawn[0].shape[1]:
+            # robots that share a generator (never seeded) draw in turn, one period at a time, as they always did
+            width = size * (DRAW_BLOCK if len({id(rng) for rng in rngs}) == self.n else 1)
+            drawn = self._drawn[i] = [np.array([_sample(rng, item, width) for rng in rngs]).reshape(self.n, width), 0]
+        values = drawn[0][:, drawn[1] : drawn[1] + size]
+        drawn[1] += size
+        return values
 
     def command(self, u: Any, omega: Any, step_count: Any) -> tuple[Any, Any]:
         """The velocities (u [m/s], omega [rad/s]) the robots really have for the commanded ones."""
@@ -303,7 +324,7 @@ class Perturbation:
                 u_out, omega_out = u_out + item.linear_amplitude * wave, omega_out + item.angular_amplitude * wave
             elif isinstance(item, VelocityRandomWalk):
                 walk = self._walk[i]
-                walk += self._draw(i, "normal", 2) * (math.sqrt(self.params.dt)
+                walk += self._draw(i) * (math.sqrt(self.params.dt)
                                                        * np.array([item.linear_intensity, item.angular_intensity]))  # fmt: skip
                 u_out, omega_out = u_out + walk[:, 0], omega_out + walk[:, 1]
         self.last.update(commanded_linear_velocity=u_cmd, commanded_angular_velocity=omega_cmd,
@@ -317,7 +338,7 @@ class Perturbation:
         held = np.zeros(self.n, dtype=bool)
         for i, item in enumerate(self.disturbances):
             if isinstance(item, MeasurementDropout):
-                held |= self._draw(i, "uniform", 1) < item.probability
+                held |= self._draw(i)[:, 0] < item.probability
         batch = np.reshape(observation, (self.n, -1))  # a view: the single env's (10,) is changed too
         batch[held, :POSE_FEATURES] = self._held[held]
         self._held[:] = batch[:, :POSE_FEATURES]

@@ -367,3 +367,32 @@ def test_the_command_rate_is_of_what_was_commanded_not_of_what_a_disturbed_robot
     steps = np.diff(np.concatenate([np.zeros((1, 2, 2)), velocities]), axis=0)
     np.testing.assert_allclose(result.velocity_rate_rms, np.sqrt(np.sum(steps**2, axis=(0, 2)) / 0.05**2 / 60))
     assert np.all(result.velocity_rate_rms > 1.2 * result.command_rate_rms)  # so the two metrics differ here
+
+
+def test_random_disturbances_drawn_ahead_are_the_numbers_of_one_draw_per_period() -> None:
+    """The random walk's and the dropout's values, drawn DRAW_BLOCK periods ahead, are each robot's own stream as one
+    draw per period would take it, also when some robots are re-seeded in the middle of a block."""
+    from dwr_gym.disturbances import DRAW_BLOCK, Perturbation
+    from dwr_gym.params import EnvParams
+
+    items = (VelocityRandomWalk(0.1, 0.2, seed=7), MeasurementDropout(0.3, seed=8))
+    n, periods, reseed_at = 5, DRAW_BLOCK * 2 + 9, DRAW_BLOCK + 17
+    perturbation = Perturbation(None, items, EnvParams(), n)
+    perturbation.seed(list(range(n)), [(3, i) for i in range(n)])
+
+    def stream(item_seed: int, key: tuple[int, ...]) -> np.random.Generator:
+        return np.random.Generator(np.random.PCG64(np.random.SeedSequence([item_seed, *key])))
+
+    walks = [stream(7, (3, i)) for i in range(n)]
+    drops = [stream(8, (3, i)) for i in range(n)]
+    for period in range(periods):
+        if period == reseed_at:
+            perturbation.seed([1, 3], [(9, 1), (9, 3)])
+            walks[1], walks[3], drops[1], drops[3] = (
+                stream(7, (9, 1)),
+                stream(7, (9, 3)),
+                stream(8, (9, 1)),
+                stream(8, (9, 3)),
+            )
+        np.testing.assert_array_equal(perturbation._draw(0), np.array([rng.standard_normal(2) for rng in walks]))
+        np.testing.assert_array_equal(perturbation._draw(1)[:, 0], np.array([rng.random() for rng in drops]))

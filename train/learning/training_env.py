@@ -47,13 +47,15 @@ def as_policy(model: Any, config: TrainConfig, normalizer: Any = None) -> Any:
     """The policy that acts in the env: the model (on observations normalised by ``normalizer``, a
     :class:`~train.learning.wrappers.NormalizedPolicy` or ``VecNormalize``, when trained so), its action held for
     ``action_repeat`` periods, alone or as the residual on the expert (see :func:`make_training_env`)."""
-    policy: Any = model
+    from train.learning.deterministic_actor import deterministic_actor
+
+    policy: Any = deterministic_actor(model)  # predict's deterministic actions to the last bit, faster
     if config.normalize_obs:
         from train.learning.wrappers import LiveNormalizedPolicy
 
         if normalizer is None:
             raise ValueError("an agent trained with normalize_obs needs its observation statistics")
-        policy = LiveNormalizedPolicy(model, normalizer)
+        policy = LiveNormalizedPolicy(policy, normalizer)
     if config.action_repeat > 1:
         from train.learning.wrappers import ActionRepeatPolicy
 
