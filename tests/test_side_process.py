@@ -122,3 +122,24 @@ def test_plain_policies_give_the_same_results_whichever_process_runs_them(monkey
         for field in ("energy", "final_distance", "final_heading_error", "episode_return", "arrival_time"):
             assert getattr(shared[label], field).tobytes() == getattr(alone[label], field).tobytes(), (label, field)
     assert sorted(t.stage for t in clock.times) == sorted(policies)
+
+
+@needs_fork
+def test_the_jobs_that_ended_beside_are_returned_as_they_end_and_once() -> None:
+    """The bar counts the side process's stages when they end there: finished() returns those ended since its last
+    call, without waiting, and results() the others; every job once."""
+    import time
+
+    jobs = {"quick": (_slow_pid, (0.0,)), "slow": (_slow_pid, (1.5,))}
+    side = side_process.SideProcess(jobs)
+    try:
+        assert side.take() == "slow"  # this process would run it: leave it waiting instead
+        deadline = time.monotonic() + 30.0
+        ended: dict[str, Any] = {}
+        while "quick" not in ended and time.monotonic() < deadline:
+            ended.update(side.finished())
+            time.sleep(0.01)
+        assert list(ended) == ["quick"]
+        assert side.finished() == {} and side.results() == {}
+    finally:
+        side.close()

@@ -15,20 +15,65 @@ import pytest
 from train.evaluation.stages import StageClock, format_seconds
 
 
-def test_a_redirected_log_gets_a_plain_line_every_tenth_of_the_work_never_a_carriage_return() -> None:
+class ManualTime:
+    """A stand-in for ``time.perf_counter`` that moves only when told."""
+
+    def __init__(self) -> None:
+        self.now = 0.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+@pytest.fixture
+def manual_time(monkeypatch: pytest.MonkeyPatch) -> ManualTime:
+    from train.evaluation import stages
+
+    clock = ManualTime()
+    monkeypatch.setattr(stages.time, "perf_counter", clock)
+    return clock
+
+
+def test_a_redirected_log_gets_a_plain_line_every_tenth_of_the_work_never_a_carriage_return(
+    manual_time: ManualTime,
+) -> None:
     log = io.StringIO()  # not a terminal
     clock = StageClock(progress=True, description="compare", file=log)
-    clock.plan(30.0)
+    clock.plan([(("random", name), 10.0) for name in ("ptc", "astolfi", "optimal")])
     for name in ("ptc", "astolfi", "optimal"):
         with clock.stage("random", name, 10.0, 100) as advance:
             for step in range(1, 101):
+                manual_time.now += 0.1
                 advance(step / 100)
     clock.close()
     text = log.getvalue()
     assert "\r" not in text
     lines = text.splitlines()
-    assert len(lines) == 10 and lines[-1].startswith("compare: 100% after")
+    assert len(lines) == 10 and lines[-1].startswith("compare: 100% after 30 s")
     assert all(line.startswith("compare: ") for line in lines)
+
+
+def test_the_time_left_learns_each_policys_pace_from_its_stages_that_ended(manual_time: ManualTime) -> None:
+    """Estimates off by a factor of each policy's own (a planner whose plans are stored, a slow network) still give
+    the right time left once each policy has run once; a policy not run yet takes every policy's ratio."""
+    clock = StageClock(progress=True, file=io.StringIO())
+    sets = ("fig5", "random", "disturbed", "fault")
+    clock.plan([((name, policy), 10.0) for name in sets for policy in ("optimal", "dagger", "ptc")])
+    assert clock.left() == pytest.approx(120.0)  # nothing ran: the estimates
+    for policy, seconds in (("optimal", 1.0), ("dagger", 40.0)):  # 10x faster, 4x slower than estimated
+        with clock.stage("fig5", policy, 10.0, 5):
+            manual_time.now += seconds
+    # ptc has not run: 41 s for 20 estimated so far, 2.05 each
+    assert clock.left() == pytest.approx(3 * 1.0 + 3 * 40.0 + 4 * 10.0 * 41.0 / 20.0)
+    with clock.stage("fig5", "ptc", 10.0, 5) as advance:
+        manual_time.now += 5.0
+        advance(0.5)  # its own pace once a tenth is done: 5 s more
+        assert clock.left() == pytest.approx(5.0 + 3 * 1.0 + 3 * 40.0 + 3 * 10.0 * 41.0 / 20.0)
+        manual_time.now += 5.0
+    assert clock.left() == pytest.approx(3 * 1.0 + 3 * 40.0 + 3 * 10.0)
+    clock.record("random", "ptc", 10.0, 1000, 10.0)  # ran in another process: done, counted where it ran
+    assert clock.left() == pytest.approx(3 * 1.0 + 3 * 40.0 + 2 * 10.0)
+    clock.close()
 
 
 def test_stages_are_timed_even_when_interrupted_and_the_summary_names_the_slowest() -> None:

@@ -45,7 +45,7 @@ def compare(
     trajectory_scenario = make_scenario(TRAJECTORY_SCENARIO, env_kwargs=env_kwargs)
     # the recorded rollouts of the figures, the last stages: planned now, so that the time left counts them
     steps = max_steps(trajectory_scenario, EnvParams.from_kwargs(**split_env_kwargs(trajectory_scenario.env_kwargs)[0]))
-    clock.plan(sum(estimated_seconds(label, trajectory_scenario.size, steps) for label in policies))
+    clock.plan([((FIGURES, label), estimated_seconds(label, trajectory_scenario.size, steps)) for label in policies])
     try:
         with plan_store.opened():  # the planners' plans, kept for the next command (what they solved, also on Ctrl-C)
             rows = evaluate_sets(policies, scenarios, n, seed, env_kwargs or {}, progress, optimum=optimum,

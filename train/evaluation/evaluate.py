@@ -72,8 +72,14 @@ def evaluate(
     def run_here(label: str) -> None:
         weight = estimated_seconds(label, scenario.size, steps)
         with clock.stage(stage_scenario, label, weight, scenario.size) as advance:
+
+            def on_step(fraction: float) -> None:
+                advance(fraction)
+                if side is not None:  # the side process's stages on the bar as they end there
+                    results.update(_recorded(side.finished(), 0.0, clock, stage_scenario, scenario.size, steps))
+
             results[label] = _rollout_one(label, policies[label], params, scenario, record, seed,
-                                          progress and not clock.shown, advance)  # fmt: skip
+                                          progress and not clock.shown, on_step)  # fmt: skip
 
     try:
         for label in policies:
@@ -225,22 +231,25 @@ def evaluate_sets(
 
 def planned_seconds(
     policies: dict[str, Policy | str], scenarios: list[Scenario], optimum: str, n_optimal: int | None
-) -> float:
-    """The estimated wall seconds of evaluating ``policies`` on ``scenarios`` (the optima not cached yet, then each
-    policy on each set): the bar's total, so that its time left spans every stage."""
+) -> list[tuple[tuple[str, str], float]]:
+    """The estimated wall seconds of each stage of evaluating ``policies`` on ``scenarios`` (the optima not cached
+    yet, then each policy on each set), as ((scenario, stage), seconds) in the order they run: what the bar plans, so
+    that its time left spans every stage."""
     from train.evaluation.disturbance_sets import ROBUSTNESS_SETS
 
     todo: set[tuple[str, str]] = set()
-    total = 0.0
+    planned: list[tuple[tuple[str, str], float]] = []
     for scenario in scenarios:
         params = EnvParams.from_kwargs(**split_env_kwargs(scenario.env_kwargs)[0])
         if optimum != "none":
-            todo |= missing_optima(params, scenario.starts, scenario.goals, scenario.T_cons, heading=optimum == "pose")
+            new = missing_optima(params, scenario.starts, scenario.goals, scenario.T_cons, heading=optimum == "pose")
+            planned.append(((scenario.name, "optimum"), len(new - todo) * PLAN_SECONDS))
+            todo |= new
         for label in policies:
             limited = label == "optimal" and n_optimal is not None and scenario.name in ROBUSTNESS_SETS
             episodes = min(scenario.size, n_optimal or scenario.size) if limited else scenario.size
-            total += estimated_seconds(label, episodes, max_steps(scenario, params))
-    return total + len(todo) * PLAN_SECONDS
+            planned.append(((scenario.name, label), estimated_seconds(label, episodes, max_steps(scenario, params))))
+    return planned
 
 
 def max_steps(scenario: Scenario, params: EnvParams) -> int:

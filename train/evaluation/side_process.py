@@ -81,11 +81,22 @@ class SideProcess:
         with self._lock:
             return self._waiting.pop() if self._waiting else None
 
+    def finished(self) -> dict[str, tuple[Any, float]]:
+        """The result and wall seconds of each job that ended in the process since the last call (an error in one is
+        raised here), without waiting: :meth:`results` returns the others."""
+        with self._lock:
+            ready = {label: result for label, result in self._pending.items() if result.ready()}
+            for label in ready:
+                del self._pending[label]
+        return {label: result.get() for label, result in ready.items()}
+
     def results(self) -> dict[str, tuple[Any, float]]:
-        """The result and wall seconds of each job the process ran or runs, waiting for those not done (an error in one
-        is raised here); call it once :meth:`take` has returned None (no job waits: none will start any more)."""
+        """The result and wall seconds of each job the process ran or runs that :meth:`finished` has not returned,
+        waiting for those not done (an error in one is raised here); call it once :meth:`take` has returned None (no
+        job waits: none will start any more)."""
         with self._lock:
             pending = dict(self._pending)
+            self._pending.clear()
         return {label: result.get() for label, result in pending.items()}
 
     def close(self) -> None:

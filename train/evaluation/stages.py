@@ -1,9 +1,15 @@
 """One progress bar across every stage of a command, and the time each stage took.
 
 ``compare`` and ``evaluate`` run in stages: the optimum of the scenario sets (CasADi solves, cached), then each
-policy on each set. :class:`StageClock` shows one bar for all of them, counted in estimated seconds of work
-(:func:`estimated_seconds`), so that its time left spans every stage to come, and it records the wall time of each
-stage for the results (``seconds`` and ``optimum_seconds`` of each row) and the closing line (:meth:`summary`).
+policy on each set. :class:`StageClock` shows one bar for all of them, counted in seconds of work, so that its time
+left spans every stage to come, and it records the wall time of each stage for the results (``seconds`` and
+``optimum_seconds`` of each row) and the closing line (:meth:`summary`).
+
+The bar's total is the wall seconds of the stages that ended and an estimate of those to come:
+:func:`estimated_seconds`, corrected by the ratio of wall to estimated seconds of the policy's stages that ended (a
+planner takes minutes where its plans must be solved and seconds where :mod:`baselines.plan_store` holds them), or of
+every policy's until the policy has run. Stages run in a second process count as they end there, so that the rate of
+work, and with it the time left, counts both cores.
 Where stderr is not a terminal (a redirected log) there is no bar: a plain line every tenth of the work instead,
 never a carriage return.
 """
@@ -12,7 +18,7 @@ from __future__ import annotations
 
 import sys
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any, TextIO
@@ -28,6 +34,10 @@ STEP_SECONDS = 5e-4
 LOG_STEP = 0.1
 #: The scenario name under which the recorded rollouts of the figures are timed (not a policy's evaluation).
 FIGURES = "figures"
+#: The estimated seconds of a policy's ended stages from which their ratio to the wall time corrects its stages to come.
+CALIBRATE_AFTER = 0.5
+#: The fraction of a running stage from which its own pace tells the rest of it.
+EXTRAPOLATE_AFTER = 0.1
 
 
 def estimated_seconds(policy: str, episodes: int, steps: int) -> float:
@@ -48,19 +58,27 @@ class StageTime:
 
 
 class StageClock:
-    """One progress bar over stages of estimated weights (seconds), and the wall time of each stage.
+    """One progress bar over stages, in seconds of work, and the wall time of each stage.
 
-    :meth:`plan` adds the weights of the stages to come (before they run, so that the time left spans them all);
-    :meth:`stage` runs one and advances the bar by its weight, in parts as the stage reports its progress.
+    :meth:`plan` adds the estimates of the stages to come (before they run, so that the time left spans them all);
+    :meth:`stage` runs one here, reporting its progress as it goes; :meth:`record` counts one that ran in another
+    process. The bar's work done is the wall seconds of the stages so far, its total that and :meth:`left`.
     """
 
     def __init__(self, progress: bool = True, description: str = "compare", file: TextIO | None = None):
         self.times: list[StageTime] = []
         self.began = time.perf_counter()
         self._file = file or sys.stderr
-        self._done = 0.0
+        self._done = 0.0  # wall seconds of work done: of the stages that ended, and the one running here so far
         self._waited = 0.0  # for stages of another process, after this one's own
         self._total = 0.0
+        self._planned: dict[tuple[str, str], list[float]] = {}  # estimates of the stages to come, by (scenario, name)
+        self._unnamed = 0.0  # estimated seconds planned without a stage's name, not run yet
+        self._finished = 0.0  # wall seconds of the stages that ended, here and in another process
+        self._took: dict[str, list[float]] = {}  # by stage name: [wall seconds, estimated seconds] of those that ended
+        self._running: tuple[str, float, float, float] | None = None  # the stage here: name, estimate, start, fraction
+        self._ratios: dict[str, float] = {}  # ratio() by stage name, worked out again as a stage ends
+        self._planned_left = 0.0  # the corrected estimates of the stages not run yet
         self._logged = 0  # tenths of the work already written to a redirected log
         self._description = description
         self._bar: Any = None
@@ -76,47 +94,119 @@ class StageClock:
         """Whether the clock shows the progress (a bar, or lines in a redirected log)."""
         return self._bar is not None or self._log
 
-    def plan(self, weight: float) -> None:
-        """Add ``weight`` (estimated seconds) of stages to come to the bar's total."""
-        self._total += weight
+    def plan(self, weight: float | Iterable[tuple[tuple[str, str], float]]) -> None:
+        """Add stages to come to the bar's total: ((scenario, stage name), estimated seconds) of each, in the order
+        they run (each corrected by what its policy's stages took so far), or one estimate for stages without names."""
+        if isinstance(weight, (int, float)):
+            self._unnamed += float(weight)
+        else:
+            for key, seconds in weight:
+                self._planned.setdefault(key, []).append(float(seconds))
+        self._correct()
+        self._move()
         if self._bar is not None:
-            self._bar.total = round(self._total, 1)
             self._bar.refresh()
 
     @contextmanager
     def stage(self, scenario: str, name: str, weight: float, size: int) -> Iterator[Callable[[float], None]]:
-        """Run a stage of ``weight`` (its share of the bar); yields ``advance(fraction)``, the fraction of the stage
-        done so far (0 to 1). Its wall time is recorded even when it is interrupted."""
-        began, start = time.perf_counter(), self._done
+        """Run a stage estimated at ``weight`` seconds (planned before under its scenario and name, or not); yields
+        ``advance(fraction)``, the fraction of the stage done so far (0 to 1). Its wall time is recorded even when
+        it is interrupted."""
+        began = time.perf_counter()
+        estimate = self._take(scenario, name, weight)
+        self._running = (name, estimate, began, 0.0)
         self._label(f"{scenario}: {name}")
 
         def advance(fraction: float) -> None:
-            self._move(start + weight * min(max(fraction, 0.0), 1.0))
+            self._running = (name, estimate, began, min(max(fraction, 0.0), 1.0))
+            self._move()
 
         try:
             yield advance
         finally:
-            self.times.append(StageTime(scenario, name, time.perf_counter() - began, size))
-        self._move(start + weight)
+            seconds = time.perf_counter() - began
+            self.times.append(StageTime(scenario, name, seconds, size))
+            self._running = None
+            self._ended(name, seconds, estimate)
+        self._move()
 
     def record(self, scenario: str, name: str, seconds: float, size: int, weight: float, waited: float = 0.0) -> None:
-        """A stage that ran elsewhere (another process, beside this one's): its wall time, and its share of the bar,
-        done; ``waited``, the wall seconds this process waited for it after its own stages (a policies' time)."""
+        """A stage that ran elsewhere (another process, beside this one's), estimated at ``weight`` seconds: its wall
+        time, done; ``waited``, the wall seconds this process waited for them after its own stages (a policies'
+        time)."""
         self._waited += waited
         self.times.append(StageTime(scenario, name, seconds, size, beside=True))
-        self._move(self._done + weight)
+        self._ended(name, seconds, self._take(scenario, name, weight))
+        self._move()
+
+    def left(self, now: float | None = None) -> float:
+        """The seconds of work to come: the stages not run yet, each estimate corrected by :meth:`ratio`, and the
+        rest of the stage running here (from its own pace once a tenth of it is done)."""
+        left = self._planned_left
+        if self._running is not None:
+            name, estimate, began, fraction = self._running
+            elapsed = (time.perf_counter() if now is None else now) - began
+            pace = elapsed / fraction if fraction >= EXTRAPOLATE_AFTER else estimate * self.ratio(name)
+            left += max((1.0 - fraction) * pace, 0.0)
+        return left
+
+    def ratio(self, name: str) -> float:
+        """Wall seconds per estimated second of the stages of ``name`` that ended; until they reach
+        :data:`CALIBRATE_AFTER` estimated seconds, the same of every policy's stages (1 before any)."""
+        if name in self._ratios:
+            return self._ratios[name]
+        seconds, estimate = self._took.get(name, (0.0, 0.0))
+        if estimate < CALIBRATE_AFTER:
+            policies = [took for stage, took in self._took.items() if stage != "optimum"]
+            seconds, estimate = sum(t[0] for t in policies), sum(t[1] for t in policies)
+        self._ratios[name] = seconds / estimate if estimate >= CALIBRATE_AFTER else 1.0
+        return self._ratios[name]
+
+    def _correct(self) -> None:
+        """Work out the ratios and the corrected estimates of the stages to come again (a stage ended or was added)."""
+        self._ratios.clear()
+        self._planned_left = self._unnamed * self.ratio("")
+        for (_, name), estimates in self._planned.items():
+            self._planned_left += sum(estimates) * self.ratio(name)
+
+    def _take(self, scenario: str, name: str, weight: float) -> float:
+        """The estimate of a stage that starts: the one planned under its scenario and name, else ``weight`` (taken
+        out of the estimates planned without names)."""
+        planned = self._planned.get((scenario, name))
+        if planned:
+            estimate = planned.pop(0)
+            if not planned:
+                del self._planned[(scenario, name)]
+        else:
+            estimate, self._unnamed = weight, max(self._unnamed - weight, 0.0)
+        self._correct()
+        return estimate
+
+    def _ended(self, name: str, seconds: float, estimate: float) -> None:
+        took = self._took.setdefault(name, [0.0, 0.0])
+        took[0] += seconds
+        took[1] += estimate
+        self._finished += seconds
+        self._correct()
 
     def _label(self, text: str) -> None:
         if self._bar is not None:
             self._bar.set_postfix_str(text, refresh=False)
 
-    def _move(self, done: float) -> None:
-        done = min(done, self._total)
+    def _move(self) -> None:
+        """The work done (the wall seconds of the stages that ended, and of the one running here so far) and the total
+        (done and :meth:`left`), on the bar or in a redirected log."""
+        if not self.shown:
+            return
+        now = time.perf_counter()
+        done = self._finished + (now - self._running[2] if self._running is not None else 0.0)
+        self._total = done + self.left(now)
+        if self._bar is not None:
+            self._bar.total = round(self._total, 1)
+            self._bar.update(max(round(done, 1) - round(self._done, 1), 0.0))  # redrawn at most every tenth of a second
+        self._done = done
         if self._total <= 0.0:
             return
-        if self._bar is not None and done > self._done:
-            self._bar.update(round(done, 1) - round(self._done, 1))
-        self._done = max(done, self._done)
         tenths = int(self._done / self._total / LOG_STEP + 1e-9)
         if self._log and tenths > self._logged:
             self._logged = tenths
