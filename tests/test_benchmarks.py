@@ -99,3 +99,15 @@ def test_compare_time_says_where_the_time_went_and_keeps_a_run_per_cache_state()
     table = render(runs)
     assert "no shipped optima (1,009 optima solved)" in table and "the shipped optima read (0 solved)" in table
     assert "optimal 1.2, optimum 0.5, ptc 0.1" in table
+
+
+def test_compare_time_reads_the_bars_time_left_from_a_redirected_log() -> None:
+    from benchmarks.speed.compare_time import PROGRESS_LINE, as_seconds, said_left
+
+    match = PROGRESS_LINE.match("compare: 40% after 1.2 min, about 2.5 min left\n")
+    assert match is not None and (match[1], as_seconds(match[2])) == ("40", 150.0)
+    assert as_seconds("42 s") == 42.0 and as_seconds("1.5 h") == 5400.0
+    assert PROGRESS_LINE.match("compare: 10% after 3 s, about ? left") is not None
+    run = {"time_left": [[10, 10.0, 120.0, 100.0], [20, 20.0, 90.0, 90.0], [50, 60.0, 60.0, 50.0]]}
+    assert said_left(run) == "1.5 (1.5) / 1.0 (0.8) / -"
+    assert said_left({}) == "-"

@@ -22,14 +22,16 @@ and after (a warm cache: none solved; a fresh clone: every episode's).
 from __future__ import annotations
 
 import json
+import re
 import resource
 import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
 from typing import Any
 
-from benchmarks.core.commands import checkout_env, dwr_gym, parser_for
+from benchmarks.core.commands import checkout_env, parser_for
 from benchmarks.core.docs import Block, Schema
 from benchmarks.core.record import load_average, torch_machine, write_json
 from benchmarks.core.timing import background_load
@@ -57,7 +59,7 @@ def measure(busy: int, cache: str, shipped: bool = True) -> dict[str, Any]:
         before_cache = cached_optima(env)
         before = resource.getrusage(resource.RUSAGE_CHILDREN)
         began = time.perf_counter()
-        dwr_gym(["compare", "--out", f"{tmp}/out", "--no-progress"], cwd=tmp, stdout=subprocess.DEVNULL, env=env)
+        said = run_logged(["compare", "--out", f"{tmp}/out"], cwd=tmp, env=env)
         wall = time.perf_counter() - began
         after = resource.getrusage(resource.RUSAGE_CHILDREN)
         load = load_average()
@@ -75,7 +77,37 @@ def measure(busy: int, cache: str, shipped: bool = True) -> dict[str, Any]:
         "optima_cached_before": before_cache,
         "optima_solved": solved,
         "stages": stage_seconds(rows),
+        # the bar's time left as a redirected log says it every 10 %: [percent, at (s), said left (s), true left (s)]
+        "time_left": [[percent, round(at, 1), left, round(wall - at, 1)] for percent, at, left in said],
     }
+
+
+#: A redirected log's progress line: ``compare: 40% after 1.2 min, about 2.0 min left``.
+PROGRESS_LINE = re.compile(r"^compare: (\d+)% after .*, about (\S+ (?:s|min|h)|\?) left")
+
+
+def as_seconds(text: str) -> float:
+    """``42 s``, ``3.5 min``, ``1.2 h`` (train.evaluation.stages.format_seconds) in seconds; ``?`` is NaN."""
+    if text == "?":
+        return float("nan")
+    value, unit = text.split()
+    return float(value) * {"s": 1.0, "min": 60.0, "h": 3600.0}[unit]
+
+
+def run_logged(args: list[str], cwd: str, env: dict[str, str]) -> list[tuple[int, float, float]]:
+    """``dwr-gym ARGS`` with its stderr a pipe (a redirected log: a progress line every 10 % of the work), stdout
+    discarded: (percent, seconds since the start, time left it said) of each progress line, as it came."""
+    began = time.perf_counter()
+    said = []
+    with subprocess.Popen([sys.executable, "-m", "train.cli", *args], cwd=cwd, env=env, text=True,
+                          stdout=subprocess.DEVNULL, stderr=subprocess.PIPE) as process:  # fmt: skip
+        assert process.stderr is not None
+        for line in process.stderr:
+            if match := PROGRESS_LINE.match(line):
+                said.append((int(match[1]), time.perf_counter() - began, as_seconds(match[2])))
+    if process.returncode:
+        raise subprocess.CalledProcessError(process.returncode, args)
+    return said
 
 
 def stage_seconds(rows: list[dict[str, Any]]) -> dict[str, float]:
@@ -100,8 +132,19 @@ def render_one(result: dict[str, Any]) -> str:
     slowest = ", ".join(f"{k} {v / 60:.1f}" for k, v in list(stages.items())[:4]) if stages else "-"
     return (
         f"| {cache} | {result['busy_processes']} | {result['wall_seconds'] / 60:.1f} | "
-        f"{result['cpu_seconds'] / 60:.1f} | {result['load_average_1min_at_end']:g} | {slowest} |"
+        f"{result['cpu_seconds'] / 60:.1f} | {result['load_average_1min_at_end']:g} | {slowest} | "
+        f"{said_left(result)} |"
     )
+
+
+def said_left(result: dict[str, Any], at: tuple[int, ...] = (20, 50, 80)) -> str:
+    """The bar's time left at 20, 50 and 80 % of the work, and the true one in brackets (min); - where not logged."""
+    lines = result.get("time_left") or []
+    parts = []
+    for percent in at:
+        line = next((line for line in lines if line[0] >= percent), None)
+        parts.append("-" if line is None else f"{line[2] / 60:.1f} ({line[3] / 60:.1f})")
+    return " / ".join(parts) if lines else "-"
 
 
 def render(results: dict[str, Any]) -> str:
@@ -110,8 +153,8 @@ def render(results: dict[str, Any]) -> str:
     machine = runs[0]["machine"] if runs else "no run"
     return "\n".join([
         "",
-        "| `dwr-gym compare`, defaults | busy processes beside it | wall time (min) | CPU time (min) | load (1 min, at the end) | slowest stages (min) |",
-        "|---|---:|---:|---:|---:|---|",
+        "| `dwr-gym compare`, defaults | busy processes beside it | wall time (min) | CPU time (min) | load (1 min, at the end) | slowest stages (min) | time left said at 20 / 50 / 80 % (true), min |",
+        "|---|---:|---:|---:|---:|---|---|",
         *(render_one(r) for r in runs),
         "",
         f"*{machine}; `python -m benchmarks run compare-time --cache cold|warm [--no-shipped] --busy N --docs`, "
