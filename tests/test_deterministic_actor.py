@@ -62,3 +62,17 @@ def test_a_stochastic_action_and_a_wrong_shape_go_to_predict() -> None:
 def test_the_loaded_agents_use_it(name: str) -> None:
     _, policy = load_agent(pretrained_paths()[name])
     assert isinstance(policy if name == "ppo" else policy.model, DeterministicActor)
+
+
+def test_a_policy_that_acts_otherwise_keeps_its_own_predict() -> None:
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.policies import ActorCriticPolicy
+
+    from dwr_gym.env import DWRPointStabilizationEnv
+
+    class Shifted(ActorCriticPolicy):
+        def _predict(self, observation, deterministic=False):  # type: ignore[no-untyped-def]
+            return super()._predict(observation, deterministic) + 0.5
+
+    model = PPO(Shifted, DWRPointStabilizationEnv(), n_steps=8, batch_size=8, seed=0, device="cpu")
+    assert deterministic_actor(model) is model

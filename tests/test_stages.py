@@ -122,3 +122,20 @@ def test_evaluate_rows_carry_each_stage_time_and_the_command_ends_with_one_time_
     assert "\r" not in result.stderr  # output captured, not a terminal: lines, not a bar
     (row,) = json.loads((tmp_path / "evaluation.json").read_text())
     assert row["seconds"] >= 0.0 and row["optimum_seconds"] >= 0.0
+
+
+def test_a_set_run_in_two_processes_takes_the_longer_of_this_ones_stages_and_half_of_all(
+    manual_time: ManualTime,
+) -> None:
+    clock = StageClock(progress=True, file=io.StringIO())
+    clock.plan([(("random", "optimal"), 10.0), (("random", "ptc"), 4.0), (("fault", "optimal"), 2.0),
+                (("fault", "ptc"), 10.0), (("fault", "astolfi"), 4.0)], beside={"ptc", "astolfi"})  # fmt: skip
+    assert clock.left() == pytest.approx(10.0 + 8.0)  # random: the planner's 10 s; fault: half of 16 s
+    with clock.stage("random", "optimal", 10.0, 5) as advance:
+        manual_time.now += 5.0
+        advance(0.5)  # 5 s more here, 4 s beside: 5 s
+        assert clock.left() == pytest.approx(5.0 + 8.0)
+        manual_time.now += 5.0
+    clock.record("random", "ptc", 4.0, 5, 4.0)
+    assert clock.left() == pytest.approx(8.0)
+    clock.close()

@@ -9,7 +9,7 @@ from typing import Any
 from baselines import plan_store
 from dwr_gym.disturbances import split_env_kwargs
 from dwr_gym.params import EnvParams
-from train.evaluation.evaluate import evaluate, evaluate_sets, max_steps
+from train.evaluation.evaluate import evaluate, evaluate_sets, max_steps, running_beside
 from train.evaluation.rollout import RolloutResult
 from train.evaluation.scenarios import make_scenario
 from train.evaluation.stages import FIGURES, StageClock, estimated_seconds
@@ -45,7 +45,10 @@ def compare(
     trajectory_scenario = make_scenario(TRAJECTORY_SCENARIO, env_kwargs=env_kwargs)
     # the recorded rollouts of the figures, the last stages: planned now, so that the time left counts them
     steps = max_steps(trajectory_scenario, EnvParams.from_kwargs(**split_env_kwargs(trajectory_scenario.env_kwargs)[0]))
-    clock.plan([((FIGURES, label), estimated_seconds(label, trajectory_scenario.size, steps)) for label in policies])
+    clock.plan(
+        [((FIGURES, label), estimated_seconds(label, trajectory_scenario.size, steps)) for label in policies],
+        beside=running_beside(policies),
+    )
     try:
         with plan_store.opened():  # the planners' plans, kept for the next command (what they solved, also on Ctrl-C)
             rows = evaluate_sets(policies, scenarios, n, seed, env_kwargs or {}, progress, optimum=optimum,

@@ -58,9 +58,9 @@ def evaluate(
         for result in results.values():
             result.optimal_energy, result.optimum_failures = optimal_energy, optimum_failures
         return results
-    plain = {label: policy for label, policy in policies.items() if label not in PLANNERS}
+    plain = {label: policy for label, policy in policies.items() if label in running_beside(policies, address)}
     side = None
-    if plain and len(plain) < len(policies) and side_process_usable():  # the planners here, the others beside them
+    if plain:  # the planners here, the others beside them
         # the agents first (a network's call per step: the costlier), the laws last: this process takes from the end
         order = sorted(plain, key=lambda label: isinstance(plain[label], str))
         side = SideProcess(
@@ -199,7 +199,7 @@ def evaluate_sets(
             # a prescribed time asked for replaces the env's range of them (v1 draws T_con per episode)
             kwargs = env_kwargs if T_con is None else {**env_kwargs, "T_con": T_con, "T_con_range": None}
             chosen.append(make_scenario(name, n=n, seed=seed, env_kwargs=kwargs))
-    clock.plan(planned_seconds(policies, chosen, optimum, n_optimal))
+    clock.plan(planned_seconds(policies, chosen, optimum, n_optimal), beside=running_beside(policies, address))
     rows = []
     try:
         with plan_store.opened():  # the planners' plans, kept for the next command (what they solved, also on Ctrl-C)
@@ -227,6 +227,15 @@ def evaluate_sets(
         if own:
             clock.close()
     return rows
+
+
+def running_beside(policies: dict[str, Policy | str], address: str | None = None) -> frozenset[str]:
+    """The policies :func:`evaluate` runs in a second process while it runs the planners: the others, where there
+    are planners and a second process is usable (:func:`side_process_usable`), not on Ray; else none."""
+    plain = frozenset(label for label in policies if label not in PLANNERS)
+    if address is None and plain and len(plain) < len(policies) and side_process_usable():
+        return plain
+    return frozenset()
 
 
 def planned_seconds(

@@ -5,11 +5,13 @@ policy on each set. :class:`StageClock` shows one bar for all of them, counted i
 left spans every stage to come, and it records the wall time of each stage for the results (``seconds`` and
 ``optimum_seconds`` of each row) and the closing line (:meth:`summary`).
 
-The bar's total is the wall seconds of the stages that ended and an estimate of those to come:
+The bar counts wall seconds: those so far, and an estimate of those to come. Each stage to come is
 :func:`estimated_seconds`, corrected by the ratio of wall to estimated seconds of the policy's stages that ended (a
 planner takes minutes where its plans must be solved and seconds where :mod:`baselines.plan_store` holds them), or of
-every policy's until the policy has run. Stages run in a second process count as they end there, so that the rate of
-work, and with it the time left, counts both cores.
+every policy's until the policy has run; the stage running here goes at its own pace once a tenth of it is done. A
+set whose stages run in two processes (the planners here, the others in a second one,
+:mod:`train.evaluation.side_process`) takes the longer of this process's stages and half of all; the second
+process's stages leave the estimate as they end there.
 Where stderr is not a terminal (a redirected log) there is no bar: a plain line every tenth of the work instead,
 never a carriage return.
 """
@@ -58,27 +60,29 @@ class StageTime:
 
 
 class StageClock:
-    """One progress bar over stages, in seconds of work, and the wall time of each stage.
+    """One progress bar over stages, in wall seconds, and the wall time of each stage.
 
     :meth:`plan` adds the estimates of the stages to come (before they run, so that the time left spans them all);
     :meth:`stage` runs one here, reporting its progress as it goes; :meth:`record` counts one that ran in another
-    process. The bar's work done is the wall seconds of the stages so far, its total that and :meth:`left`.
+    process. The bar shows the wall seconds so far against those and :meth:`left`.
     """
 
     def __init__(self, progress: bool = True, description: str = "compare", file: TextIO | None = None):
         self.times: list[StageTime] = []
         self.began = time.perf_counter()
         self._file = file or sys.stderr
-        self._done = 0.0  # wall seconds of work done: of the stages that ended, and the one running here so far
+        self._done = 0.0  # wall seconds since the start, as the bar shows them
         self._waited = 0.0  # for stages of another process, after this one's own
         self._total = 0.0
         self._planned: dict[tuple[str, str], list[float]] = {}  # estimates of the stages to come, by (scenario, name)
         self._unnamed = 0.0  # estimated seconds planned without a stage's name, not run yet
-        self._finished = 0.0  # wall seconds of the stages that ended, here and in another process
         self._took: dict[str, list[float]] = {}  # by stage name: [wall seconds, estimated seconds] of those that ended
-        self._running: tuple[str, float, float, float] | None = None  # the stage here: name, estimate, start, fraction
+        self._running: tuple[str, str, float, float, float] | None = None  # here: set, name, estimate, start, fraction
         self._ratios: dict[str, float] = {}  # ratio() by stage name, worked out again as a stage ends
-        self._planned_left = 0.0  # the corrected estimates of the stages not run yet
+        self._beside: set[str] = set()  # the names of the stages run in a second process (plan's beside)
+        self._left_unnamed = 0.0  # the corrected estimates of the stages not run yet: without names,
+        self._left_here: dict[str, float] = {}  # by set, of those run here,
+        self._left_beside: dict[str, float] = {}  # and of those run in the second process
         self._logged = 0  # tenths of the work already written to a redirected log
         self._description = description
         self._bar: Any = None
@@ -94,14 +98,17 @@ class StageClock:
         """Whether the clock shows the progress (a bar, or lines in a redirected log)."""
         return self._bar is not None or self._log
 
-    def plan(self, weight: float | Iterable[tuple[tuple[str, str], float]]) -> None:
+    def plan(self, weight: float | Iterable[tuple[tuple[str, str], float]], beside: Iterable[str] = ()) -> None:
         """Add stages to come to the bar's total: ((scenario, stage name), estimated seconds) of each, in the order
-        they run (each corrected by what its policy's stages took so far), or one estimate for stages without names."""
+        they run (each corrected by what its policy's stages took so far), or one estimate for stages without names.
+        ``beside``: the names of the stages that run in a second process while this one runs the others of their set
+        (the set then takes the longer of this process's stages and half of all)."""
         if isinstance(weight, (int, float)):
             self._unnamed += float(weight)
         else:
             for key, seconds in weight:
                 self._planned.setdefault(key, []).append(float(seconds))
+        self._beside |= set(beside)
         self._correct()
         self._move()
         if self._bar is not None:
@@ -114,11 +121,11 @@ class StageClock:
         it is interrupted."""
         began = time.perf_counter()
         estimate = self._take(scenario, name, weight)
-        self._running = (name, estimate, began, 0.0)
+        self._running = (scenario, name, estimate, began, 0.0)
         self._label(f"{scenario}: {name}")
 
         def advance(fraction: float) -> None:
-            self._running = (name, estimate, began, min(max(fraction, 0.0), 1.0))
+            self._running = (scenario, name, estimate, began, min(max(fraction, 0.0), 1.0))
             self._move()
 
         try:
@@ -140,14 +147,19 @@ class StageClock:
         self._move()
 
     def left(self, now: float | None = None) -> float:
-        """The seconds of work to come: the stages not run yet, each estimate corrected by :meth:`ratio`, and the
-        rest of the stage running here (from its own pace once a tenth of it is done)."""
-        left = self._planned_left
+        """The wall seconds to come: the stages not run yet, each estimate corrected by :meth:`ratio`, and the rest of
+        the stage running here (from its own pace once a tenth of it is done); a set whose stages run in two processes
+        takes the longer of this process's and half of all."""
+        here = dict(self._left_here)
         if self._running is not None:
-            name, estimate, began, fraction = self._running
+            scenario, name, estimate, began, fraction = self._running
             elapsed = (time.perf_counter() if now is None else now) - began
             pace = elapsed / fraction if fraction >= EXTRAPOLATE_AFTER else estimate * self.ratio(name)
-            left += max((1.0 - fraction) * pace, 0.0)
+            here[scenario] = here.get(scenario, 0.0) + max((1.0 - fraction) * pace, 0.0)
+        left = self._left_unnamed
+        for scenario in here.keys() | self._left_beside.keys():
+            mine, theirs = here.get(scenario, 0.0), self._left_beside.get(scenario, 0.0)
+            left += max(mine, (mine + theirs) / 2.0)
         return left
 
     def ratio(self, name: str) -> float:
@@ -165,9 +177,11 @@ class StageClock:
     def _correct(self) -> None:
         """Work out the ratios and the corrected estimates of the stages to come again (a stage ended or was added)."""
         self._ratios.clear()
-        self._planned_left = self._unnamed * self.ratio("")
-        for (_, name), estimates in self._planned.items():
-            self._planned_left += sum(estimates) * self.ratio(name)
+        self._left_unnamed = self._unnamed * self.ratio("")
+        self._left_here, self._left_beside = {}, {}
+        for (scenario, name), estimates in self._planned.items():
+            lane = self._left_beside if name in self._beside else self._left_here
+            lane[scenario] = lane.get(scenario, 0.0) + sum(estimates) * self.ratio(name)
 
     def _take(self, scenario: str, name: str, weight: float) -> float:
         """The estimate of a stage that starts: the one planned under its scenario and name, else ``weight`` (taken
@@ -186,7 +200,6 @@ class StageClock:
         took = self._took.setdefault(name, [0.0, 0.0])
         took[0] += seconds
         took[1] += estimate
-        self._finished += seconds
         self._correct()
 
     def _label(self, text: str) -> None:
@@ -194,12 +207,11 @@ class StageClock:
             self._bar.set_postfix_str(text, refresh=False)
 
     def _move(self) -> None:
-        """The work done (the wall seconds of the stages that ended, and of the one running here so far) and the total
-        (done and :meth:`left`), on the bar or in a redirected log."""
+        """The wall seconds so far and the total (those and :meth:`left`), on the bar or in a redirected log."""
         if not self.shown:
             return
         now = time.perf_counter()
-        done = self._finished + (now - self._running[2] if self._running is not None else 0.0)
+        done = now - self.began  # the bar counts wall seconds: done so far, and to come
         self._total = done + self.left(now)
         if self._bar is not None:
             self._bar.total = round(self._total, 1)
@@ -210,9 +222,8 @@ class StageClock:
         tenths = int(self._done / self._total / LOG_STEP + 1e-9)
         if self._log and tenths > self._logged:
             self._logged = tenths
-            elapsed = time.perf_counter() - self.began
-            left = elapsed * (self._total - self._done) / self._done if self._done > 0 else float("nan")
-            print(f"{self._description}: {100 * self._done / self._total:.0f}% after {format_seconds(elapsed)}, "
+            left = self._total - self._done
+            print(f"{self._description}: {100 * self._done / self._total:.0f}% after {format_seconds(self._done)}, "
                   f"about {format_seconds(left)} left", file=self._file, flush=True)  # fmt: skip
 
     def close(self) -> None:

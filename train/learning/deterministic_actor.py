@@ -29,8 +29,11 @@ def deterministic_actor(model: Any) -> Any:
         return model
     policy = getattr(model, "policy", None)
     if (
-        type(policy).predict is not ActorCriticPolicy.predict  # a subclass acting otherwise: leave it to predict
-        or not isinstance(policy, ActorCriticPolicy)
+        not isinstance(policy, ActorCriticPolicy)
+        or any(  # a subclass that acts otherwise (a recurrent or masked policy): leave it to predict
+            getattr(type(policy), name) is not getattr(ActorCriticPolicy, name)
+            for name in ("predict", "_predict", "get_distribution", "_get_action_dist_from_latent")
+        )
         or type(policy.action_dist) is not DiagGaussianDistribution
         or policy.squash_output
         or not isinstance(policy.action_space, spaces.Box)
