@@ -90,7 +90,7 @@ class StageClock:
         if progress and not self._log:
             from train.progress import Progress
 
-            self._bar = Progress(total=0.0, desc=description, unit="s of work", file=self._file,
+            self._bar = Progress(total=0.0, desc=description, unit="s", file=self._file,
                                  bar_format="{desc}: {percentage:3.0f}%|{bar}| {postfix} [{elapsed}<{remaining}]")  # fmt: skip
 
     @property
