@@ -139,3 +139,19 @@ def test_a_set_run_in_two_processes_takes_the_longer_of_this_ones_stages_and_hal
     clock.record("random", "ptc", 4.0, 5, 4.0)
     assert clock.left() == pytest.approx(8.0)
     clock.close()
+
+
+def test_a_policys_pace_is_learned_apart_on_disturbed_sets(manual_time: ManualTime) -> None:
+    """optimal plans once per episode on a nominal set and re-plans on a disturbed one: its nominal pace is used on
+    a disturbed set only until a disturbed stage has ended."""
+    clock = StageClock(progress=True, file=io.StringIO())
+    sets = {"random": "nominal", "disturbed": "disturbed", "fault": "disturbed"}
+    clock.plan([((name, "optimal"), 10.0) for name in sets], groups=sets)
+    with clock.stage("random", "optimal", 10.0, 5):
+        manual_time.now += 1.0  # 0.1 of its estimate
+    assert clock.left() == pytest.approx(2 * 1.0)
+    with clock.stage("disturbed", "optimal", 10.0, 5):
+        manual_time.now += 30.0  # 3 times its estimate
+    assert clock.ratio("optimal", "fault") == pytest.approx(3.0) and clock.ratio("optimal", "random") == 0.1
+    assert clock.left() == pytest.approx(30.0)
+    clock.close()

@@ -199,7 +199,11 @@ def evaluate_sets(
             # a prescribed time asked for replaces the env's range of them (v1 draws T_con per episode)
             kwargs = env_kwargs if T_con is None else {**env_kwargs, "T_con": T_con, "T_con_range": None}
             chosen.append(make_scenario(name, n=n, seed=seed, env_kwargs=kwargs))
-    clock.plan(planned_seconds(policies, chosen, optimum, n_optimal), beside=running_beside(policies, address))
+    from train.evaluation.disturbance_sets import ROBUSTNESS_SETS
+
+    groups = {scenario.name: "disturbed" if scenario.name in ROBUSTNESS_SETS else "nominal" for scenario in chosen}
+    clock.plan(planned_seconds(policies, chosen, optimum, n_optimal), beside=running_beside(policies, address),
+               groups=groups)  # fmt: skip
     rows = []
     try:
         with plan_store.opened():  # the planners' plans, kept for the next command (what they solved, also on Ctrl-C)
@@ -257,7 +261,9 @@ def planned_seconds(
         for label in policies:
             limited = label == "optimal" and n_optimal is not None and scenario.name in ROBUSTNESS_SETS
             episodes = min(scenario.size, n_optimal or scenario.size) if limited else scenario.size
-            planned.append(((scenario.name, label), estimated_seconds(label, episodes, max_steps(scenario, params))))
+            disturbed = scenario.name in ROBUSTNESS_SETS
+            estimate = estimated_seconds(label, episodes, max_steps(scenario, params), disturbed)
+            planned.append(((scenario.name, label), estimate))
     return planned
 
 

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import sys
 import time
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any, TextIO
@@ -28,7 +28,9 @@ from typing import Any, TextIO
 #: Estimated wall seconds of one optimum solved on the two cores of a quiet machine (only the time left uses it).
 PLAN_SECONDS = 0.25
 #: Estimated wall seconds per episode of each policy (the planners re-plan with CasADi); others: DEFAULT_EPISODE_SECONDS.
-EPISODE_SECONDS = {"optimal": 0.6, "robust-pt": 0.08, "robust": 0.02}
+EPISODE_SECONDS = {"optimal": 0.04, "robust-pt": 0.08, "robust": 0.02}
+#: The same on a disturbed set, where they differ: ``optimal`` re-plans whenever the robot is pushed off its plan.
+DISTURBED_EPISODE_SECONDS = {**EPISODE_SECONDS, "optimal": 0.4}
 DEFAULT_EPISODE_SECONDS = 0.004
 #: Estimated wall seconds of one step of a batch, whatever its size (a policy's call, the env's transition).
 STEP_SECONDS = 5e-4
@@ -42,10 +44,11 @@ CALIBRATE_AFTER = 0.5
 EXTRAPOLATE_AFTER = 0.1
 
 
-def estimated_seconds(policy: str, episodes: int, steps: int) -> float:
-    """The share of the bar of ``policy`` run on ``episodes`` episodes of at most ``steps`` steps: an estimate of its
-    wall seconds (a cost per step of the batch, and one per episode)."""
-    return STEP_SECONDS * steps + EPISODE_SECONDS.get(policy, DEFAULT_EPISODE_SECONDS) * episodes
+def estimated_seconds(policy: str, episodes: int, steps: int, disturbed: bool = False) -> float:
+    """An estimate of the wall seconds of ``policy`` run on ``episodes`` episodes of at most ``steps`` steps, of a
+    disturbed set or not: a cost per step of the batch, and one per episode."""
+    per_episode = (DISTURBED_EPISODE_SECONDS if disturbed else EPISODE_SECONDS).get(policy, DEFAULT_EPISODE_SECONDS)
+    return STEP_SECONDS * steps + per_episode * episodes
 
 
 @dataclass(frozen=True)
@@ -76,9 +79,10 @@ class StageClock:
         self._total = 0.0
         self._planned: dict[tuple[str, str], list[float]] = {}  # estimates of the stages to come, by (scenario, name)
         self._unnamed = 0.0  # estimated seconds planned without a stage's name, not run yet
-        self._took: dict[str, list[float]] = {}  # by stage name: [wall seconds, estimated seconds] of those that ended
+        self._took: dict[tuple[str, str], list[float]] = {}  # by (name, group): [wall s, estimated s] of those ended
+        self._groups: dict[str, str] = {}  # scenario -> the group a policy's pace is learned in (plan's groups)
         self._running: tuple[str, str, float, float, float] | None = None  # here: set, name, estimate, start, fraction
-        self._ratios: dict[str, float] = {}  # ratio() by stage name, worked out again as a stage ends
+        self._ratios: dict[tuple[str, str], float] = {}  # ratio() by (name, group), worked out again as a stage ends
         self._beside: set[str] = set()  # the names of the stages run in a second process (plan's beside)
         self._left_unnamed = 0.0  # the corrected estimates of the stages not run yet: without names,
         self._left_here: dict[str, float] = {}  # by set, of those run here,
@@ -90,7 +94,7 @@ class StageClock:
         if progress and not self._log:
             from train.progress import Progress
 
-            self._bar = Progress(total=0.0, desc=description, unit="s of work", file=self._file,
+            self._bar = Progress(total=0.0, desc=description, unit="s", file=self._file,
                                  bar_format="{desc}: {percentage:3.0f}%|{bar}| {postfix} [{elapsed}<{remaining}]")  # fmt: skip
 
     @property
@@ -98,17 +102,24 @@ class StageClock:
         """Whether the clock shows the progress (a bar, or lines in a redirected log)."""
         return self._bar is not None or self._log
 
-    def plan(self, weight: float | Iterable[tuple[tuple[str, str], float]], beside: Iterable[str] = ()) -> None:
+    def plan(
+        self,
+        weight: float | Iterable[tuple[tuple[str, str], float]],
+        beside: Iterable[str] = (),
+        groups: Mapping[str, str] | None = None,
+    ) -> None:
         """Add stages to come to the bar's total: ((scenario, stage name), estimated seconds) of each, in the order
         they run (each corrected by what its policy's stages took so far), or one estimate for stages without names.
         ``beside``: the names of the stages that run in a second process while this one runs the others of their set
-        (the set then takes the longer of this process's stages and half of all)."""
+        (the set then takes the longer of this process's stages and half of all). ``groups``: a group for some
+        scenarios (e.g. "disturbed"): a policy's pace is learned in each group apart (:meth:`ratio`)."""
         if isinstance(weight, (int, float)):
             self._unnamed += float(weight)
         else:
             for key, seconds in weight:
                 self._planned.setdefault(key, []).append(float(seconds))
         self._beside |= set(beside)
+        self._groups.update(groups or {})
         self._correct()
         self._move()
         if self._bar is not None:
@@ -134,7 +145,7 @@ class StageClock:
             seconds = time.perf_counter() - began
             self.times.append(StageTime(scenario, name, seconds, size))
             self._running = None
-            self._ended(name, seconds, estimate)
+            self._ended(scenario, name, seconds, estimate)
         self._move()
 
     def record(self, scenario: str, name: str, seconds: float, size: int, weight: float, waited: float = 0.0) -> None:
@@ -143,7 +154,7 @@ class StageClock:
         time)."""
         self._waited += waited
         self.times.append(StageTime(scenario, name, seconds, size, beside=True))
-        self._ended(name, seconds, self._take(scenario, name, weight))
+        self._ended(scenario, name, seconds, self._take(scenario, name, weight))
         self._move()
 
     def left(self, now: float | None = None) -> float:
@@ -154,7 +165,7 @@ class StageClock:
         if self._running is not None:
             scenario, name, estimate, began, fraction = self._running
             elapsed = (time.perf_counter() if now is None else now) - began
-            pace = elapsed / fraction if fraction >= EXTRAPOLATE_AFTER else estimate * self.ratio(name)
+            pace = elapsed / fraction if fraction >= EXTRAPOLATE_AFTER else estimate * self.ratio(name, scenario)
             here[scenario] = here.get(scenario, 0.0) + max((1.0 - fraction) * pace, 0.0)
         left = self._left_unnamed
         for scenario in here.keys() | self._left_beside.keys():
@@ -162,17 +173,24 @@ class StageClock:
             left += max(mine, (mine + theirs) / 2.0)
         return left
 
-    def ratio(self, name: str) -> float:
-        """Wall seconds per estimated second of the stages of ``name`` that ended; until they reach
-        :data:`CALIBRATE_AFTER` estimated seconds, the same of every policy's stages (1 before any)."""
-        if name in self._ratios:
-            return self._ratios[name]
-        seconds, estimate = self._took.get(name, (0.0, 0.0))
-        if estimate < CALIBRATE_AFTER:
-            policies = [took for stage, took in self._took.items() if stage != "optimum"]
-            seconds, estimate = sum(t[0] for t in policies), sum(t[1] for t in policies)
-        self._ratios[name] = seconds / estimate if estimate >= CALIBRATE_AFTER else 1.0
-        return self._ratios[name]
+    def ratio(self, name: str, scenario: str = "") -> float:
+        """Wall seconds per estimated second of the stages of ``name`` that ended in the group of ``scenario``; until
+        they reach :data:`CALIBRATE_AFTER` estimated seconds, the same of ``name``'s stages in every group, then of
+        every policy's stages (1 before any)."""
+        group = self._groups.get(scenario, "")
+        if (name, group) in self._ratios:
+            return self._ratios[name, group]
+        ratio = 1.0
+        for took in (
+            [t for (stage, _), t in self._took.items() if stage != "optimum"],
+            [t for (stage, _), t in self._took.items() if stage == name],
+            [t for (stage, in_group), t in self._took.items() if stage == name and in_group == group],
+        ):  # the narrowest with enough estimated seconds
+            seconds, estimate = sum(t[0] for t in took), sum(t[1] for t in took)
+            if estimate >= CALIBRATE_AFTER:
+                ratio = seconds / estimate
+        self._ratios[name, group] = ratio
+        return ratio
 
     def _correct(self) -> None:
         """Work out the ratios and the corrected estimates of the stages to come again (a stage ended or was added)."""
@@ -181,7 +199,7 @@ class StageClock:
         self._left_here, self._left_beside = {}, {}
         for (scenario, name), estimates in self._planned.items():
             lane = self._left_beside if name in self._beside else self._left_here
-            lane[scenario] = lane.get(scenario, 0.0) + sum(estimates) * self.ratio(name)
+            lane[scenario] = lane.get(scenario, 0.0) + sum(estimates) * self.ratio(name, scenario)
 
     def _take(self, scenario: str, name: str, weight: float) -> float:
         """The estimate of a stage that starts: the one planned under its scenario and name, else ``weight`` (taken
@@ -196,8 +214,8 @@ class StageClock:
         self._correct()
         return estimate
 
-    def _ended(self, name: str, seconds: float, estimate: float) -> None:
-        took = self._took.setdefault(name, [0.0, 0.0])
+    def _ended(self, scenario: str, name: str, seconds: float, estimate: float) -> None:
+        took = self._took.setdefault((name, self._groups.get(scenario, "")), [0.0, 0.0])
         took[0] += seconds
         took[1] += estimate
         self._correct()
