@@ -58,7 +58,8 @@ def evaluate(
         for result in results.values():
             result.optimal_energy, result.optimum_failures = optimal_energy, optimum_failures
         return results
-    plain = {label: policy for label, policy in policies.items() if label in running_beside(policies, address)}
+    beside = running_beside(policies)  # (not on Ray: returned above)
+    plain = {label: policy for label, policy in policies.items() if label in beside}
     side = None
     if plain:  # the planners here, the others beside them
         # the agents first (a network's call per step: the costlier), the laws last: this process takes from the end

@@ -132,6 +132,7 @@ class StageClock:
         it is interrupted."""
         began = time.perf_counter()
         estimate = self._take(scenario, name, weight)
+        self._correct()
         self._running = (scenario, name, estimate, began, 0.0)
         self._label(f"{scenario}: {name}")
 
@@ -202,8 +203,8 @@ class StageClock:
             lane[scenario] = lane.get(scenario, 0.0) + sum(estimates) * self.ratio(name, scenario)
 
     def _take(self, scenario: str, name: str, weight: float) -> float:
-        """The estimate of a stage that starts: the one planned under its scenario and name, else ``weight`` (taken
-        out of the estimates planned without names)."""
+        """The estimate of a stage that starts (or ended elsewhere): the one planned under its scenario and name, else
+        ``weight`` (taken out of the estimates planned without names); :meth:`_correct` follows."""
         planned = self._planned.get((scenario, name))
         if planned:
             estimate = planned.pop(0)
@@ -211,7 +212,6 @@ class StageClock:
                 del self._planned[(scenario, name)]
         else:
             estimate, self._unnamed = weight, max(self._unnamed - weight, 0.0)
-        self._correct()
         return estimate
 
     def _ended(self, scenario: str, name: str, seconds: float, estimate: float) -> None:
