@@ -39,6 +39,7 @@ SUITE: dict[str, str] = {
     "rl-residual": "benchmarks.learning.rl_residual",
     "rl-rushing": "benchmarks.learning.rl_rushing",
     "incentives": "benchmarks.learning.incentives",
+    "energy-split": "benchmarks.learning.energy_split",
     "ship-rl-agents": "benchmarks.learning.ship_rl_agents",
     "per-t-con": "benchmarks.learning.per_t_con",
     "prescribed-time-goal": "benchmarks.learning.prescribed_time_goal",

@@ -54,7 +54,8 @@ def shipped_agents() -> dict[str, Any]:
     return {name: load_agent(path)[1] for name, path in sorted(paths.items())}
 
 
-def _episodes(env_id: str, n: int, seed: int, **env_overrides: Any) -> tuple[Any, Any]:
+def random_episodes(env_id: str, n: int, seed: int, **env_overrides: Any) -> tuple[Any, Any]:
+    """The random set of ``n`` episodes (``seed``) of ``env_id`` with ``env_overrides``, and its env's params."""
     from dwr_gym.params import EnvParams
     from train.evaluation.scenarios import make_scenario
 
@@ -72,7 +73,7 @@ def return_ranking(
     every shipped agent."""
     from train.evaluation.rollout import rollout
 
-    scenario, params = _episodes(env_id, n, seed)
+    scenario, params = random_episodes(env_id, n, seed)
     gamma = training_discount(env_id)
     if policies is None:
         policies = {name: controller_policy(name, params) for name in CONTROLLERS} | shipped_agents()
@@ -106,7 +107,7 @@ def rushing_returns(
     gamma = training_discount(env_id)
     rows = []
     for sigma in sigmas:
-        scenario, params = _episodes(env_id, n, seed, actuation_noise=sigma)
+        scenario, params = random_episodes(env_id, n, seed, actuation_noise=sigma)
         for fraction in fractions:
             policy = controller_policy("optimal", params, arrival_fraction=fraction, workers=workers)
             result = rollout(policy, params, scenario.starts, scenario.goals, T_con=scenario.T_cons, seed=seed,
@@ -128,5 +129,5 @@ def rushing_returns(
             "latest_pays_most": latest}  # fmt: skip
 
 
-__all__ = ["CONTROLLERS", "controller_policy", "return_ranking", "rushing_returns", "shipped_agents",
+__all__ = ["CONTROLLERS", "controller_policy", "random_episodes", "return_ranking", "rushing_returns", "shipped_agents",
            "training_discount"]  # fmt: skip

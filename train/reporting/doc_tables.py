@@ -28,7 +28,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
-from train.reporting import dataset_tables, incentive_tables
+from train.reporting import dataset_tables, energy_tables, incentive_tables
 
 ROOT = Path(__file__).resolve().parents[2]
 #: A generated block: its name, its producer and the command that writes its JSON, then its body.
@@ -288,6 +288,8 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "jax-env-step": ("docs/jax/env_step.json", jax_env_step_table),
     "incentives-ranking": ("docs/rl_benchmark/incentives.json", lambda data: incentive_tables.ranking_table(data)),
     "incentives-rushing": ("docs/rl_benchmark/incentives.json", lambda data: incentive_tables.rushing_table(data)),
+    "energy-split": ("docs/rl_benchmark/energy_split.json", lambda data: energy_tables.split_table(data)),
+    "law-gains": ("docs/rl_benchmark/energy_split.json", lambda data: energy_tables.gains_table(data)),
     "sbx-speed": ("docs/rl_benchmark/sbx_speed.json", sbx_speed_table),
     "sbx-v1": ("docs/rl_benchmark/sbx_v1.json", lambda data: rl_table(data, "random")),
     "sbx-v2": ("docs/rl_benchmark/sbx_v2.json", lambda data: rl_table(data, "random")),

@@ -1,0 +1,54 @@
+"""The tables of docs/rl-benchmark.md's "Where the energy goes on v2", from docs/rl_benchmark/energy_split.json
+(``python -m benchmarks run energy-split``, train/evaluation/energy_split.py)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+
+def split_table(data: dict[str, Any]) -> str:
+    """Each policy's energy on v2, its linear and turning parts, and its share in each part of T_con."""
+    split = data["split"]
+    parts = int(split["parts"])
+    head = [f"{i}/{parts}-{i + 1}/{parts} T_con" for i in range(parts)]
+    lines = ["| policy | in time | energy | linear (u^2) | turning (omega^2) | " + " | ".join(head)
+             + " | final heading [rad] |", "|---" * (6 + parts) + "|"]  # fmt: skip
+    for row in split["rows"]:
+        shares = " | ".join(f"{100 * share:.0f} %" for share in row["shares"])
+        lines.append(f"| {row['policy']} | {row['in_time']:.2f} | {row['energy_mean']:.3f} | {row['linear_mean']:.3f} "
+                     f"| {row['turning_mean']:.3f} | {shares} | {row['final_heading_mean']:.2f} |")  # fmt: skip
+    lines += ["", f"Means over {split['episodes']} random episodes of {split['env_id']} (seed {split['seed']}); the "
+              "energy is counted until the episode ends (T_con), its share in each part of T_con summed over them."]  # fmt: skip
+    return "\n".join(lines) + "\n"
+
+
+def _gains(row: dict[str, Any]) -> str:
+    return ", ".join(f"{name} {value:g}" for name, value in row["gains"].items())
+
+
+def gains_table(data: dict[str, Any]) -> str:
+    """Per law: its default gains, and the lowest E/opt its gain grid reaches in time, without and with the heading
+    goal."""
+    gains = data["gains"]
+    lines = ["| law | gains | which | in time | E/opt | final heading [rad] |", "|---" * 6 + "|"]
+    for law, defaults in data["defaults"].items():
+        mine = [row for row in gains["rows"] if row["law"] == law]
+        default = next((row for row in mine if all(row["gains"].get(k) == v for k, v in defaults.items())), None)
+        best = gains["best"].get(law, {})
+        chosen = (("default (PTC's: the paper's)", default), ("lowest E/opt in time", best.get("any_heading")),
+                  (f"lowest E/opt in time, heading <= {gains['heading_goal']:g} rad", best.get("heading_goal")))  # fmt: skip
+        for which, row in chosen:
+            if row is None:
+                lines.append(f"| {law} | - | {which} | - | none in the grid | - |")
+                continue
+            ratio = "-" if row["energy_ratio"] is None else f"{row['energy_ratio']:.2f}"
+            lines.append(f"| {law} | {_gains(row)} | {which} | {row['in_time']:.2f} | {ratio} "
+                         f"| {row['final_heading']:.2f} |")  # fmt: skip
+    sizes = {law: sum(row["law"] == law for row in gains["rows"]) for law in data["defaults"]}
+    lines += ["", f"{gains['episodes']} random episodes of {gains['env_id']} (seed {gains['seed']}); in time: on >= "
+              f"{100 * gains['in_time_goal']:g} % of them; settings tried: "
+              + ", ".join(f"{law} {count}" for law, count in sizes.items()) + " (all in the JSON)."]  # fmt: skip
+    return "\n".join(lines) + "\n"
+
+
+__all__ = ["gains_table", "split_table"]
