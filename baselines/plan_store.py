@@ -150,6 +150,14 @@ def _casadi_installed() -> bool:
     return True
 
 
+def has_plans(directory: Path | None = None) -> bool:
+    """Whether the store at ``directory`` (default :func:`default_directory`) holds plans an earlier command wrote;
+    False where it is off (``DWR_GYM_PLAN_CACHE=0``) or CasADi is missing: the planners will solve every plan."""
+    if os.environ.get(SWITCH, "1") == "0" or not _casadi_installed():
+        return False
+    return any((directory or default_directory()).glob("*.npz"))
+
+
 #: The store :class:`baselines.nmpc.PlanPool` reads and adds to: None (the default) keeps plans in memory only.
 _OPEN: list[PlanStore] = []
 
@@ -179,4 +187,5 @@ def opened(directory: Path | None = None) -> Iterator[PlanStore | None]:
             pass
 
 
-__all__ = ["FLUSH_EVERY", "STORE_VERSION", "SWITCH", "PlanStore", "current", "default_directory", "opened"]
+__all__ = ["FLUSH_EVERY", "STORE_VERSION", "SWITCH", "PlanStore", "current", "default_directory", "has_plans",
+           "opened"]  # fmt: skip

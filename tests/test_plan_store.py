@@ -101,3 +101,12 @@ def test_a_changed_solver_has_a_store_of_its_own(monkeypatch: pytest.MonkeyPatch
     before = plan_store.default_directory()
     monkeypatch.setattr(plan_store, "STORE_VERSION", plan_store.STORE_VERSION + 1)
     assert plan_store.default_directory() != before and plan_store.default_directory().parent == before.parent
+
+
+def test_the_store_says_whether_a_command_wrote_plans_before(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    assert not plan_store.has_plans(tmp_path)  # a first run: every plan is solved
+    with plan_store.opened(tmp_path):
+        nmpc.PlanPool(workers=1).map([{**JOB, "arrival_time": 5.8}])
+    assert plan_store.has_plans(tmp_path)
+    monkeypatch.setenv(plan_store.SWITCH, "0")
+    assert not plan_store.has_plans(tmp_path)  # off: the plans are solved again

@@ -155,3 +155,17 @@ def test_a_policys_pace_is_learned_apart_on_disturbed_sets(manual_time: ManualTi
     assert clock.ratio("optimal", "fault") == pytest.approx(3.0) and clock.ratio("optimal", "random") == 0.1
     assert clock.left() == pytest.approx(30.0)
     clock.close()
+
+
+def test_a_planners_estimate_follows_the_set_and_whether_its_plans_are_stored() -> None:
+    from train.evaluation.stages import COLD_EPISODE_SECONDS, DEFAULT_EPISODE_SECONDS, estimated_seconds
+
+    cold = {name: estimated_seconds("robust-pt", 1000, 0, name, cold=True) for name in ("random", "fault", "noise")}
+    assert cold["fault"] > cold["noise"] > cold["random"]  # robust-pt re-plans most where a wheel fails
+    assert estimated_seconds("robust-pt", 1000, 0, "random", cold=False) < cold["random"]
+    assert estimated_seconds("robust-pt", 10, 0, "paper-fig5", cold=True) == pytest.approx(
+        10 * COLD_EPISODE_SECONDS["robust-pt"]["random"]
+    )  # a set not measured: as the random one
+    assert estimated_seconds("ptc", 100, 10, "fault", cold=True) == pytest.approx(
+        100 * DEFAULT_EPISODE_SECONDS + 10 * 5e-4
+    )

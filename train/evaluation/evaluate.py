@@ -251,6 +251,7 @@ def planned_seconds(
     that its time left spans every stage."""
     from train.evaluation.disturbance_sets import ROBUSTNESS_SETS
 
+    cold = not plan_store.has_plans()  # the planners solve every plan: minutes, where a second run takes seconds
     todo: set[tuple[str, str]] = set()
     planned: list[tuple[tuple[str, str], float]] = []
     for scenario in scenarios:
@@ -262,8 +263,7 @@ def planned_seconds(
         for label in policies:
             limited = label == "optimal" and n_optimal is not None and scenario.name in ROBUSTNESS_SETS
             episodes = min(scenario.size, n_optimal or scenario.size) if limited else scenario.size
-            disturbed = scenario.name in ROBUSTNESS_SETS
-            estimate = estimated_seconds(label, episodes, max_steps(scenario, params), disturbed)
+            estimate = estimated_seconds(label, episodes, max_steps(scenario, params), scenario.name, cold)
             planned.append(((scenario.name, label), estimate))
     return planned
 

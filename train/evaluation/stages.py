@@ -8,7 +8,8 @@ left spans every stage to come, and it records the wall time of each stage for t
 The bar counts wall seconds: those so far, and an estimate of those to come. Each stage to come is
 :func:`estimated_seconds`, corrected by the ratio of wall to estimated seconds of the policy's stages that ended (a
 planner takes minutes where its plans must be solved and seconds where :mod:`baselines.plan_store` holds them), or of
-every policy's until the policy has run; the stage running here goes at its own pace once a tenth of it is done. A
+every policy's until the policy has run (a planner's estimate is measured per set, cold where the plan store is
+empty, warm where it holds plans); the stage running here goes at its own pace once a tenth of it is done. A
 set whose stages run in two processes (the planners here, the others in a second one,
 :mod:`train.evaluation.side_process`) takes the longer of this process's stages and half of all; the second
 process's stages leave the estimate as they end there.
@@ -27,10 +28,20 @@ from typing import Any, TextIO
 
 #: Estimated wall seconds of one optimum solved on the two cores of a quiet machine (only the time left uses it).
 PLAN_SECONDS = 0.25
-#: Estimated wall seconds per episode of each policy (the planners re-plan with CasADi); others: DEFAULT_EPISODE_SECONDS.
-EPISODE_SECONDS = {"optimal": 0.04, "robust-pt": 0.08, "robust": 0.02}
-#: The same on a disturbed set, where they differ: ``optimal`` re-plans whenever the robot is pushed off its plan.
-DISTURBED_EPISODE_SECONDS = {**EPISODE_SECONDS, "optimal": 0.4}
+#: Wall seconds per episode of each planner on each of compare's sets, measured on 2 cores with the other policies
+#: run beside them (``dwr-gym compare``, 1,000 episodes a set, 50 of ``optimal`` on the disturbed ones): where its
+#: plans are solved (COLD: no plan store yet, a first run) and where the plan store holds them (WARM). The ratio
+#: of a machine's wall to these seconds is learned as the stages end; only the sets' proportions are taken from here.
+COLD_EPISODE_SECONDS: dict[str, dict[str, float]] = {
+    "robust-pt": {"random": 0.038, "disturbed": 0.020, "fault": 0.098, "delay": 0.024, "noise": 0.047},
+    "optimal": {"random": 0.045, "disturbed": 0.50, "fault": 0.48, "delay": 0.23, "noise": 0.28},
+    "robust": {"random": 0.014, "disturbed": 0.024, "fault": 0.032, "delay": 0.025, "noise": 0.020},
+}
+WARM_EPISODE_SECONDS: dict[str, dict[str, float]] = {
+    "robust-pt": {"random": 0.0038, "disturbed": 0.0076, "fault": 0.011, "delay": 0.0072, "noise": 0.006},
+    "optimal": {"random": 0.0024, "disturbed": 0.005, "fault": 0.005, "delay": 0.003, "noise": 0.003},
+    "robust": {"random": 0.0073, "disturbed": 0.0074, "fault": 0.0074, "delay": 0.0074, "noise": 0.0074},
+}
 DEFAULT_EPISODE_SECONDS = 0.004
 #: Estimated wall seconds of one step of a batch, whatever its size (a policy's call, the env's transition).
 STEP_SECONDS = 5e-4
@@ -44,10 +55,12 @@ CALIBRATE_AFTER = 0.5
 EXTRAPOLATE_AFTER = 0.1
 
 
-def estimated_seconds(policy: str, episodes: int, steps: int, disturbed: bool = False) -> float:
-    """An estimate of the wall seconds of ``policy`` run on ``episodes`` episodes of at most ``steps`` steps, of a
-    disturbed set or not: a cost per step of the batch, and one per episode."""
-    per_episode = (DISTURBED_EPISODE_SECONDS if disturbed else EPISODE_SECONDS).get(policy, DEFAULT_EPISODE_SECONDS)
+def estimated_seconds(policy: str, episodes: int, steps: int, scenario: str = "random", cold: bool = False) -> float:
+    """An estimate of the wall seconds of ``policy`` run on ``episodes`` episodes of at most ``steps`` steps of the set
+    ``scenario``: a cost per step of the batch, and one per episode (a planner's as measured on that set, solving its
+    plans where ``cold``, else taking them from the plan store; on a set not measured, as on ``random``)."""
+    by_set = (COLD_EPISODE_SECONDS if cold else WARM_EPISODE_SECONDS).get(policy)
+    per_episode = DEFAULT_EPISODE_SECONDS if by_set is None else by_set.get(scenario, by_set["random"])
     return STEP_SECONDS * steps + per_episode * episodes
 
 
