@@ -34,6 +34,10 @@ def test_gain_settings_span_the_grid_in_order_and_refuse_an_empty_axis() -> None
     assert gain_settings({"a": (1, 2), "b": (3.0,)}) == [{"a": 1.0, "b": 3.0}, {"a": 2.0, "b": 3.0}]
     with pytest.raises(ValueError, match=r"grid\['b'\]=\(\) is invalid"):
         gain_settings({"a": (1,), "b": ()})
+    with pytest.raises(ValueError, match="n=0 is invalid"):
+        law_gains(n=0)
+    with pytest.raises(ValueError, match="n=0 and parts=5 are invalid"):
+        energy_split({"ptc": "ptc"}, n=0)
 
 
 def test_law_gains_leaves_out_what_a_law_refuses_and_names_its_lowest_e_opt_in_time() -> None:

@@ -1,6 +1,6 @@
 """Where the energy goes on v2, and how far the laws get by their gains alone (issue 40's residual goal, sized).
 
-    python -m benchmarks run energy-split --docs         # 100 episodes each (about 5 min on 2 cores)
+    python -m benchmarks run energy-split --docs         # 100 episodes each (about 1.5 min on 2 cores)
     python -m benchmarks run energy-split --n 20         # a quick look (printed, nothing written)
 
 ``--docs`` writes docs/rl_benchmark/energy_split.json, from which the tables ``energy-split`` and ``law-gains`` of

@@ -105,6 +105,8 @@ def law_gains(
     from dwr_gym.params import EnvParams
     from train.evaluation.evaluate import evaluate_sets
 
+    if n < 1:
+        raise ValueError(f"n={n!r} is invalid: expected an integer >= 1")
     kwargs = env_keywords(env_id, {})
     params = EnvParams.from_kwargs(**{k: v for k, v in kwargs.items() if k in EnvParams.__dataclass_fields__})
     rows, policies, settings = [], {}, {}
