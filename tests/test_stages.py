@@ -169,3 +169,21 @@ def test_a_planners_estimate_follows_the_set_and_whether_its_plans_are_stored() 
     assert estimated_seconds("ptc", 100, 10, "fault", cold=True) == pytest.approx(
         100 * DEFAULT_EPISODE_SECONDS + 10 * 5e-4
     )
+
+
+def test_a_first_run_plans_the_planners_cold_and_a_second_run_warm(tmp_path: Path, monkeypatch) -> None:
+    pytest.importorskip("casadi")
+    from baselines import plan_store
+    from train.env_ids import env_keywords
+    from train.evaluation.evaluate import planned_seconds
+    from train.evaluation.scenarios import make_scenario
+
+    monkeypatch.setenv("DWR_GYM_CACHE", str(tmp_path))
+    scenario = make_scenario("random", n=10, seed=0, env_kwargs=env_keywords("DWRPointStabilization-v1"))
+    policies = {"robust-pt": "robust-pt", "ptc": "ptc"}
+    first = dict(planned_seconds(policies, [scenario], "none", None))
+    plan_store.default_directory().mkdir(parents=True)
+    (plan_store.default_directory() / "1-0.npz").write_bytes(b"")  # what an earlier command wrote
+    second = dict(planned_seconds(policies, [scenario], "none", None))
+    assert first[("random", "robust-pt")] > second[("random", "robust-pt")]
+    assert first[("random", "ptc")] == second[("random", "ptc")]

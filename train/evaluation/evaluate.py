@@ -251,7 +251,8 @@ def planned_seconds(
     that its time left spans every stage."""
     from train.evaluation.disturbance_sets import ROBUSTNESS_SETS
 
-    cold = not plan_store.has_plans()  # the planners solve every plan: minutes, where a second run takes seconds
+    # the planners solve every plan (minutes, where a second run takes seconds); without planners, no store to look at
+    cold = not PLANNERS.isdisjoint(policies) and not plan_store.has_plans()
     todo: set[tuple[str, str]] = set()
     planned: list[tuple[tuple[str, str], float]] = []
     for scenario in scenarios:
