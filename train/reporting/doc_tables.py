@@ -295,6 +295,7 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "sbx-v2": ("docs/rl_benchmark/sbx_v2.json", lambda data: rl_table(data, "random")),
     "sbx-v2-long": ("docs/rl_benchmark/sbx_v2_long.json", lambda data: rl_table(data, "random")),
     "sbx-v2-seeds": ("docs/rl_benchmark/sbx_v2_seeds.json", lambda data: rl_table(data, "random")),
+    "sbx-v2-30min": ("docs/rl_benchmark/sbx_v2_30min.json", lambda data: rl_table(data, "random")),
 }
 
 
