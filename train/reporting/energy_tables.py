@@ -35,7 +35,8 @@ def gains_table(data: dict[str, Any]) -> str:
         mine = [row for row in gains["rows"] if row["law"] == law]
         default = next((row for row in mine if all(row["gains"].get(k) == v for k, v in defaults.items())), None)
         best = gains["best"].get(law, {})
-        chosen = (("default (PTC's: the paper's)", default), ("lowest E/opt in time", best.get("any_heading")),
+        label = "default (the paper's)" if law == "ptc" else "default"
+        chosen = ((label, default), ("lowest E/opt in time", best.get("any_heading")),
                   (f"lowest E/opt in time, heading <= {gains['heading_goal']:g} rad", best.get("heading_goal")))  # fmt: skip
         for which, row in chosen:
             if row is None:
