@@ -27,7 +27,8 @@ LONG = ["--seeds", "1", "--jobs", "3", "--time-limit", "1200", "--eval-freq", "2
         "--disturbed-episodes", "20", "--optimum-episodes", "50", "--references"]  # fmt: skip
 
 SEEDS = ["--seeds", "5", "--jobs", "1", *BRIEF[2:]]
-#: The issue's budget, 30 min a seed (the time limit, not the env steps, ends it), for the learner that arrived most often above (TQC), two seeds side by side.
+#: The issue's budget, 30 min a seed (the time limit, not the env steps, ends it), for the learner that arrived most
+#: often above (TQC), two seeds side by side.
 HALF_HOUR = ["--seeds", "2", "--jobs", "2", "--time-limit", "1800", "--env-steps", "50000000", "--eval-freq", "1000000",
              *LONG[8:]]  # fmt: skip
 

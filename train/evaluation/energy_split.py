@@ -55,9 +55,10 @@ def energy_split(
         trajectory = result.trajectory or {}
         u, omega = trajectory["linear_velocity"], trajectory["angular_velocity"]  # (steps, N), 0 once ended
         linear, turning = u * u * params.dt, omega * omega * params.dt
+        energy = linear + turning
         part = np.minimum((trajectory["time"][:-1] / result.T_con * parts).astype(np.int64), parts - 1)
-        total = float(np.sum(linear + turning))
-        shares = [float(np.sum((linear + turning)[part == i]) / total) if total > 0 else 0.0 for i in range(parts)]
+        total = float(np.sum(energy))
+        shares = [float(np.sum(energy[part == i]) / total) if total > 0 else 0.0 for i in range(parts)]
         rows.append({"policy": name, "in_time": float(np.mean(result.success)),
                      "energy_mean": float(np.mean(result.energy)),
                      "linear_mean": float(np.mean(np.sum(linear, axis=0))),
@@ -75,18 +76,15 @@ def gain_settings(grid: Mapping[str, Sequence[float]]) -> list[dict[str, float]]
     return [dict(zip(names, map(float, values), strict=True)) for values in itertools.product(*grid.values())]
 
 
-def _valid(law: str, gains: dict[str, float]) -> dict[str, float] | None:
-    """``gains`` completed so the law accepts them (PTC's K capped at min(1.2, 0.6 K1, K2), Table 1), or None where
-    the law refuses them."""
-    from baselines.registry import make_controller
-
+def _law_policy(law: str, gains: dict[str, float], params: Any) -> tuple[dict[str, float], Any] | None:
+    """``gains`` completed so the law accepts them (PTC's K capped at min(1.2, 0.6 K1, K2), Table 1) and the law acting
+    with them in an env of ``params``, or None where the law refuses them."""
     if law == "ptc":
         gains = {**gains, "K": round(min(1.2, 0.6 * gains["K1"], gains["K2"]), 12)}
     try:
-        make_controller(law, **gains)
+        return gains, controller_policy(law, params, **gains)
     except ValueError:
         return None
-    return gains
 
 
 def law_gains(
@@ -100,8 +98,6 @@ def law_gains(
     the ``n`` episodes of the random set (``seed``) of ``env_id``: in time, E/opt (the pose's optimum) and final
     heading; settings the law refuses are left out. ``best`` names, per law, the lowest E/opt in time on >= 99.5 %
     of the episodes, without and with a final heading <= 0.15 rad (None where no setting is)."""
-    from baselines.expert import ExpertPolicy
-    from baselines.registry import make_controller
     from dwr_gym.params import EnvParams
     from train.evaluation.evaluate import evaluate_sets
 
@@ -112,12 +108,12 @@ def law_gains(
     rows, policies, settings = [], {}, {}
     for law, grid in (grids or GAIN_GRIDS).items():
         for gains in gain_settings(grid):
-            full = _valid(law, gains)
-            if full is None:
+            accepted = _law_policy(law, gains, params)
+            if accepted is None:
                 continue
+            full, policy = accepted
             label = f"{law} " + ", ".join(f"{k}={v:g}" for k, v in full.items())
-            policies[label] = ExpertPolicy(make_controller(law, **full), params.u_max, params.omega_max)
-            settings[label] = (law, full)
+            policies[label], settings[label] = policy, (law, full)
     for row in evaluate_sets(policies, ["random"], n, seed, kwargs, progress=progress, optimum="pose"):
         law, gains = settings[row["policy"]]
         ratio = row["energy_ratio_mean"]
