@@ -5,8 +5,8 @@
 
 The suite's name for the three ``dwr-gym benchmark`` commands behind docs/rl-libraries.md's tables ``sbx-v1``,
 ``sbx-v2`` (one seed each, 300 s of training per run), ``sbx-v2-long`` (1200 s each, three jobs side by side) and
-``sbx-v2-seeds`` (five seeds of 300 s each, one job at a time) and ``sbx-v2-30min`` (TQC, two seeds of 1800 s side by
-side).
+``sbx-v2-seeds`` (five seeds of 300 s each, one job at a time) and ``sbx-v2-30min`` (SAC, TQC and CrossQ, two seeds of
+1800 s each, two runs side by side).
 Each writes ``results/sbx-<run>/`` (a run already finished there is only aggregated again); ``--docs`` copies its
 benchmark.json to ``docs/rl_benchmark/sbx_<run>.json``, from which the tables are rendered.
 """
@@ -27,8 +27,8 @@ LONG = ["--seeds", "1", "--jobs", "3", "--time-limit", "1200", "--eval-freq", "2
         "--disturbed-episodes", "20", "--optimum-episodes", "50", "--references"]  # fmt: skip
 
 SEEDS = ["--seeds", "5", "--jobs", "1", *BRIEF[2:]]
-#: The issue's budget, 30 min a seed (the time limit, not the env steps, ends it), for the learner that arrived most
-#: often above (TQC), two seeds side by side.
+#: The issue's budget, 30 min a seed (the time limit, not the env steps, ends it), two seeds of each, two runs side by
+#: side.
 HALF_HOUR = ["--seeds", "2", "--jobs", "2", "--time-limit", "1800", "--env-steps", "50000000", "--eval-freq", "1000000",
              *LONG[8:]]  # fmt: skip
 
@@ -38,7 +38,7 @@ RUNS: dict[str, list[str]] = {
     "v2": ["--agents", f"sac-v2:env_id={V2}", "sac-sbx-v2", "tqc-sbx-v2", "crossq-sbx-v2", *BRIEF],
     "v2-long": ["--agents", "sac-sbx-v2", "tqc-sbx-v2", "crossq-sbx-v2", *LONG],
     "v2-seeds": ["--agents", "sac-sbx-v2", "tqc-sbx-v2", "crossq-sbx-v2", *SEEDS],
-    "v2-30min": ["--agents", "tqc-sbx-v2", *HALF_HOUR],
+    "v2-30min": ["--agents", "sac-sbx-v2", "tqc-sbx-v2", "crossq-sbx-v2", *HALF_HOUR],
 }
 
 
