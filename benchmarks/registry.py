@@ -70,6 +70,7 @@ SUITE: dict[str, str] = {
     "rl-agents": "benchmarks.recipes.rl_agents",
     "rl-anneal": "benchmarks.recipes.rl_anneal",
     "rl-v2": "benchmarks.recipes.rl_v2",
+    "rl-time-scale": "benchmarks.recipes.rl_time_scale",
     "robust-rl": "benchmarks.recipes.robust_rl",
 }
 

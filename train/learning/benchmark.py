@@ -49,6 +49,16 @@ ENTRIES: dict[str, dict[str, Any]] = {
         "env_kwargs": {"arena_radius": 50.0},
     },
     "es-v2": {"algo": "es", "backend": "jax", "env_id": V2, "eval_freq": 5_000_000, "checkpoint_freq": 5_000_000},
+    # the same with time-scaled actions (train.learning.time_scale): the action times min(1, 10 s / T_con), so that one
+    # behaviour in the time fraction serves every T_con, as the optimum's commands scale
+    "es-time-scaled-v2": {
+        "algo": "es",
+        "backend": "jax",
+        "env_id": V2,
+        "action_time_scale": 10.0,
+        "eval_freq": 5_000_000,
+        "checkpoint_freq": 5_000_000,
+    },
     "sac": {"algo": "sac"},
     "td3": {"algo": "td3"},
     "tqc": {"algo": "tqc"},

@@ -62,6 +62,12 @@ class TrainConfig:
     residual: bool = option(False, "learn a residual on the expert: action = clip(expert + scale * residual)")
     residual_scale: float = option(0.5, "scale of the residual action, in (0, 2]")
     expert: str = option("ptc", "controller under the residual: any of evaluate --controllers")
+    action_time_scale: float = option(
+        0.0,
+        "T_REF [s]: the action (a residual agent's residual) times min(1, T_REF / T_con), so that one behaviour serves "
+        "every T_con, as the optimum's commands scale (train.learning.time_scale); 0: off",
+        metavar="T_REF",
+    )
     action_repeat: int = option(1, "hold each action for this many control periods (train.learning.wrappers)")
     normalize_obs: bool = option(False, "normalise observations (VecNormalize; statistics saved beside the model)")
     normalize_reward: bool = option(False, "scale rewards by the running deviation of the return (training only)")
@@ -160,6 +166,7 @@ class TrainConfig:
         self.residual_scale = as_float(
             "--residual-scale", self.residual_scale, 0.0, 2.0, low_inclusive=False, text=True
         )
+        self.action_time_scale = as_float("--action-time-scale", self.action_time_scale, 0.0, 3600.0, text=True)
         for name in ("residual", "overwrite", "progress", "normalize_obs", "normalize_reward"):
             setattr(self, name, as_bool(f"--{name}", getattr(self, name)))
         if not isinstance(self.env_kwargs, dict) or not isinstance(self.hyperparam_overrides, dict):

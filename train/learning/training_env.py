@@ -31,6 +31,10 @@ def make_training_env(config: TrainConfig) -> Any:
     venv: Any = make_sb3_vec_env(config.num_envs, seed=config.seed, **config.env_keywords())
     if config.residual:
         venv = ResidualVecEnv(venv, make_expert(config), config.residual_scale)
+    if config.action_time_scale:  # outside the residual: the residual is what is scaled
+        from train.learning.time_scale import TimeScaledVecEnv
+
+        venv = TimeScaledVecEnv(venv, config.action_time_scale)
     if config.action_repeat > 1:
         from train.learning.wrappers import ActionRepeatVecEnv
 
@@ -60,6 +64,10 @@ def as_policy(model: Any, config: TrainConfig, normalizer: Any = None) -> Any:
         from train.learning.wrappers import ActionRepeatPolicy
 
         policy = ActionRepeatPolicy(policy, config.env_params().dt, config.action_repeat)
+    if config.action_time_scale:
+        from train.learning.time_scale import TimeScaledPolicy
+
+        policy = TimeScaledPolicy(policy, config.action_time_scale)
     if not config.residual:
         return policy
     from train.learning.residual import ResidualPolicy

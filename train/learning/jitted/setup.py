@@ -71,6 +71,10 @@ def make_jax_env(config: TrainConfig) -> tuple[Any, Any]:
         from train.learning.jitted.residual import residual_env
 
         env = residual_env(config, env)
+    if config.action_time_scale:  # outside the residual, as train.learning.training_env wraps the VecEnv
+        from train.learning.time_scale import TimeScaledGymnaxEnv
+
+        env = TimeScaledGymnaxEnv(env, config.action_time_scale)
     return env, env_params
 
 
