@@ -3,11 +3,12 @@ residual, times min(1, T_REF / T_con).
 
 Why: the task's minimum-energy problem is time-scale invariant where the limits do not bind. If (u(t), omega(t)) is
 the least-energy way to the goal pose by T, then (u(t / k) / k, omega(t / k) / k) is the least-energy way by k T,
-along the same path, with 1 / k of the energy (the integral of u^2 + omega^2 over [0, k T]). A network whose output is multiplied by T_REF / T_con
-commands at every T_con what the same output commands at T_REF, slowed to the longer time: one behaviour in the time
-fraction, which the observation carries, serves every T_con, and its exploration noise costs energy in proportion
-to the optimum's instead of growing with T_con against it. The commands stay within the limits (the factor is at most
-1: below T_REF the action is the network's). 0 turns it off (the default; every agent trained before it).
+along the same path, with 1 / k of the energy (the integral of u^2 + omega^2 over [0, k T]). A network whose output
+is multiplied by T_REF / T_con commands at every T_con what the same output commands at T_REF, slowed to the longer
+time: one behaviour in the time fraction, which the observation carries, serves every T_con, and its exploration
+noise costs energy in proportion to the optimum's instead of growing with T_con against it. The commands stay within
+the limits (the factor is at most 1: below T_REF the action is the network's). 0 turns it off (the default; every
+agent trained before it).
 
 One copy of the arithmetic (:func:`time_scaled_action`, array API: numpy and jax.numpy) serves the three places an
 action enters the env: :class:`TimeScaledVecEnv` (SB3's VecEnv: the SB3 and sbx trainers), :class:`TimeScaledGymnaxEnv`
