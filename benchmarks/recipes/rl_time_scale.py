@@ -1,4 +1,4 @@
-"""ES from reward on DWRPointStabilization-v2 with and without time-scaled actions, five seeds each, per T_con too.
+"""ES from reward on DWRPointStabilization-v2 with and without time-scaled actions, five seeds each, then at 4x the budget.
 
     python -m benchmarks run rl-time-scale
 
@@ -13,4 +13,7 @@ from benchmarks.core.docs import Schema, table
 main = recipe_main(__file__)
 
 V2 = Schema({"budget": dict, "machine": str, "summary": dict, "references": dict, "best_seed": dict})
-BLOCKS = tuple(table(name, V2) for name in ("rl-time-scale", "rl-time-scale-per-T_con"))
+BLOCKS = tuple(
+    table(name, V2)
+    for name in ("rl-time-scale", "rl-time-scale-per-T_con", "rl-time-scale-long", "rl-time-scale-long-per-T_con")
+)

@@ -280,6 +280,11 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "rl-v2-per-T_con": ("docs/rl_benchmark/v2.json", lambda data: rl_table(data, "per-T_con")),
     "rl-time-scale": ("docs/rl_benchmark/time_scale.json", lambda data: rl_table(data, "random")),
     "rl-time-scale-per-T_con": ("docs/rl_benchmark/time_scale.json", lambda data: rl_table(data, "per-T_con")),
+    "rl-time-scale-long": ("docs/rl_benchmark/time_scale_long.json", lambda data: rl_table(data, "random")),
+    "rl-time-scale-long-per-T_con": (
+        "docs/rl_benchmark/time_scale_long.json",
+        lambda data: rl_table(data, "per-T_con"),
+    ),
     "rl-diagnosis": ("docs/rl_benchmark/diagnosis.json", lambda data: rl_table(data, "diagnosis")),
     "rl-levers": ("docs/rl_benchmark/levers.json", lambda data: rl_table(data, "levers")),
     "rl-rushing": ("docs/rl_benchmark/rushing.json", lambda data: rl_table(data, "rushing")),
