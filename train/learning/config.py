@@ -99,8 +99,8 @@ class TrainConfig:
     )
     init_from: str | None = option(
         None,
-        "a saved agent of the same algorithm (run directory or .zip) whose network starts this run (RL fine-tuning); "
-        "its architecture is adopted",
+        "a saved agent of the same algorithm (run directory or .zip; --algo es: a PPO agent's actor) whose network "
+        "starts this run (RL fine-tuning); its architecture is adopted",
         shown_default="none: a fresh network",
         metavar="RUN_DIR|ZIP",
     )

@@ -109,7 +109,7 @@ LEARNERS: tuple[Learner, ...] = (
     Learner("ppo", "jax", "jitted", "train.learning.jitted.trainer", "stable_baselines3:PPO", "jax", JAX,
             residual=True),
     Learner("es", "jax", "evolution", "train.learning.evolution.trainer", "stable_baselines3:PPO", "es", EVOSAX,
-            residual=True, hyperparams="train.learning.evolution.settings:check_es_kwargs"),
+            residual=True, init_from=True, hyperparams="train.learning.evolution.settings:check_es_kwargs"),
 )
 # fmt: on
 """Every learner of ``dwr-gym train``; a new one is a line here and its trainer module."""

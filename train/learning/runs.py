@@ -48,6 +48,18 @@ class RunDirError(ConfigError):
     """A run directory that cannot be used as asked (in use, or holding another run)."""
 
 
+def learned_from(config: TrainConfig) -> str:
+    """config.yaml's ``learned_from``: "reward", or "expert, then reward" for RL fine-tuning of a cloned network."""
+    if config.init_from is None:
+        return "reward"
+    import yaml
+
+    source_model = Path(config.init_from)
+    saved = (source_model.parent if source_model.is_file() else source_model) / "config.yaml"
+    source = yaml.safe_load(saved.read_text()).get("learned_from") if saved.is_file() else None
+    return "expert, then reward" if source in ("expert", "expert, then reward") else "reward"
+
+
 def find_run_dir(path: Path) -> Path:
     """The run directory holding config.yaml for a model file, a checkpoint or a run directory."""
     for candidate in (path, *path.parents[:3]):

@@ -93,9 +93,17 @@ class JaxES:
     """ES of one configuration on one gymnax-style env: :meth:`init` an :class:`ESState`, :meth:`generation` it."""
 
     def __init__(
-        self, settings: ESSettings, env: Any, env_params: Any, devices: int | None = None, residual: bool = False
+        self,
+        settings: ESSettings,
+        env: Any,
+        env_params: Any,
+        devices: int | None = None,
+        residual: bool = False,
+        initial_actor: Any = None,
     ) -> None:
         self.settings, self.env, self.env_params, self.residual = settings, env, env_params, residual
+        #: a saved actor's layers the search starts from (train.learning.evolution.init_from), or None
+        self.initial_actor = initial_actor
         space = env.action_space(env_params)
         self.action_low = jnp.asarray(space.low, jnp.float32)
         self.action_high = jnp.asarray(space.high, jnp.float32)
@@ -119,7 +127,8 @@ class JaxES:
         return {k: v for k, v in params["params"].items() if k.startswith("policy_") or k == "action"}
 
     def init(self, seed: int) -> Any:
-        """A fresh state: the network initialised from ``seed`` as the jitted PPO's, the search centred on it."""
+        """A fresh state: the network initialised from ``seed`` as the jitted PPO's (its actor the saved one with
+        ``initial_actor``), the search centred on it."""
         return jax.jit(self._init, out_shardings=self.replicated)(jax.random.PRNGKey(seed))
 
     def _init(self, rng: Any) -> Any:
@@ -129,6 +138,10 @@ class JaxES:
             from train.learning.jitted.residual import near_zero_head
 
             params = near_zero_head(params)
+        if self.initial_actor is not None:  # --init-from: the search starts at a saved network
+            from train.learning.evolution.init_from import centred_on
+
+            params = centred_on(params, self.initial_actor, "the saved network")
         stats = ObservationStatistics.create(self.obs_dim)
         if self.settings.normalize_observations:
             keys = jax.random.split(key_obs, INITIAL_OBSERVATIONS)

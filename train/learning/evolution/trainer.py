@@ -60,6 +60,15 @@ class ESTrainer:
         force_host_devices(devices)
         configure_threads(config.threads)
         self.settings = ESSettings.from_algo_kwargs(config.algo_kwargs)
+        initial_actor = None
+        if config.init_from is not None:  # the saved actor's architecture, raw observations (init_from's docstring)
+            from train.learning.evolution.init_from import adopt, saved_actor
+
+            if config.residual:
+                raise ConfigError("--init-from is invalid with --algo es --residual: a residual starts at its expert")
+            initial_actor, net_arch, activation = saved_actor(config.init_from)
+            self.settings = adopt(self.settings, net_arch, activation)
+            config.algo_kwargs["policy_kwargs"] = {**es_policy_kwargs(self.settings), "normalize_observations": False}
         config.num_envs = 1  # (the exporter's native env; the ES's robots are population_size x episodes)
         env, env_params = make_jax_env(config)
         use_compilation_cache()
@@ -67,7 +76,9 @@ class ESTrainer:
         from train.learning.jitted.export import SB3Exporter
         from train.learning.training_env import make_training_env
 
-        self.es = JaxES(self.settings, env, env_params, devices, residual=bool(config.residual))
+        self.es = JaxES(
+            self.settings, env, env_params, devices, residual=bool(config.residual), initial_actor=initial_actor
+        )
         venv = make_training_env(config)
         self.exporter = SB3Exporter(venv, {"policy_kwargs": es_policy_kwargs(self.settings)}, config.seed)
         venv.close()
@@ -97,8 +108,13 @@ class ESTrainer:
         return max(0, int(config.total_timesteps) - done)
 
     def start_note(self, config: TrainConfig) -> str | None:
+        start = (
+            f" from {config.init_from} ({list(self.settings.net_arch)}, {self.settings.activation})"
+            if (config.init_from is not None)
+            else ""
+        )
         return (f"ES: {self.settings.strategy}, {self.settings.population_size} candidates x "
-                f"{self.settings.episodes} episodes per generation on {self.es.devices} device(s)")  # fmt: skip
+                f"{self.settings.episodes} episodes per generation on {self.es.devices} device(s){start}")  # fmt: skip
 
 
 def train(

@@ -23,6 +23,7 @@ from train.learning.runs import (
     EVAL_FILE,
     MODEL_FILE,
     RESUME_FILE,
+    learned_from,
     prepare_run_dir,
     read_state,
     resume_command,
@@ -159,7 +160,7 @@ def train_jitted(
             truncate_log(run_dir / EVAL_FILE, steps)
         from train.learning.training_env import runtime_of
 
-        save_config(config, run_dir, {"command": command or sys.argv, "learned_from": "reward",
+        save_config(config, run_dir, {"command": command or sys.argv, "learned_from": learned_from(config),
                                       "runtime": runtime_of(config)})  # fmt: skip
         run = JaxRun(config, run_dir, trainer.export, state, on_evaluation)
         bar = None

@@ -30,6 +30,7 @@ from train.learning.runs import (
     MODEL_FILE,
     RESUME_FILE,
     evaluation_cells,
+    learned_from,
     prepare_run_dir,
     read_state,
     resume_command,
@@ -202,17 +203,6 @@ def make_anneal_callback(config: TrainConfig) -> Any:
                     self.model.policy.log_std.clamp_(max=value)
 
     return AnnealCallback()
-
-
-def learned_from(config: TrainConfig) -> str:
-    """config.yaml's ``learned_from``: "reward", or "expert, then reward" for RL fine-tuning of a cloned network."""
-    if config.init_from is None:
-        return "reward"
-    import yaml
-
-    saved = finetune.source_path(config.init_from).parent / "config.yaml"
-    source = yaml.safe_load(saved.read_text()).get("learned_from") if saved.is_file() else None
-    return "expert, then reward" if source in ("expert", "expert, then reward") else "reward"
 
 
 def make_progress_callback(total: int) -> Any:
