@@ -99,7 +99,9 @@ def test_cli_fine_tunes_a_saved_network_and_records_it(tmp_path: Path) -> None:
     assert saved["learned_from"] == "expert, then reward"
     assert saved["config"]["algo_kwargs"]["policy_kwargs"]["net_arch"] == [24, 16]
     _, policy = load_agent(tmp_path / "run")  # the exported agent has the saved architecture
-    assert [layer.out_features for layer in policy.policy.mlp_extractor.policy_net if hasattr(layer, "out_features")] == [24, 16]
+    assert [
+        layer.out_features for layer in policy.policy.mlp_extractor.policy_net if hasattr(layer, "out_features")
+    ] == [24, 16]
     refused = cli(*common, "--residual", "--run-dir", str(tmp_path / "residual"))
     assert refused.returncode != 0
     assert "--init-from is invalid with --algo es --residual" in refused.stderr
