@@ -285,6 +285,11 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
         "docs/rl_benchmark/time_scale_long.json",
         lambda data: rl_table(data, "per-T_con"),
     ),
+    "rl-time-scale-30min": ("docs/rl_benchmark/time_scale_30min.json", lambda data: rl_table(data, "random")),
+    "rl-time-scale-30min-per-T_con": (
+        "docs/rl_benchmark/time_scale_30min.json",
+        lambda data: rl_table(data, "per-T_con"),
+    ),
     "rl-diagnosis": ("docs/rl_benchmark/diagnosis.json", lambda data: rl_table(data, "diagnosis")),
     "rl-levers": ("docs/rl_benchmark/levers.json", lambda data: rl_table(data, "levers")),
     "rl-rushing": ("docs/rl_benchmark/rushing.json", lambda data: rl_table(data, "rushing")),
