@@ -363,3 +363,13 @@ def test_an_entrys_own_budget_and_a_repeats_share_of_the_evaluations_are_whole_n
     config = train_config(repeat, 0, tmp_path / "rep", {"env_steps": 6144, "eval_freq": 2048})
     assert (config.total_timesteps, config.eval_freq, config.checkpoint_freq) == (2048, 682, 682)
     assert all(type(v) is int for v in (config.eval_freq, config.checkpoint_freq))
+
+
+def test_an_entrys_own_time_limit_beats_the_benchmarks(tmp_path: Path) -> None:
+    """``--agents 'NAME:time_limit=S'`` stops that entry's runs after S seconds whatever the benchmark's --time-limit
+    (a run of issue 40's 30-minute measure trained on past it when the budget's None replaced the entry's 1800)."""
+    own = parse_entry("ppo-30min:time_limit=1800")
+    assert train_config(own, 0, tmp_path / "own", {}).time_limit == 1800
+    assert train_config(own, 0, tmp_path / "both", {"time_limit": 60.0}).time_limit == 1800
+    assert train_config(parse_entry("ppo"), 0, tmp_path / "budget", {"time_limit": 60.0}).time_limit == 60.0
+    assert train_config(parse_entry("ppo"), 0, tmp_path / "none", {}).time_limit is None

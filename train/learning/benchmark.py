@@ -185,7 +185,8 @@ def train_config(entry: Entry, seed: int, run_dir: Path, budget: dict[str, Any])
     if budget.get("eval_freq") and "eval_freq" not in entry.options:
         config.eval_freq = max(1, int(budget["eval_freq"]) // repeat)
         config.checkpoint_freq = config.eval_freq
-    config.time_limit = budget.get("time_limit")
+    if budget.get("time_limit") is not None and "time_limit" not in entry.options:  # as the budget above
+        config.time_limit = budget["time_limit"]
     if isinstance(overrides, str):  # hyperparams=PATH: an rl-zoo3 YAML file, as dwr-gym train --hyperparams
         config.hyperparams = overrides
     elif isinstance(overrides, dict):
