@@ -1,4 +1,4 @@
-"""The time-scaled ES from reward on DWRPointStabilization-v2 at the goal's budget: 30 minutes of training a seed, five seeds.
+"""The time-scaled ES from reward on DWRPointStabilization-v2 at the goal's budget: 30 minutes of training a seed, two seeds.
 
     python -m benchmarks run rl-time-scale-30min
 
