@@ -62,6 +62,22 @@ def test_the_search_starts_at_the_saved_actor(tmp_path: Path) -> None:
     np.testing.assert_allclose(np.asarray(es.act(es.mean_params(state), obs, state.obs_stats)), expected, atol=1e-5)
 
 
+def test_a_saved_actor_of_another_shape_is_refused_naming_it() -> None:
+    from dwr_gym.jax_env.gymnax import make_gymnax_env
+    from train.learning.evolution.settings import ESSettings
+    from train.learning.evolution.strategies import JaxES
+
+    actor = {"policy_0": {"kernel": np.zeros((12, 16), np.float32), "bias": np.zeros(16, np.float32)},
+             "action": {"kernel": np.zeros((16, 2), np.float32), "bias": np.zeros(2, np.float32)}}  # fmt: skip
+    env, env_params = make_gymnax_env("DWRPointStabilization-v2", T_con_range=(10.0, 11.0))
+    settings = ESSettings(population_size=4, episodes=2, net_arch=(16,), normalize_observations=False)
+    es = JaxES(settings, env, env_params, devices=1, initial_actor=actor, initial_source="runs/other-env")
+    with pytest.raises(
+        ConfigError, match=r"^--init-from 'runs/other-env': the saved actor's policy_0.kernel \(12, 16\)"
+    ):
+        es.init(0)
+
+
 def test_what_es_cannot_start_from_is_refused_in_one_line(tmp_path: Path) -> None:
     from stable_baselines3 import SAC
 

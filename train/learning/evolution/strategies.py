@@ -100,10 +100,11 @@ class JaxES:
         devices: int | None = None,
         residual: bool = False,
         initial_actor: Any = None,
+        initial_source: str = "the saved network",
     ) -> None:
         self.settings, self.env, self.env_params, self.residual = settings, env, env_params, residual
         #: a saved actor's layers the search starts from (train.learning.evolution.init_from), or None
-        self.initial_actor = initial_actor
+        self.initial_actor, self.initial_source = initial_actor, initial_source
         space = env.action_space(env_params)
         self.action_low = jnp.asarray(space.low, jnp.float32)
         self.action_high = jnp.asarray(space.high, jnp.float32)
@@ -141,7 +142,7 @@ class JaxES:
         if self.initial_actor is not None:  # --init-from: the search starts at a saved network
             from train.learning.evolution.init_from import centred_on
 
-            params = centred_on(params, self.initial_actor, "the saved network")
+            params = centred_on(params, self.initial_actor, self.initial_source)
         stats = ObservationStatistics.create(self.obs_dim)
         if self.settings.normalize_observations:
             keys = jax.random.split(key_obs, INITIAL_OBSERVATIONS)

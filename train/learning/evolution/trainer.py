@@ -77,7 +77,13 @@ class ESTrainer:
         from train.learning.training_env import make_training_env
 
         self.es = JaxES(
-            self.settings, env, env_params, devices, residual=bool(config.residual), initial_actor=initial_actor
+            self.settings,
+            env,
+            env_params,
+            devices,
+            residual=bool(config.residual),
+            initial_actor=initial_actor,
+            initial_source=str(config.init_from),
         )
         venv = make_training_env(config)
         self.exporter = SB3Exporter(venv, {"policy_kwargs": es_policy_kwargs(self.settings)}, config.seed)
