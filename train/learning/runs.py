@@ -48,14 +48,19 @@ class RunDirError(ConfigError):
     """A run directory that cannot be used as asked (in use, or holding another run)."""
 
 
+def saved_model(init_from: str) -> Path:
+    """The model file of ``--init-from``: the path itself if it is a file, else its run directory's model.zip."""
+    path = Path(init_from)
+    return path if path.is_file() else path / MODEL_FILE
+
+
 def learned_from(config: TrainConfig) -> str:
     """config.yaml's ``learned_from``: "reward", or "expert, then reward" for RL fine-tuning of a cloned network."""
     if config.init_from is None:
         return "reward"
     import yaml
 
-    source_model = Path(config.init_from)
-    saved = (source_model.parent if source_model.is_file() else source_model) / "config.yaml"
+    saved = saved_model(config.init_from).parent / "config.yaml"
     source = yaml.safe_load(saved.read_text()).get("learned_from") if saved.is_file() else None
     return "expert, then reward" if source in ("expert", "expert, then reward") else "reward"
 

@@ -11,18 +11,16 @@ energy of its action noise (docs/rl-benchmark.md, 'Robust RL').
 from __future__ import annotations
 
 import dataclasses
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from train.learning.config import ConfigError
-from train.learning.evolution.settings import ESSettings
+from train.learning.evolution.settings import TORCH_ACTIVATIONS, ESSettings
+from train.learning.runs import saved_model
 
-MODEL_FILE = "model.zip"
-#: Our activation names by torch's class names (the inverse of the exporter's, train.learning.evolution.trainer).
-ACTIVATION_NAMES = {"Tanh": "tanh", "ReLU": "relu", "ELU": "elu", "LeakyReLU": "leakyrelu", "SiLU": "silu",
-                    "GELU": "gelu", "Sigmoid": "sigmoid"}  # fmt: skip
+#: Our activation names by torch's class names.
+ACTIVATION_NAMES = {torch_name: name for name, torch_name in TORCH_ACTIVATIONS.items()}
 
 
 def saved_actor(init_from: str) -> tuple[dict[str, dict[str, np.ndarray]], tuple[int, ...], str]:
@@ -32,8 +30,7 @@ def saved_actor(init_from: str) -> tuple[dict[str, dict[str, np.ndarray]], tuple
     import torch
     from stable_baselines3 import PPO
 
-    path = Path(init_from)
-    path = path if path.is_file() else path / MODEL_FILE
+    path = saved_model(init_from)
     if not path.is_file():
         raise ConfigError(f"--init-from {init_from!r} is invalid: {path} does not exist")
     try:

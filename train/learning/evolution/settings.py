@@ -27,6 +27,9 @@ ES_DEFAULTS: dict[str, Any] = {
     "strategy": "open_es", "population_size": 64, "episodes": 8, "sigma": 0.05, "learning_rate": 0.01,
     "antithetic": True,
 }  # fmt: skip
+#: torch's class name of each activation (``policy_kwargs``' ``activation_fn``, nn.<name>), by our name.
+TORCH_ACTIVATIONS = {"tanh": "Tanh", "relu": "ReLU", "elu": "ELU", "leakyrelu": "LeakyReLU", "silu": "SiLU",
+                     "gelu": "GELU", "sigmoid": "Sigmoid"}  # fmt: skip
 POLICY_KEYS = ("net_arch", "activation_fn", "ortho_init", "normalize_observations")
 IGNORED_KEYS = ("policy", "verbose")
 MAX_POPULATION = 65536

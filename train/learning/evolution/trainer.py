@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from train.learning.config import ConfigError, TrainConfig
-from train.learning.evolution.settings import ESSettings
+from train.learning.evolution.settings import TORCH_ACTIVATIONS, ESSettings
 
 
 def force_host_devices(count: int) -> bool:
@@ -40,13 +40,8 @@ def host_devices(threads: int | None) -> int:
 
 def es_policy_kwargs(settings: ESSettings) -> dict[str, Any]:
     """The SB3 PPO ``policy_kwargs`` of the ES's network (the architecture the exporter builds)."""
-    return {"net_arch": list(settings.net_arch), "activation_fn": f"nn.{_torch_name(settings.activation)}",
+    return {"net_arch": list(settings.net_arch), "activation_fn": f"nn.{TORCH_ACTIVATIONS[settings.activation]}",
             "ortho_init": settings.ortho_init}  # fmt: skip
-
-
-def _torch_name(activation: str) -> str:
-    return {"tanh": "Tanh", "relu": "ReLU", "elu": "ELU", "leakyrelu": "LeakyReLU", "silu": "SiLU", "gelu": "GELU",
-            "sigmoid": "Sigmoid"}[activation]  # fmt: skip
 
 
 class ESTrainer:
@@ -114,11 +109,9 @@ class ESTrainer:
         return max(0, int(config.total_timesteps) - done)
 
     def start_note(self, config: TrainConfig) -> str | None:
-        start = (
-            f" from {config.init_from} ({list(self.settings.net_arch)}, {self.settings.activation})"
-            if (config.init_from is not None)
-            else ""
-        )
+        start = ""
+        if config.init_from is not None:
+            start = f" from {config.init_from} ({list(self.settings.net_arch)}, {self.settings.activation})"
         return (f"ES: {self.settings.strategy}, {self.settings.population_size} candidates x "
                 f"{self.settings.episodes} episodes per generation on {self.es.devices} device(s){start}")  # fmt: skip
 

@@ -6,24 +6,16 @@ steer the first policy updates (issue 32's robust RL).
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Any
 
 from train.learning.config import ConfigError, TrainConfig
 from train.learning.hyperparams import algorithm_class
-
-MODEL_FILE = "model.zip"
-
-
-def source_path(init_from: str) -> Path:
-    """The model file of ``--init-from``: the path itself if it is a file, else its run directory's model.zip."""
-    path = Path(init_from)
-    return path if path.is_file() else path / MODEL_FILE
+from train.learning.runs import saved_model
 
 
 def load_source(config: TrainConfig) -> Any:
     """The saved model of ``--init-from``, loaded on the CPU; a ConfigError names it if it is not this algorithm's."""
-    path = source_path(str(config.init_from))
+    path = saved_model(str(config.init_from))
     if not path.is_file():
         raise ConfigError(f"--init-from {config.init_from!r} is invalid: {path} does not exist")
     try:
