@@ -22,6 +22,7 @@ def without_times(result: dict) -> dict:
 
 
 @pytest.mark.slow
+@pytest.mark.own_process
 def test_a_tiny_grid_on_local_ray_trains_what_processes_train_and_continues_where_it_stopped(tmp_path: Path) -> None:
     """A tiny PPO as a Ray task and as a local process: the same result; then the grid of two seeds on Ray runs
     only the seed it lacks. Marked slow (a local Ray started twice and three tiny trainings, each evaluated: minutes

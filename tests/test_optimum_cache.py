@@ -43,6 +43,7 @@ def test_fatrop_finds_ipopts_plan_in_the_callers_layout() -> None:
 
 
 @pytest.mark.slow
+@pytest.mark.own_process
 def test_the_optima_solved_as_ray_tasks_on_a_local_cluster_are_the_local_processes(
     monkeypatch: pytest.MonkeyPatch, tmp_path: Path
 ) -> None:

@@ -64,6 +64,7 @@ def test_an_error_in_a_ray_task_reaches_the_command(monkeypatch: pytest.MonkeyPa
 
 
 @pytest.mark.slow
+@pytest.mark.own_process
 def test_a_tiny_set_on_a_local_ray_cluster_gives_the_local_rows(monkeypatch: pytest.MonkeyPatch, tmp_path: Any) -> None:
     """The real thing: ``--address local`` starts Ray here; the rows equal a local run's but for the seconds."""
     pytest.importorskip("ray")

@@ -54,6 +54,7 @@ def test_best_yaml_reads_back_as_the_same_configuration(tmp_path: Path, algo: st
 
 
 @pytest.mark.slow
+@pytest.mark.own_process
 def test_two_trial_sweep_on_local_ray_then_resume(tmp_path: Path) -> None:
     """Two configurations x one seed with a tiny budget on a local Ray, as a user runs it; --resume reuses them.
 
