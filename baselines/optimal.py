@@ -280,8 +280,17 @@ def solve_minimum_energy(
             f"(last status: {status})"
         )
     elapsed = time.perf_counter() - began
-    return Plan(best.commands[:planned], best.states[: planned + 1], h, best.energy, iterations, elapsed, best.solution,
-                best.candidate, best.tried)
+    return Plan(
+        best.commands[:planned],
+        best.states[: planned + 1],
+        h,
+        best.energy,
+        iterations,
+        elapsed,
+        best.solution,
+        best.candidate,
+        best.tried,
+    )
 
 
 def _cheapest(

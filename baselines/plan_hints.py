@@ -9,8 +9,8 @@ of its guess, so the plan is the search's to the last bit, and so are the tables
 (some 2 % of them, each guess to its iteration limit) is named with its error, which the planner then returns unsolved.
 It is only a cache:
 
-- it is read only by the solver it was recorded with (:func:`baselines.plan_store.solver_digest`: the solver's source
-  and CasADi's version); any other solver searches every guess, as does any job it does not name;
+- it is read only by the solver it was recorded with (:func:`solver_digest`: the solver's source and CasADi's version);
+  any other solver searches every guess, as does any job it does not name;
 - a hinted guess that does not converge falls back to the whole search;
 - ``python -m benchmarks run ship-plan-hints --check`` runs ``compare``'s whole search again and compares every
   winner, and a test does so for a sample; ``DWR_GYM_PLAN_HINTS=0`` turns the hints off.
@@ -22,9 +22,11 @@ It is only a cache:
 from __future__ import annotations
 
 import functools
+import hashlib
 import json
 import os
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -49,36 +51,54 @@ def hints_enabled() -> bool:
     return os.environ.get(SWITCH, "1") != "0"
 
 
-def read_hints(path: Path) -> tuple[str, dict[bytes, Hint]]:
-    """The solver digest and the hints by key prefix of the hint file ``path``."""
+class HintFile(NamedTuple):
+    """A hint file's content: the digest of the solver it was recorded with, that solver's CasADi version, the hints."""
+
+    solver: str
+    casadi: str
+    hints: dict[bytes, Hint]
+
+
+def read_hints(path: Path) -> HintFile:
+    """The solver digest, CasADi version and hints by key prefix of the hint file ``path``."""
     with np.load(path, allow_pickle=False) as data:
-        keys, winners, solver = data["keys"], data["winners"], str(data["solver"])
+        keys, winners, solver, casadi = data["keys"], data["winners"], str(data["solver"]), str(data["casadi"])
         errors = json.loads(str(data["errors"]))
     if keys.shape != (len(winners), KEY_BYTES) or len(errors) != int((winners == NO_PLAN).sum()):
         raise ValueError(f"{path}: not a plan hint file (keys {keys.shape}, winners {winners.shape})")
     hints: dict[bytes, Hint] = {key.tobytes(): int(w) for key, w in zip(keys, winners, strict=True)}
     hints.update({bytes.fromhex(key): message for key, message in errors.items()})
-    return solver, hints
+    return HintFile(solver, casadi, hints)
 
 
-def write_hints(path: Path, solver: str, hints: dict[bytes, Hint]) -> None:
-    """Write ``hints`` (by key prefix) recorded with the solver of digest ``solver`` to ``path``, sorted by key."""
+def write_hints(path: Path, solver: str, casadi: str, hints: dict[bytes, Hint]) -> None:
+    """Write ``hints`` (by key prefix) recorded with the solver of digest ``solver`` (CasADi ``casadi``) to ``path``,
+    sorted by key."""
     keys = sorted(hints)
     winners = np.array([NO_PLAN if isinstance(hints[k], str) else hints[k] for k in keys], dtype=np.uint8)
     errors = {k.hex(): hints[k] for k in keys if isinstance(hints[k], str)}
     np.savez_compressed(path, keys=np.frombuffer(b"".join(keys), dtype=np.uint8).reshape(len(keys), KEY_BYTES),
-                        winners=winners, errors=np.array(json.dumps(errors)), solver=np.array(solver))  # fmt: skip
+                        winners=winners, errors=np.array(json.dumps(errors)), solver=np.array(solver),
+                        casadi=np.array(casadi))  # fmt: skip
+
+
+def solver_digest() -> str:
+    """What a winner depends on: the solver's source (baselines/optimal.py) and CasADi's version (16 hex digits)."""
+    import casadi
+
+    import baselines.optimal
+
+    source = Path(baselines.optimal.__file__).read_bytes()
+    return hashlib.sha256(source + casadi.__version__.encode()).hexdigest()[:16]
 
 
 @functools.cache
 def _shipped() -> dict[bytes, Hint]:
     """The shipped winners, where they were recorded with this solver (else none), read once per process."""
-    from baselines.plan_store import solver_digest
-
     if not HINTS_PATH.is_file():
         return {}
-    solver, winners = read_hints(HINTS_PATH)
-    return winners if solver == solver_digest() else {}
+    shipped = read_hints(HINTS_PATH)
+    return shipped.hints if shipped.solver == solver_digest() else {}
 
 
 def hint(key: bytes) -> Hint | None:
@@ -110,5 +130,5 @@ def read_recorded(directory: Path) -> dict[bytes, Hint]:
     return hints
 
 
-__all__ = ["HINTS_PATH", "KEY_BYTES", "NO_PLAN", "RECORD", "SWITCH", "hint", "hints_enabled", "read_hints", "read_recorded",
-           "record", "write_hints"]  # fmt: skip
+__all__ = ["HINTS_PATH", "KEY_BYTES", "NO_PLAN", "RECORD", "SWITCH", "HintFile", "hint", "hints_enabled", "read_hints",
+           "read_recorded", "record", "solver_digest", "write_hints"]  # fmt: skip

@@ -6,7 +6,7 @@
 Runs ``dwr-gym compare`` with its defaults as a user would, in a fresh process, with every plan solved by the whole
 search of its guesses (no plan store: ``DWR_GYM_PLAN_CACHE=0``; no hints: ``DWR_GYM_PLAN_HINTS=0``), each solving
 process writing the winner of every search of more than one guess (``DWR_GYM_PLAN_HINTS_RECORD``). The file records
-the solver's digest (:func:`baselines.plan_store.solver_digest`): a changed solver reads none of it until this runs
+the solver's digest (:func:`baselines.plan_hints.solver_digest`): a changed solver reads none of it until this runs
 again (tests/test_plan_hints.py says so). About 8 minutes on 2 cores.
 """
 
@@ -45,18 +45,19 @@ def check(shipped: dict[bytes, int], recorded: dict[bytes, int]) -> list[str]:
 
 
 def main(argv: list[str] | None = None) -> None:
-    from baselines.plan_hints import HINTS_PATH, read_hints, write_hints
-    from baselines.plan_store import solver_digest
+    import casadi
+
+    from baselines.plan_hints import HINTS_PATH, read_hints, solver_digest, write_hints
 
     parser = parser_for("ship-plan-hints", __doc__)
     parser.add_argument("--check", action="store_true", help="compare with the shipped file instead of writing it")
     args = parser.parse_args(argv)
     recorded = recorded_winners()
     if not args.check:
-        write_hints(HINTS_PATH, solver_digest(), recorded)
+        write_hints(HINTS_PATH, solver_digest(), casadi.__version__, recorded)
         print(f"wrote {HINTS_PATH.name}: {len(recorded)} plans' winning guesses ({HINTS_PATH.stat().st_size:,} bytes)")
         return
-    solver, shipped = read_hints(HINTS_PATH)
+    solver, _, shipped = read_hints(HINTS_PATH)
     lines = [] if solver == solver_digest() else [f"recorded with solver {solver}, this one is {solver_digest()}"]
     lines += check(shipped, recorded)
     for line in lines:
