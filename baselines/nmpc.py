@@ -100,11 +100,20 @@ class OptimalParams(ControllerParams):
 
 
 def _solve(job: dict[str, Any]) -> Plan | Exception:
-    """Solve one plan; errors are returned, not raised, so that one failure cannot stop a batch."""
+    """Solve one plan (its winning guess alone where :mod:`baselines.plan_hints` names it, or its error: the same
+    result); errors are returned, not raised, so that one failure cannot stop a batch."""
+    from baselines import plan_hints
+
+    key = job_key(job)
+    hint = plan_hints.hint(key)
+    if isinstance(hint, str):  # a search in which no guess converges: its error, unsolved
+        return OptimalControlError(hint)
     try:
-        return solve_minimum_energy(**job)
+        result: Plan | Exception = solve_minimum_energy(**job, only=hint)
     except (OptimalControlError, InfeasibleArrivalTimeError) as error:
-        return error
+        result = error
+    plan_hints.record(key, result)
+    return result
 
 
 #: The worker processes of every :class:`PlanPool`, by (workers, start method): kept from one controller to the next,

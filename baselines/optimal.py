@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 from typing import Any
 
@@ -148,6 +148,8 @@ class Plan:
     iterations: int
     solve_time: float  # [s]
     solution: NDArray[np.float64]  # the raw decision vector, to warm-start the next solve
+    candidate: int = -1  # the guess of the search it was solved from (0: the warm start, where one was given)
+    tried: int = 0  # how many guesses the search solved (0: read from a plan store)
 
     @property
     def intervals(self) -> int:
@@ -187,6 +189,7 @@ def solve_minimum_energy(
     pad_to: int = 1,
     max_iter: int = 1000,
     solver: str = "ipopt",
+    only: int | None = None,
 ) -> Plan:
     """The minimum-energy plan from ``start`` (goal frame: goal at the origin, heading 0) to the goal.
 
@@ -206,6 +209,8 @@ def solve_minimum_energy(
     at the goal, and returns the plan without them: the same plan from fewer solvers to build and cache.
     ``max_iter`` bounds the solver's iterations per guess (a re-plan in a control loop must not take seconds).
     ``solver`` is "ipopt" or "fatrop" (:data:`SOLVERS`); where fatrop converges from no guess, IPOPT tries them too.
+    ``only`` solves that guess of the search alone (the one the whole search keeps, :mod:`baselines.plan_hints`): the
+    same plan to the last bit, the search's other solves saved; the whole search where it does not converge.
     """
     h = dt * hold_steps
     if intervals is None:
@@ -256,8 +261,15 @@ def solve_minimum_energy(
                 guess = np.concatenate([states, goal, commands, padding_command])
             candidates.append((guess, target if heading else None))
     began = time.perf_counter()
-    best, iterations, status = _cheapest(candidates, lower, upper, parameters, intervals, h, max_iter,
-                                         response is not None, solver, warm_start is not None)  # fmt: skip
+    best, iterations, status = None, 0, ""
+    if only is not None and 0 <= only < len(candidates):
+        best, iterations, status = _cheapest([candidates[only]], lower, upper, parameters, intervals, h, max_iter,
+                                             response is not None, solver, False)  # fmt: skip
+        best = None if best is None else replace(best, candidate=only)
+    if best is None:
+        best, more, status = _cheapest(candidates, lower, upper, parameters, intervals, h, max_iter,
+                                       response is not None, solver, warm_start is not None)  # fmt: skip
+        iterations += more
     if best is None and solver != "ipopt":  # fatrop's failures are rare: IPOPT from the same guesses
         best, more, status = _cheapest(candidates, lower, upper, parameters, intervals, h, max_iter,
                                        response is not None, "ipopt", warm_start is not None)  # fmt: skip
@@ -268,7 +280,17 @@ def solve_minimum_energy(
             f"(last status: {status})"
         )
     elapsed = time.perf_counter() - began
-    return Plan(best.commands[:planned], best.states[: planned + 1], h, best.energy, iterations, elapsed, best.solution)
+    return Plan(
+        best.commands[:planned],
+        best.states[: planned + 1],
+        h,
+        best.energy,
+        iterations,
+        elapsed,
+        best.solution,
+        best.candidate,
+        best.tried,
+    )
 
 
 def _cheapest(
@@ -303,10 +325,10 @@ def _cheapest(
             unknowns[order] = np.asarray(solution["x"]).ravel()
             plan = plan_from_solution(unknowns, intervals, h, float(solution["f"]))
             if best is None or plan.energy < best.energy - 1e-12:
-                best = plan
+                best = replace(plan, candidate=index)
         if index == 0 and warm and best is not None:
             break  # a converged warm start is the re-plan; the cold guesses are only its fallback
-    return best, iterations, status
+    return (None if best is None else replace(best, tried=index + 1)), iterations, status
 
 
 def frozen_guess(

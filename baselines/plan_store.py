@@ -28,8 +28,8 @@ import numpy as np
 
 from baselines.optimal import InfeasibleArrivalTimeError, OptimalControlError, Plan
 
-#: Bump when what a stored plan holds changes.
-STORE_VERSION = 1
+#: Bump when what a stored plan holds changes (2: the guess it was solved from and the guesses its search solved).
+STORE_VERSION = 2
 #: ``DWR_GYM_PLAN_CACHE=0`` turns the store off.
 SWITCH = "DWR_GYM_PLAN_CACHE"
 #: New plans written to a file of their own once this many are pending (an interruption loses fewer).
@@ -107,8 +107,8 @@ def write_plans(path: Path, results: dict[bytes, Plan | Exception]) -> None:
     solutions = [p.solution if isinstance(p, Plan) else np.zeros(0) for p in plans]
     numbers = np.array([[p.interval, p.energy, p.solve_time] if isinstance(p, Plan) else [0.0, 0.0, 0.0]
                         for p in plans], dtype=np.float64).reshape(-1, 3)  # fmt: skip
-    counts = np.array([[p.intervals, p.iterations] if isinstance(p, Plan) else [-1, 0] for p in plans],
-                      dtype=np.int64).reshape(-1, 2)  # fmt: skip
+    counts = np.array([[p.intervals, p.iterations, p.candidate, p.tried] if isinstance(p, Plan) else [-1, 0, -1, 0]
+                       for p in plans], dtype=np.int64).reshape(-1, 4)  # fmt: skip
     errors = json.dumps({str(i): [type(p).__name__, str(p)] for i, p in enumerate(plans) if not isinstance(p, Plan)})
     temporary = path.with_name(f".{path.name}.tmp")
     with temporary.open("wb") as handle:
@@ -138,7 +138,7 @@ def read_plans(path: Path) -> dict[bytes, Plan | Exception]:
         commands = solution[3 * (padded + 1) :].reshape(padded, 2)
         interval, energy, solve_time = (float(v) for v in numbers[i])
         found[key.tobytes()] = Plan(commands[:planned], states[: planned + 1], interval, energy, int(counts[i, 1]),
-                                    solve_time, solution)  # fmt: skip
+                                    solve_time, solution, int(counts[i, 2]), int(counts[i, 3]))  # fmt: skip
     return found
 
 

@@ -99,6 +99,9 @@ def test_compare_time_says_where_the_time_went_and_keeps_a_run_per_cache_state()
     table = render(runs)
     assert "no shipped optima (1,009 optima solved)" in table and "the shipped optima read (0 solved)" in table
     assert "optimal 1.2, optimum 0.5, ptc 0.1" in table
+    hinted = merged(runs, {**run, "shipped_optima": True, "plan_hints": True})
+    assert len(hinted["runs"]) == 3  # the plan hints' run beside the one before them
+    assert "the shipped optima and plan hints read (0 solved)" in render(hinted)
 
 
 def test_compare_time_reads_the_bars_time_left_from_a_redirected_log() -> None:

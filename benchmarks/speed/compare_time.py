@@ -6,6 +6,9 @@
 
 A fresh clone's user cache is empty, but dwr-gym ships the optima of the default sets (train/optima/, read where the
 user's cache has none): ``--no-shipped`` turns them off (``DWR_GYM_SHIPPED_OPTIMA=0``), so that every optimum is solved.
+It also ships which guess wins each planner plan (baselines/plan_hints.npz): ``--no-hints`` turns them off
+(``DWR_GYM_PLAN_HINTS=0``), so that every plan searches all its guesses. A warm run meets them only where a plan is not
+stored.
 
 Each run adds (or replaces) its measurement, keyed by the cache's state, the shipped optima and the busy processes, in
 docs/compare/timing.json; the block renders every measurement there, one row each.
@@ -52,19 +55,21 @@ def cached_optima(env: dict[str, str]) -> int:
     return total
 
 
-def measure(busy: int, cache: str, shipped: bool = True) -> dict[str, Any]:
+def measure(busy: int, cache: str, shipped: bool = True, hints: bool = True, out: Path | None = None) -> dict[str, Any]:
     with background_load(busy, 6 * 3600.0), tempfile.TemporaryDirectory() as tmp:
         env = checkout_env(DWR_GYM_CACHE=f"{tmp}/cache") if cache == "cold" else checkout_env()
         env["DWR_GYM_SHIPPED_OPTIMA"] = "1" if shipped else "0"
+        env["DWR_GYM_PLAN_HINTS"] = "1" if hints else "0"
         before_cache = cached_optima(env)
         before = resource.getrusage(resource.RUSAGE_CHILDREN)
         began = time.perf_counter()
-        said = run_logged(["compare", "--out", f"{tmp}/out"], cwd=tmp, env=env)
+        out = out or Path(tmp) / "out"
+        said = run_logged(["compare", "--out", str(Path(out).resolve())], cwd=tmp, env=env)
         wall = time.perf_counter() - began
         after = resource.getrusage(resource.RUSAGE_CHILDREN)
         load = load_average()
         solved = cached_optima(env) - before_cache
-        rows = json.loads(Path(f"{tmp}/out/comparison.json").read_text())
+        rows = json.loads((out / "comparison.json").read_text())
     return {
         "machine": torch_machine(),
         "command": "dwr-gym compare",
@@ -74,6 +79,7 @@ def measure(busy: int, cache: str, shipped: bool = True) -> dict[str, Any]:
         "load_average_1min_at_end": load,
         "cache": cache,
         "shipped_optima": shipped,
+        "plan_hints": hints,
         "optima_cached_before": before_cache,
         "optima_solved": solved,
         "stages": stage_seconds(rows),
@@ -123,8 +129,9 @@ def stage_seconds(rows: list[dict[str, Any]]) -> dict[str, float]:
 
 def render_one(result: dict[str, Any]) -> str:
     shipped = result.get("shipped_optima", False)  # the runs before the optima were shipped: none read
+    hints = " and plan hints" if result.get("plan_hints", False) else ""  # the runs before the hints were shipped
     if result["cache"] == "cold":
-        cache = (f"a fresh clone: an empty cache, the shipped optima read ({result['optima_solved']:,} solved)"
+        cache = (f"a fresh clone: an empty cache, the shipped optima{hints} read ({result['optima_solved']:,} solved)"
                  if shipped else f"an empty cache, no shipped optima ({result['optima_solved']:,} optima solved)")  # fmt: skip
     else:
         cache = f"a second run: the optima and the planners' plans of an earlier one cached ({result['optima_solved']:,} optima solved)"
@@ -149,7 +156,7 @@ def said_left(result: dict[str, Any], at: tuple[int, ...] = (20, 50, 80)) -> str
 
 def render(results: dict[str, Any]) -> str:
     runs = sorted(results["runs"], key=lambda r: (r["cache"] != "cold", r.get("shipped_optima", False),
-                                                  r["busy_processes"]))  # fmt: skip
+                                                  r["busy_processes"], r.get("plan_hints", False)))  # fmt: skip
     machine = runs[0]["machine"] if runs else "no run"
     return "\n".join([
         "",
@@ -157,18 +164,24 @@ def render(results: dict[str, Any]) -> str:
         "|---|---:|---:|---:|---:|---|---|",
         *(render_one(r) for r in runs),
         "",
-        f"*{machine}; `python -m benchmarks run compare-time --cache cold|warm [--no-shipped] --busy N --docs`, "
+        f"*{machine}; `python -m benchmarks run compare-time --cache cold|warm [--no-shipped] [--no-hints] --busy N "
+        "--docs`, "
         "`docs/compare/timing.json`.*",
         "",
     ])  # fmt: skip
 
 
 def merged(previous: dict[str, Any] | None, result: dict[str, Any]) -> dict[str, Any]:
-    """``previous``'s runs with ``result`` added, replacing the run of the same cache state, shipped optima and busy
-    processes."""
+    """``previous``'s runs with ``result`` added, replacing the run of the same cache state, shipped optima, plan hints
+    and busy processes."""
 
     def key(run: dict[str, Any]) -> tuple[Any, ...]:
-        return run.get("cache"), run.get("shipped_optima", False), run.get("busy_processes")
+        return (
+            run.get("cache"),
+            run.get("shipped_optima", False),
+            run.get("busy_processes"),
+            run.get("plan_hints", False),
+        )
 
     runs = [r for r in (previous or {}).get("runs", []) if key(r) != key(result)]
     return {"runs": [*runs, result]}
@@ -181,13 +194,16 @@ def main(argv: list[str] | None = None) -> None:
                         help="cold: an empty optimum cache (a fresh clone); warm: the shared one (default)")  # fmt: skip
     parser.add_argument("--no-shipped", action="store_true",
                         help="do not read the optima shipped for the default sets (every missing one is solved)")  # fmt: skip
+    parser.add_argument("--out", type=Path, help="keep compare's output there (default: a temporary directory)")
+    parser.add_argument("--no-hints", action="store_true",
+                        help="do not read the shipped plan hints (every plan searches all its guesses)")  # fmt: skip
     parser.add_argument(
         "--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} (and render the block)"
     )
     args = parser.parse_args(argv)
     if args.busy < 0:
         parser.error(f"--busy={args.busy} is invalid: expected an integer >= 0")
-    result = measure(args.busy, args.cache, shipped=not args.no_shipped)
+    result = measure(args.busy, args.cache, shipped=not args.no_shipped, hints=not args.no_hints, out=args.out)
     previous = json.loads(JSON_PATH.read_text()) if JSON_PATH.exists() else None
     results = merged(previous if previous and "runs" in previous else None, result)
     print(render({"runs": [result]}))
