@@ -149,7 +149,7 @@ class Plan:
     solve_time: float  # [s]
     solution: NDArray[np.float64]  # the raw decision vector, to warm-start the next solve
     candidate: int = -1  # the guess of the search it was solved from (0: the warm start, where one was given)
-    tried: int = 0  # how many guesses the search solved (0: read from a plan store)
+    tried: int = 0  # how many guesses the search solved (1 where a hint named the guess)
 
     @property
     def intervals(self) -> int:

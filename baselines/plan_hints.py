@@ -9,7 +9,7 @@ of its guess, so the plan is the search's to the last bit, and so are the tables
 (some 2 % of them, each guess to its iteration limit) is named with its error, which the planner then returns unsolved.
 It is only a cache:
 
-- it is read only by the solver it was recorded with (:func:`solver_digest`: the solver's source and CasADi's version);
+- it is read only by the solver it was recorded with (:func:`solver_digest`: the solver's code and CasADi's version);
   any other solver searches every guess, as does any job it does not name;
 - a hinted guess that does not converge falls back to the whole search;
 - ``python -m benchmarks run ship-plan-hints --check`` runs ``compare``'s whole search again and compares every
@@ -21,6 +21,7 @@ It is only a cache:
 
 from __future__ import annotations
 
+import ast
 import functools
 import hashlib
 import json
@@ -83,13 +84,14 @@ def write_hints(path: Path, solver: str, casadi: str, hints: dict[bytes, Hint]) 
 
 
 def solver_digest() -> str:
-    """What a winner depends on: the solver's source (baselines/optimal.py) and CasADi's version (16 hex digits)."""
+    """What a winner depends on: the solver's code (baselines/optimal.py's syntax tree: its layout and comments do not
+    count) and CasADi's version (16 hex digits)."""
     import casadi
 
     import baselines.optimal
 
-    source = Path(baselines.optimal.__file__).read_bytes()
-    return hashlib.sha256(source + casadi.__version__.encode()).hexdigest()[:16]
+    code = ast.dump(ast.parse(Path(baselines.optimal.__file__).read_text()))
+    return hashlib.sha256(f"{code}/{casadi.__version__}".encode()).hexdigest()[:16]
 
 
 @functools.cache
