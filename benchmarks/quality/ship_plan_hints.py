@@ -15,11 +15,15 @@ from __future__ import annotations
 import sys
 import tempfile
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from benchmarks.core.commands import checkout_env, dwr_gym, parser_for
 
+if TYPE_CHECKING:
+    from baselines.plan_hints import Hint
 
-def recorded_winners() -> dict[bytes, int]:
+
+def recorded_winners() -> dict[bytes, Hint]:
     """The winner of every whole search ``dwr-gym compare`` solves with its defaults, by key prefix."""
     from baselines.plan_hints import RECORD, SWITCH, read_recorded
 
@@ -31,7 +35,7 @@ def recorded_winners() -> dict[bytes, int]:
         return read_recorded(record)
 
 
-def check(shipped: dict[bytes, int], recorded: dict[bytes, int]) -> list[str]:
+def check(shipped: dict[bytes, Hint], recorded: dict[bytes, Hint]) -> list[str]:
     """What differs between the shipped winners and those just recorded (empty: the file is right)."""
     wrong = [key.hex() for key in recorded if key in shipped and shipped[key] != recorded[key]]
     missing, extra = recorded.keys() - shipped.keys(), shipped.keys() - recorded.keys()
