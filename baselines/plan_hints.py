@@ -2,7 +2,7 @@
 
 A minimum-energy plan is not convex, so :func:`baselines.optimal.solve_minimum_energy` solves it from 2-4 cold guesses
 and keeps the cheapest. On a fresh clone (no plan store yet) that search is most of ``compare``'s time beyond a
-warm run's: about 60 % of its solves are the guesses that lose. ``baselines/plan_hints.npz`` names, for every plan
+warm run's: 44 % of its solver time went to guesses that lose. ``baselines/plan_hints.npz`` names, for every plan
 of ``compare``'s default sets whose search solved more than one guess, the guess the search keeps; a planner that
 meets that very job (:func:`baselines.nmpc.job_key`, bit for bit) solves that guess alone. A solve is a pure function
 of its guess, so the plan is the search's to the last bit, and so are the tables. A search in which no guess converges

@@ -71,21 +71,20 @@ def test_the_hint_file_reads_back_what_was_written(tmp_path: Path) -> None:
     assert plan_hints.read_hints(tmp_path / "h.npz") == ("abc", "3.8.2", hints)
 
 
-def shipped_hints() -> dict[bytes, plan_hints.Hint]:
-    """The shipped hints; the test is skipped under another CasADi than theirs (they are not read there)."""
+def shipped_hints() -> plan_hints.HintFile:
+    """The shipped hint file; the test is skipped under another CasADi than theirs (they are not read there)."""
     import casadi
 
     shipped = plan_hints.read_hints(plan_hints.HINTS_PATH)
     if shipped.casadi != casadi.__version__:
         pytest.skip(f"the plan hints were recorded with CasADi {shipped.casadi}, this is {casadi.__version__}")
-    return shipped.hints
+    return shipped
 
 
 def test_the_shipped_hints_are_for_this_solver() -> None:
     """Fails where baselines/optimal.py changed since the hints were recorded: run ``python -m benchmarks run
     ship-plan-hints`` (until then every plan searches all its guesses: slower, not wrong)."""
-    winners = shipped_hints()
-    solver = plan_hints.read_hints(plan_hints.HINTS_PATH).solver
+    solver, _, winners = shipped_hints()
     assert solver == plan_hints.solver_digest(), "the solver changed: python -m benchmarks run ship-plan-hints"
     guesses = {w for w in winners.values() if isinstance(w, int)}
     assert len(winners) > 1000 and guesses <= {0, 1, 2, 3}
@@ -124,7 +123,7 @@ def test_the_shipped_hints_name_the_searchs_winners_and_give_the_same_rows(
     monkeypatch.setenv(plan_hints.SWITCH, "0")
     searched = rows(policies, scenario)
     recorded = plan_hints.read_recorded(tmp_path)
-    shipped = shipped_hints()
+    shipped = shipped_hints().hints
     assert len(recorded) >= 3 and recorded.keys() <= shipped.keys()
     assert recorded == {key: shipped[key] for key in recorded}
     for path in tmp_path.glob("*.txt"):

@@ -10,8 +10,8 @@ It also ships which guess wins each planner plan (baselines/plan_hints.npz): ``-
 (``DWR_GYM_PLAN_HINTS=0``), so that every plan searches all its guesses. A warm run meets them only where a plan is not
 stored.
 
-Each run adds (or replaces) its measurement, keyed by the cache's state, the shipped optima and the busy processes, in
-docs/compare/timing.json; the block renders every measurement there, one row each.
+Each run adds (or replaces) its measurement, keyed by the cache's state, the shipped optima, the plan hints and the
+busy processes, in docs/compare/timing.json; the block renders every measurement there, one row each.
 
 A page shows the block where it holds the pair ``<!-- generated: compare-time by compare-time (python -m benchmarks
 run compare-time --docs) -->`` and ``<!-- /generated -->`` (on one line each).
@@ -63,8 +63,8 @@ def measure(busy: int, cache: str, shipped: bool = True, hints: bool = True, out
         before_cache = cached_optima(env)
         before = resource.getrusage(resource.RUSAGE_CHILDREN)
         began = time.perf_counter()
-        out = out or Path(tmp) / "out"
-        said = run_logged(["compare", "--out", str(Path(out).resolve())], cwd=tmp, env=env)
+        out = (out or Path(tmp) / "out").resolve()
+        said = run_logged(["compare", "--out", str(out)], cwd=tmp, env=env)
         wall = time.perf_counter() - began
         after = resource.getrusage(resource.RUSAGE_CHILDREN)
         load = load_average()
