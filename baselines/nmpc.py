@@ -104,15 +104,15 @@ def _solve(job: dict[str, Any]) -> Plan | Exception:
     result); errors are returned, not raised, so that one failure cannot stop a batch."""
     from baselines import plan_hints
 
-    key = job_key(job)
-    hint = plan_hints.hint(key)
+    exact = job_key(job)
+    hint = plan_hints.hint(job, exact)
     if isinstance(hint, str):  # a search in which no guess converges: its error, unsolved
         return OptimalControlError(hint)
     try:
         result: Plan | Exception = solve_minimum_energy(**job, only=hint)
     except (OptimalControlError, InfeasibleArrivalTimeError) as error:
         result = error
-    plan_hints.record(key, result)
+    plan_hints.record(job, exact, result)
     return result
 
 

@@ -4,10 +4,19 @@ A minimum-energy plan is not convex, so :func:`baselines.optimal.solve_minimum_e
 and keeps the cheapest. On a fresh clone (no plan store yet) that search is most of ``compare``'s time beyond a
 warm run's: 44 % of its solver time went to guesses that lose. ``baselines/plan_hints.npz`` names, for every plan
 of ``compare``'s default sets whose search solved more than one guess, the guess the search keeps; a planner that
-meets that very job (:func:`baselines.nmpc.job_key`, bit for bit) solves that guess alone. A solve is a pure function
-of its guess, so the plan is the search's to the last bit, and so are the tables. A search in which no guess converges
-(some 2 % of them, each guess to its iteration limit) is named with its error, which the planner then returns unsolved.
-It is only a cache:
+meets that job (:func:`hint_key`: its numbers to 10 significant digits) solves that guess alone. A solve is a pure
+function of its guess, so on the machine the file was recorded on the plan is the search's to the last bit, and so are
+the tables. A search in which no guess converges (some 2 % of them, each guess to its iteration limit) is named with
+its error, which the planner then returns unsolved. It is only a cache:
+
+- why 10 digits, not the job's bits: the planners re-plan from poses their rollouts reached, and numpy's sines and
+  cosines differ in the last bits between CPUs (its SIMD code is picked by processor), so on another machine those
+  jobs differ from the recorded ones in the 15th-16th digit, and a bit-exact key names few of them. There the hinted
+  guess is the search's winner unless two guesses' plans cost nearly the same. A search that found no plan is named
+  by the job's bits alone: whether a nearly infeasible problem converges can turn on them. The ``robust`` agent's jobs
+  come from its float32 network, whose outputs can differ from CPU to CPU in the 7th digit (MKL's kernels): only the
+  machines the file was recorded on have hints for those (``ship-plan-hints --merge`` adds a machine's);
+- a re-plan warm-started from the plan before has no hint (it converges from that start, one guess);
 
 - it is read only by the solver it was recorded with (:func:`solver_digest`: the solver's code and CasADi's version);
   any other solver searches every guess, as does any job it does not name;
@@ -26,8 +35,9 @@ import functools
 import hashlib
 import json
 import os
+import pickle
 from pathlib import Path
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -39,7 +49,7 @@ HINTS_PATH = Path(__file__).resolve().with_name("plan_hints.npz")
 SWITCH = "DWR_GYM_PLAN_HINTS"
 #: A directory: each process that solves a plan by the whole search writes its winner there (``ship-plan-hints``).
 RECORD = "DWR_GYM_PLAN_HINTS_RECORD"
-#: The bytes of a job's key a hint is kept by (of its 32: a clash is 1 in 2^64 per pair).
+#: The bytes of a job's digest a hint is kept by (of its 32: a clash is 1 in 2^64 per pair).
 KEY_BYTES = 16
 #: The winner the file records for a search in which no guess converges (its error message is kept beside).
 NO_PLAN = 255
@@ -103,23 +113,57 @@ def _shipped() -> dict[bytes, Hint]:
     return shipped.hints if shipped.solver == solver_digest() else {}
 
 
-def hint(key: bytes) -> Hint | None:
-    """The guess that wins the search of the job with :func:`baselines.nmpc.job_key` ``key`` (or the error of a
-    search that finds no plan), where shipped."""
-    return _shipped().get(key[:KEY_BYTES]) if hints_enabled() else None
+#: Significant digits of a job's numbers in its :func:`hint_key`.
+DIGITS = 10
 
 
-def record(key: bytes, result: Plan | Exception) -> None:
-    """Write the winner of a whole search of more than one guess, or the error of one that found no plan, to
-    ``$DWR_GYM_PLAN_HINTS_RECORD``, where set."""
+def _rounded(value: Any) -> Any:
+    """``value`` with every float in it to :data:`DIGITS` significant digits (tuples and lists element by element)."""
+    if isinstance(value, (float, np.floating)):
+        return float(f"{float(value):.{DIGITS}g}")
+    if isinstance(value, (tuple, list)):
+        return tuple(_rounded(item) for item in value)
+    return value
+
+
+def hint_key(job: dict[str, Any]) -> bytes | None:
+    """The key a hint of the :func:`baselines.optimal.solve_minimum_energy` job ``job`` is kept by: a digest of its
+    keywords with their numbers to :data:`DIGITS` significant digits (the same job on another CPU, whose numpy differs
+    in the last bits, has the same key; a float and a numpy float of one value too); None for a warm-started job,
+    which has no hint."""
+    if job.get("warm_start") is not None:
+        return None
+    items = sorted((name, _rounded(value)) for name, value in job.items())
+    return hashlib.sha256(pickle.dumps(items, protocol=5)).digest()[:KEY_BYTES]
+
+
+def hint(job: dict[str, Any], exact: bytes) -> Hint | None:
+    """The guess that wins the search of ``job`` (by :func:`hint_key`), or the error of a search that found no plan
+    (by ``exact``, the job's :func:`baselines.nmpc.job_key`: whether a nearly infeasible problem converges turns on
+    its last bits), where shipped."""
+    if not hints_enabled():
+        return None
+    key = hint_key(job)
+    winner = None if key is None else _shipped().get(key)
+    if isinstance(winner, int):
+        return winner
+    error = _shipped().get(exact[:KEY_BYTES])
+    return error if isinstance(error, str) else None
+
+
+def record(job: dict[str, Any], exact: bytes, result: Plan | Exception) -> None:
+    """Write the winner of a whole search of more than one guess (by :func:`hint_key`), or the error of one that found
+    no plan (by ``exact``, the job's bits), to ``$DWR_GYM_PLAN_HINTS_RECORD``, where set."""
     directory = os.environ.get(RECORD)
+    key = hint_key(job)
     if isinstance(result, Plan):
-        line = f"{result.candidate}" if result.tried > 1 else ""
+        line = f"{result.candidate}" if result.tried > 1 and key is not None else ""
     else:
         line = "!" + json.dumps(str(result)) if isinstance(result, OptimalControlError) else ""
+        key = exact[:KEY_BYTES]
     if directory and line:
         with open(Path(directory) / f"{os.getpid()}.txt", "a") as handle:
-            handle.write(f"{key[:KEY_BYTES].hex()} {line}\n")
+            handle.write(f"{key.hex()} {line}\n")  # type: ignore[union-attr]
 
 
 def read_recorded(directory: Path) -> dict[bytes, Hint]:
@@ -132,5 +176,5 @@ def read_recorded(directory: Path) -> dict[bytes, Hint]:
     return hints
 
 
-__all__ = ["HINTS_PATH", "KEY_BYTES", "NO_PLAN", "RECORD", "SWITCH", "HintFile", "hint", "hints_enabled", "read_hints",
-           "read_recorded", "record", "solver_digest", "write_hints"]  # fmt: skip
+__all__ = ["DIGITS", "HINTS_PATH", "KEY_BYTES", "NO_PLAN", "RECORD", "SWITCH", "HintFile", "hint", "hint_key",
+           "hints_enabled", "read_hints", "read_recorded", "record", "solver_digest", "write_hints"]  # fmt: skip

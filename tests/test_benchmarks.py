@@ -102,6 +102,9 @@ def test_compare_time_says_where_the_time_went_and_keeps_a_run_per_cache_state()
     hinted = merged(runs, {**run, "shipped_optima": True, "plan_hints": True})
     assert len(hinted["runs"]) == 3  # the plan hints' run beside the one before them
     assert "the shipped optima and plan hints read (0 solved)" in render(hinted)
+    elsewhere = merged(hinted, {**run, "shipped_optima": True, "plan_hints": True, "cpu": "AMD EPYC"})
+    assert len(elsewhere["runs"]) == 4  # another CPU's run replaces none of the earlier machine's
+    assert render(elsewhere).count("| AMD EPYC |") == 1 and "| earlier machine (model not recorded) |" in table
 
 
 def test_compare_time_reads_the_bars_time_left_from_a_redirected_log() -> None:

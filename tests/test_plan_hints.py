@@ -58,11 +58,43 @@ def test_a_search_named_as_finding_no_plan_returns_its_error_unsolved(
     searched = nmpc._solve(job)
     assert isinstance(searched, optimal.OptimalControlError)
     (recorded,) = plan_hints.read_recorded(tmp_path).items()
-    assert recorded == (nmpc.job_key(job)[: plan_hints.KEY_BYTES], str(searched))
+    assert recorded == (nmpc.job_key(job)[: plan_hints.KEY_BYTES], str(searched))  # an error by the job's bits
     monkeypatch.setattr(plan_hints, "_shipped", lambda: dict([recorded]))
     monkeypatch.setattr(nmpc, "solve_minimum_energy", lambda **job: pytest.fail("solved a hinted failure"))
     hinted = nmpc._solve(job)
     assert type(hinted) is type(searched) and str(hinted) == str(searched)
+
+
+def test_a_winner_is_found_to_10_digits_and_a_search_without_plan_by_its_bits(monkeypatch: pytest.MonkeyPatch) -> None:
+    from baselines.nmpc import job_key
+
+    job = {"start": (0.018, -0.025, -0.36), "arrival_time": 2.0, **LIMITS}
+    ulps = {**job, "start": tuple(np.nextafter(v, np.inf, dtype=np.float64) for v in job["start"])}
+    monkeypatch.setattr(plan_hints, "_shipped", lambda: {plan_hints.hint_key(job): 1})
+    assert plan_hints.hint(job, job_key(job)) == 1 and plan_hints.hint(ulps, job_key(ulps)) == 1
+    monkeypatch.setattr(plan_hints, "_shipped", lambda: {job_key(job)[: plan_hints.KEY_BYTES]: "no plan"})
+    assert plan_hints.hint(job, job_key(job)) == "no plan"
+    assert plan_hints.hint(ulps, job_key(ulps)) is None  # a few ulps away it may converge: searched
+    monkeypatch.setenv(plan_hints.SWITCH, "0")
+    assert plan_hints.hint(job, job_key(job)) is None
+
+
+def test_a_job_keeps_its_hint_key_on_a_cpu_whose_numbers_differ_in_the_last_bits() -> None:
+    """The key of a hint is the job's to 10 significant digits: a start that another CPU's numpy reached a few ulps away
+    (or a numpy float for a float) has the same key; a start 1e-6 away, another deadline or limit, does not; a
+    warm-started re-plan has none."""
+    from baselines.nmpc import job_key
+
+    job = {"start": (-1.2, 0.4, -2.5), "arrival_time": 8.0, **LIMITS, "response": (0.01, -0.02, 0.9, 0.1)}
+    key = plan_hints.hint_key(job)
+    assert key is not None and len(key) == plan_hints.KEY_BYTES
+    ulps = {**job, "start": tuple(np.nextafter(v, np.inf, dtype=np.float64) for v in job["start"])}
+    assert job_key(ulps) != job_key(job) and plan_hints.hint_key(ulps) == key  # the plan store's key is exact
+    assert plan_hints.hint_key({**job, "arrival_time": np.float64(8.0)}) == key
+    for other in ({"start": (-1.2 + 1e-6, 0.4, -2.5)}, {"arrival_time": 8.25}, {"u_max": 0.5}, {"heading": False},
+                  {"response": (0.01, -0.02, 0.9, 0.1 + 1e-6)}):  # fmt: skip
+        assert plan_hints.hint_key({**job, **other}) != key, other
+    assert plan_hints.hint_key({**job, "warm_start": np.zeros(10)}) is None
 
 
 def test_the_hint_file_reads_back_what_was_written(tmp_path: Path) -> None:

@@ -18,6 +18,17 @@ def torch_machine() -> str:
     return f"{platform.machine()}, {os.cpu_count()} cores, torch {torch.__version__}"
 
 
+def cpu_model() -> str:
+    """The processor's model name (Linux's /proc/cpuinfo; else what the platform module says, or "unknown")."""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown"
+
+
 def load_average() -> float:
     """The 1-minute load average now, to two decimals."""
     return round(os.getloadavg()[0], 2)

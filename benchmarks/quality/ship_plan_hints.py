@@ -2,12 +2,19 @@
 
     python -m benchmarks run ship-plan-hints            # compare's whole search, its winners written to the file
     python -m benchmarks run ship-plan-hints --check    # the same search, every winner compared with the shipped one
+    python -m benchmarks run ship-plan-hints --merge    # the check, then this machine's winners added to the file
 
 Runs ``dwr-gym compare`` with its defaults as a user would, in a fresh process, with every plan solved by the whole
 search of its guesses (no plan store: ``DWR_GYM_PLAN_CACHE=0``; no hints: ``DWR_GYM_PLAN_HINTS=0``), each solving
 process writing the winner of every search of more than one guess (``DWR_GYM_PLAN_HINTS_RECORD``). The file records
 the solver's digest (:func:`baselines.plan_hints.solver_digest`): a changed solver reads none of it until this runs
 again (tests/test_plan_hints.py says so). About 8 minutes on 2 cores.
+
+Why ``--merge``: a hint is keyed by its job to 10 significant digits (:func:`baselines.plan_hints.hint_key`), which
+holds across CPUs for the laws' planners, but the jobs of the ``robust`` agent's planner start from poses its float32
+torch network steered there, whose outputs differ in the 7th digit between CPUs (MKL picks its kernels by processor).
+So the winners recorded on one machine name few of that agent's searches on another. ``--merge`` checks every winner
+both machines met and keeps the union: the file then serves each machine it was recorded on.
 """
 
 from __future__ import annotations
@@ -54,10 +61,13 @@ def main(argv: list[str] | None = None) -> None:
     from baselines.plan_hints import HINTS_PATH, read_hints, solver_digest, write_hints
 
     parser = parser_for("ship-plan-hints", __doc__)
-    parser.add_argument("--check", action="store_true", help="compare with the shipped file instead of writing it")
+    mode = parser.add_mutually_exclusive_group()
+    mode.add_argument("--check", action="store_true", help="compare with the shipped file instead of writing it")
+    mode.add_argument("--merge", action="store_true",
+                      help="compare with the shipped file, then write it with this machine's winners added")  # fmt: skip
     args = parser.parse_args(argv)
     recorded = recorded_winners()
-    if not args.check:
+    if not args.check and not args.merge:
         write_hints(HINTS_PATH, solver_digest(), casadi.__version__, recorded)
         print(f"wrote {HINTS_PATH.name}: {len(recorded)} plans' winning guesses ({HINTS_PATH.stat().st_size:,} bytes)")
         return
@@ -70,3 +80,8 @@ def main(argv: list[str] | None = None) -> None:
     print(f"{len(recorded)} searches, {len(shipped)} shipped hints: {'WRONG' if wrong else 'every shipped hint right'}")
     if wrong:
         sys.exit(1)
+    if args.merge:
+        merged = {**shipped, **recorded}
+        write_hints(HINTS_PATH, solver_digest(), casadi.__version__, merged)
+        print(f"wrote {HINTS_PATH.name}: {len(merged)} plans' winning guesses, {len(merged) - len(shipped)} of them "
+              f"new ({HINTS_PATH.stat().st_size:,} bytes)")  # fmt: skip

@@ -36,11 +36,13 @@ from typing import Any
 
 from benchmarks.core.commands import checkout_env, parser_for
 from benchmarks.core.docs import Block, Schema
-from benchmarks.core.record import load_average, torch_machine, write_json
+from benchmarks.core.record import cpu_model, load_average, torch_machine, write_json
 from benchmarks.core.timing import background_load
 
 ROOT = Path(__file__).resolve().parents[2]
 JSON_PATH = ROOT / "docs" / "compare" / "timing.json"
+#: The CPU column of the runs recorded before the model was: all on one machine of the sessions before.
+EARLIER_CPU = "earlier machine (model not recorded)"
 
 
 def cached_optima(env: dict[str, str]) -> int:
@@ -72,6 +74,7 @@ def measure(busy: int, cache: str, shipped: bool = True, hints: bool = True, out
         rows = json.loads((out / "comparison.json").read_text())
     return {
         "machine": torch_machine(),
+        "cpu": cpu_model(),
         "command": "dwr-gym compare",
         "busy_processes": busy,
         "wall_seconds": round(wall, 1),
@@ -138,7 +141,7 @@ def render_one(result: dict[str, Any]) -> str:
     stages = result.get("stages")
     slowest = ", ".join(f"{k} {v / 60:.1f}" for k, v in list(stages.items())[:4]) if stages else "-"
     return (
-        f"| {cache} | {result['busy_processes']} | {result['wall_seconds'] / 60:.1f} | "
+        f"| {result.get('cpu', EARLIER_CPU)} | {cache} | {result['busy_processes']} | {result['wall_seconds'] / 60:.1f} | "
         f"{result['cpu_seconds'] / 60:.1f} | {result['load_average_1min_at_end']:g} | {slowest} | "
         f"{said_left(result)} |"
     )
@@ -155,13 +158,13 @@ def said_left(result: dict[str, Any], at: tuple[int, ...] = (20, 50, 80)) -> str
 
 
 def render(results: dict[str, Any]) -> str:
-    runs = sorted(results["runs"], key=lambda r: (r["cache"] != "cold", r.get("shipped_optima", False),
+    runs = sorted(results["runs"], key=lambda r: (r.get("cpu", EARLIER_CPU) != EARLIER_CPU, r["cache"] != "cold", r.get("shipped_optima", False),
                                                   r["busy_processes"], r.get("plan_hints", False)))  # fmt: skip
     machine = runs[0]["machine"] if runs else "no run"
     return "\n".join([
         "",
-        "| `dwr-gym compare`, defaults | busy processes beside it | wall time (min) | CPU time (min) | load (1 min, at the end) | slowest stages (min) | time left said at 20 / 50 / 80 % (true), min |",
-        "|---|---:|---:|---:|---:|---|---|",
+        "| CPU | `dwr-gym compare`, defaults | busy processes beside it | wall time (min) | CPU time (min) | load (1 min, at the end) | slowest stages (min) | time left said at 20 / 50 / 80 % (true), min |",
+        "|---|---|---:|---:|---:|---:|---|---|",
         *(render_one(r) for r in runs),
         "",
         f"*{machine}; `python -m benchmarks run compare-time --cache cold|warm [--no-shipped] [--no-hints] --busy N "
@@ -172,11 +175,12 @@ def render(results: dict[str, Any]) -> str:
 
 
 def merged(previous: dict[str, Any] | None, result: dict[str, Any]) -> dict[str, Any]:
-    """``previous``'s runs with ``result`` added, replacing the run of the same cache state, shipped optima, plan hints
-    and busy processes."""
+    """``previous``'s runs with ``result`` added, replacing the run of the same CPU, cache state, shipped optima, plan
+    hints and busy processes."""
 
     def key(run: dict[str, Any]) -> tuple[Any, ...]:
         return (
+            run.get("cpu", EARLIER_CPU),
             run.get("cache"),
             run.get("shipped_optima", False),
             run.get("busy_processes"),
