@@ -26,7 +26,8 @@ from typing import Any
 
 KINDS: dict[str, str] = {
     "sb3": "stable-baselines3's API on the native vector env: SB3 on torch, or sbx-rl on JAX (train.learning.sb3)",
-    "jitted": "a gradient learner compiled whole with the functional JAX env (train.learning.jitted)",
+    "jitted": "a gradient learner compiled whole with the functional JAX env: PPO, and APG through its derivative "
+    "(train.learning.jitted)",
     "evolution": "evolution strategies, on the loop of the jitted trainers (train.learning.evolution)",
 }
 
@@ -110,6 +111,8 @@ LEARNERS: tuple[Learner, ...] = (
             residual=True),
     Learner("es", "jax", "evolution", "train.learning.evolution.trainer", "stable_baselines3:PPO", "es", EVOSAX,
             residual=True, init_from=True, hyperparams="train.learning.evolution.settings:check_es_kwargs"),
+    Learner("apg", "jax", "jitted", "train.learning.jitted.apg_trainer", "stable_baselines3:PPO", "jax", JAX,
+            residual=True, hyperparams="train.learning.jitted.apg_settings:check_apg_kwargs"),
 )
 # fmt: on
 """Every learner of ``dwr-gym train``; a new one is a line here and its trainer module."""

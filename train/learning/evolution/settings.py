@@ -86,7 +86,7 @@ class ESSettings:
                 sigma=as_float("sigma", values["sigma"], 0.0, 100.0, low_inclusive=False, text=True),
                 learning_rate=as_float("learning_rate", values["learning_rate"], 0.0, 100.0, low_inclusive=False,
                                        text=True),
-                antithetic=antithetic, **_policy(policy),
+                antithetic=antithetic, **network_fields(policy),
             )  # fmt: skip
         except ValueError as error:
             raise ConfigError(str(error)) from None
@@ -110,7 +110,7 @@ class ESSettings:
         return {f.name: getattr(self, f.name) for f in fields(self)}
 
 
-def _policy(policy: dict[str, Any]) -> dict[str, Any]:
+def network_fields(policy: dict[str, Any]) -> dict[str, Any]:
     """ESSettings' network fields from ``policy_kwargs`` (checked by train.learning.hyperparams before)."""
     from train.learning.jitted.policy import ACTIVATIONS
 

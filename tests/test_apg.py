@@ -1,0 +1,178 @@
+"""Analytic policy gradients through the JAX env (``dwr-gym train --algo apg --backend jax``): options refused in one
+line, the gradient it follows is the return's (finite differences agree), the state's gradient clipped on the way back
+only, an exported agent that acts as the trained policy, and runs that resume bit for bit and load in ``dwr-gym
+evaluate``."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from train.learning.config import ConfigError, TrainConfig
+from train.learning.jitted.apg_settings import APGSettings
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+@pytest.mark.parametrize(
+    ("overrides", "message"),
+    [
+        ({"episodes": 0}, r"^episodes=0 is invalid: expected an integer in \[1, 65536\]$"),
+        ({"learning_rate": 0}, r"^learning_rate=0(\.0)? is invalid"),
+        ({"max_grad_norm": -1}, r"^max_grad_norm=-1(\.0)? is invalid"),
+        ({"state_grad_clip": -0.5}, r"^state_grad_clip=-0.5 is invalid: expected a finite number in \[0, 1e\+09\]$"),
+        ({"n_steps": 64}, r"^hyperparameter\(s\) \['n_steps'\] are not accepted by APG"),
+        ({"policy_kwargs": {"log_std_init": -1}}, r"^policy_kwargs \['log_std_init'\] are not implemented by APG"),
+    ],
+)
+def test_bad_options_are_refused_in_one_line(overrides: dict[str, Any], message: str) -> None:
+    with pytest.raises(ConfigError, match=message) as error:
+        APGSettings.from_algo_kwargs(overrides)
+    assert "\n" not in str(error.value)
+
+
+def resolved(**kwargs: Any) -> TrainConfig:
+    from train.learning.hyperparams import resolve_hyperparams
+
+    config = TrainConfig(algo="apg", backend="jax", **kwargs)
+    config.validate()
+    return resolve_hyperparams(config, set(kwargs))
+
+
+def test_the_yaml_is_read_and_apg_needs_the_jax_backend() -> None:
+    config = resolved(env_id="DWRPointStabilization-v2", hyperparam_overrides={"episodes": 8})
+    assert config.algo_kwargs["episodes"] == 8 and config.algo_kwargs["state_grad_clip"] == 1.0
+    assert config.total_timesteps > 0
+    with pytest.raises(
+        ConfigError, match=r"^--algo 'apg' is invalid with --backend sb3: .*apg trains with --backend jax$"
+    ):
+        TrainConfig(algo="apg").validate()
+    assert resolved(residual=True, expert="ptc").algo_kwargs["episodes"] == 64  # residual_apg.yml
+
+
+jax = pytest.importorskip("jax")
+
+
+def small_apg(state_grad_clip: float = 0.0, residual: bool = False) -> Any:
+    from dwr_gym.jax_env import make_gymnax_env
+    from train.learning.jitted.apg import JaxAPG
+
+    env, params = make_gymnax_env("DWRPointStabilization-v2", T_con_range=[2.0, 2.2])
+    settings = APGSettings(episodes=2, net_arch=(8,), state_grad_clip=state_grad_clip)
+    return JaxAPG(settings, env, params, residual=residual)
+
+
+def test_the_gradient_it_follows_is_the_returns() -> None:
+    """jax.grad of an episode's return along a random direction of the weights equals the finite difference."""
+    apg = small_apg()
+    state = apg.init(0)
+    key = jax.random.PRNGKey(3)
+    params = jax.tree.map(lambda x: x * 20.0 if x.ndim == 2 else x, state.params)  # a policy that moves the robot
+
+    def episode_return(p: Any) -> Any:
+        return apg.episode(p, state.obs_stats, key)[0]
+
+    direction = jax.tree.map(lambda x: jax.random.normal(jax.random.PRNGKey(x.size), x.shape), params)
+    gradient = jax.grad(episode_return)(params)
+    slope = sum(float(np.sum(np.asarray(g) * np.asarray(d)))
+                for g, d in zip(jax.tree.leaves(gradient), jax.tree.leaves(direction), strict=True))  # fmt: skip
+    eps = 1e-3
+    plus = episode_return(jax.tree.map(lambda p, d: p + eps * d, params, direction))
+    minus = episode_return(jax.tree.map(lambda p, d: p - eps * d, params, direction))
+    difference = float(plus - minus) / (2 * eps)
+    assert abs(slope) > 0.1 and slope == pytest.approx(difference, rel=0.05)
+
+
+def test_the_states_gradient_is_clipped_on_the_way_back_only() -> None:
+    import jax.numpy as jnp
+
+    from train.learning.jitted.apg import clip_gradient
+
+    x = {"a": jnp.array([3.0, 4.0]), "n": jnp.array(2, jnp.int32)}
+    assert clip_gradient(x, 1.0)["a"].tolist() == [3.0, 4.0]
+    gradient = jax.grad(lambda a: jnp.sum(clip_gradient({"a": a, "n": x["n"]}, 1.0)["a"] * jnp.array([30.0, 40.0])))
+    np.testing.assert_allclose(gradient(x["a"]), [0.6, 0.8], rtol=1e-6)  # norm 50 clipped to 1, same direction
+    small = jax.grad(lambda a: jnp.sum(clip_gradient(a, 1.0) * jnp.array([0.3, 0.4])))(x["a"])
+    np.testing.assert_allclose(small, [0.3, 0.4], rtol=1e-6)  # within the limit: unchanged
+
+
+def test_an_update_counts_the_episodes_steps_and_keeps_every_number_finite() -> None:
+    apg = small_apg(state_grad_clip=1.0, residual=True)
+    state = apg.init(0)
+    after, metrics = apg.update(state)
+    assert 2 * 40 <= int(metrics["steps"]) <= 2 * 44 and int(after.updates) == 1  # two episodes of T_con 2-2.2 s
+    assert np.isfinite(float(metrics["return_mean"])) and np.isfinite(float(metrics["grad_norm"]))
+    assert all(np.all(np.isfinite(np.asarray(leaf))) for leaf in jax.tree.leaves(after.params))
+    changed = [not np.array_equal(a, b) for a, b in zip(jax.tree.leaves(state.params), jax.tree.leaves(after.params),
+                                                          strict=True)]  # fmt: skip
+    assert any(changed)
+
+
+def test_the_exported_agent_acts_as_the_trained_policy() -> None:
+    from train.learning.jitted.apg_trainer import apg_policy_kwargs
+    from train.learning.jitted.export import SB3Exporter
+    from train.learning.training_env import make_training_env
+
+    apg = small_apg()
+    state = apg.init(0)
+    leaves, tree = jax.tree.flatten(state.params)  # random weights: some actions clipped, some not
+    keys = jax.random.split(jax.random.PRNGKey(7), len(leaves))
+    params = jax.tree.unflatten(tree, [jax.random.normal(k, x.shape) for k, x in zip(keys, leaves, strict=True)])
+    stats = state.obs_stats
+    config = resolved(env_id="DWRPointStabilization-v2", hyperparam_overrides={"policy_kwargs": {"net_arch": [8]}})
+    model = SB3Exporter(make_training_env(config), {"policy_kwargs": apg_policy_kwargs(apg.settings)}).load(
+        *jax.device_get((params, stats.mean, stats.var))
+    )
+    rng = np.random.default_rng(0)
+    obs = rng.normal(size=(300, 10)) * [1, 1, 1, 1, 1, 1, 0.5, 20, 1, 1] + [1, 0, 0, 0, 0, 0, 0.5, 30, 1, 0]
+    obs = obs.astype(np.float32)
+    expected = np.asarray(apg.act(params, obs, stats))
+    assert 0.05 < np.mean(np.abs(expected) == 1.0) < 0.95
+    actions, _ = model.predict(obs, deterministic=True)
+    np.testing.assert_allclose(actions, expected, atol=1e-4)
+
+
+def cli(*args: str) -> subprocess.CompletedProcess[str]:
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "OMP_NUM_THREADS": "1"}
+    return subprocess.run([sys.executable, "-m", "train.cli", *args], cwd=ROOT, env=env, text=True,
+                          capture_output=True, timeout=600)  # fmt: skip
+
+
+TINY = ("train", "--algo", "apg", "--backend", "jax", "--env", "DWRPointStabilization-v2", "--eval-episodes", "3",
+        "--no-progress", "--env-kwargs", "T_con_range=[10,11]", "--hyperparams", "episodes=2",
+        "policy_kwargs=dict(net_arch=[16])")  # fmt: skip
+
+
+@pytest.mark.slow
+def test_cli_trains_resumes_bit_for_bit_and_evaluates(tmp_path: Path) -> None:
+    from train.learning.agents import load_agent
+    from train.learning.runs import read_state
+
+    straight, split = tmp_path / "straight", tmp_path / "split"
+    common = ("--eval-freq", "1000", "--checkpoint-freq", "1000")
+    done = cli(*TINY, *common, "--total-timesteps", "3000", "--run-dir", str(straight))
+    assert done.returncode == 0, done.stderr
+    done = cli(*TINY, *common, "--total-timesteps", "1500", "--run-dir", str(split))
+    assert done.returncode == 0, done.stderr
+    done = cli("train", "--resume", str(split), "--total-timesteps", "3000", "--no-progress")
+    assert done.returncode == 0, done.stderr
+    assert read_state(split)["timesteps"] == read_state(straight)["timesteps"] and read_state(split)["finished"]
+    _, resumed = load_agent(split)
+    _, uninterrupted = load_agent(straight)
+    for a, b in zip(resumed.policy.state_dict().values(), uninterrupted.policy.state_dict().values(), strict=True):
+        assert np.array_equal(a.numpy(), b.numpy())  # the resumed run is the uninterrupted one, bit for bit
+    import yaml
+
+    saved = yaml.safe_load((split / "config.yaml").read_text())
+    assert saved["learned_from"] == "reward" and saved["config"]["algo"] == "apg"
+    done = cli("evaluate", "--agents", str(split), "--n", "3", "--scenarios", "random", "--controllers", "ptc",
+               "--env", "DWRPointStabilization-v2", "--optimum", "none", "--no-progress",
+               "--out", str(tmp_path / "evaluate"))  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert "split" in done.stdout and "ptc" in done.stdout

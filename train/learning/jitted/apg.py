@@ -1,0 +1,147 @@
+"""``dwr-gym train --algo apg --backend jax``: analytic policy gradients, the return differentiated through the
+functional env.
+
+The task's dynamics (the exact step of eq. (1)), its energy and its terminal payment are smooth functions written in
+jax (:mod:`dwr_gym.jax_env`), so the gradient of an episode's return with respect to the policy's weights is computed
+exactly by ``jax.grad`` through the whole episode (Brax's APG, Freeman et al. 2021; SHAC, Xu et al. 2022, without
+its critic). Each update plays ``episodes`` fresh episodes with the deterministic policy (its mean action, clipped:
+no exploration noise, so no noise energy is paid, as ES), ``lax.scan`` over the longest episode with the ended ones
+held, and takes one Adam step on the mean return's gradient. v2's return (:class:`dwr_gym.env`'s docstring) pays the
+distance and heading at T_con linearly and the energy of every command, so its gradient says how to reach the goal
+pose with less energy; v2's arrival bonus (a step at 1 cm) has no gradient and is not what the learner follows.
+
+Gradients through 1,200 steps of a closed loop explode: the cotangent of the env state is clipped to a norm of
+``state_grad_clip`` at every step on the way back (:func:`clip_gradient`), and the update's gradient to
+``max_grad_norm``. This learns from the reward alone: what it uses beside the reward is the env's own derivative,
+which model-free RL does not have (the docs say so where it is compared).
+
+The policy is the actor of the jitted PPO's network (:func:`train.learning.jitted.policy.make_network`), exported
+as an SB3 PPO model (:class:`train.learning.jitted.export.SB3Exporter`) like the ES's; the observations are scaled by
+the mean and deviation of 1,024 first observations, fixed, folded into the exported first layer.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import flax.struct
+import jax
+import jax.numpy as jnp
+import optax
+
+from train.learning.jitted.apg_settings import INITIAL_OBSERVATIONS, APGSettings
+from train.learning.jitted.policy import make_network
+from train.learning.jitted.ppo import ObservationStatistics
+
+
+class APGState(flax.struct.PyTreeNode):
+    """Everything a run continues from: the network, Adam's state, the observation scaling, the key, the updates."""
+
+    params: Any
+    opt_state: Any
+    obs_stats: Any
+    rng: Any
+    updates: Any
+
+
+def clip_gradient(tree: Any, limit: float) -> Any:
+    """``tree`` unchanged on the way forward; on the way back its cotangent (the floating leaves together) clipped to
+    the norm ``limit``."""
+
+    def floating(leaf: Any) -> bool:
+        return hasattr(leaf, "dtype") and jnp.issubdtype(leaf.dtype, jnp.floating)
+
+    @jax.custom_vjp
+    def identity(x: Any) -> Any:
+        return x
+
+    def forward(x: Any) -> tuple[Any, None]:
+        return x, None
+
+    def backward(_: None, cotangent: Any) -> tuple[Any]:
+        norm = jnp.sqrt(sum(jnp.sum(leaf**2) for leaf in jax.tree.leaves(cotangent) if floating(leaf)) + 1e-12)
+        factor = jnp.minimum(1.0, limit / norm)
+        return (jax.tree.map(lambda leaf: leaf * factor if floating(leaf) else leaf, cotangent),)
+
+    identity.defvjp(forward, backward)
+    return identity(tree)
+
+
+class JaxAPG:
+    """APG of one configuration on one gymnax-style env: :meth:`init` a state, :meth:`update` it (jitted)."""
+
+    def __init__(self, settings: APGSettings, env: Any, env_params: Any, residual: bool = False) -> None:
+
+        self.settings, self.env, self.env_params, self.residual = settings, env, env_params, residual
+        self.obs_dim = int(env.observation_space(env_params).shape[0])
+        self.network = make_network(settings.ppo_settings(), int(env.action_space(env_params).shape[0]))
+        self.max_steps = int(getattr(env_params, "max_episode_steps", 0) or env_params.max_steps_in_episode)
+        self.optimizer = optax.chain(optax.clip_by_global_norm(settings.max_grad_norm),
+                                     optax.adam(settings.learning_rate))  # fmt: skip
+        self.update = jax.jit(self._update)
+
+    def init(self, seed: int) -> Any:
+        """A fresh state: the network initialised from ``seed`` as the jitted PPO's (a residual's near zero), the
+        observation scaling of fresh episodes."""
+
+        rng, key_net, key_obs = jax.random.split(jax.random.PRNGKey(seed), 3)
+        params = self.network.init(key_net, jnp.zeros((self.obs_dim,), jnp.float32))
+        if self.residual:  # the search starts at the expert (train.learning.jitted.residual)
+            from train.learning.jitted.residual import near_zero_head
+
+            params = near_zero_head(params)
+        stats = ObservationStatistics.create(self.obs_dim)
+        if self.settings.normalize_observations:
+            keys = jax.random.split(key_obs, INITIAL_OBSERVATIONS)
+            obs, _ = jax.vmap(self.env.reset_env, in_axes=(0, None))(keys, self.env_params)
+            stats = stats.update(jnp.asarray(obs, jnp.float32))
+        state = APGState(params=params, opt_state=self.optimizer.init(params), obs_stats=stats, rng=rng,
+                         updates=jnp.asarray(0, jnp.int32))  # fmt: skip
+        return jax.tree.map(lambda x: jnp.asarray(x, x.dtype), state)  # no weak types: one compilation
+
+    def act(self, params: Any, obs: Any, stats: Any) -> Any:
+        """The deterministic action: the network's mean on the (scaled) observation, clipped as SB3 clips it."""
+
+        if self.settings.normalize_observations:
+            obs = stats.normalize(obs)
+        mean, _, _ = self.network.apply(params, jnp.asarray(obs, jnp.float32))
+        return jnp.clip(mean, -1.0, 1.0)
+
+    def episode(self, params: Any, stats: Any, key: Any) -> tuple[Any, Any]:
+        """One episode's return (differentiable in ``params``) and its env steps."""
+
+        key_reset, key_steps = jax.random.split(key)
+        _, start = self.env.reset_env(key_reset, self.env_params)
+        limit = self.settings.state_grad_clip
+
+        def one_step(carry: tuple[Any, ...], t: Any) -> tuple[tuple[Any, ...], None]:
+            state, alive, total, steps = carry
+            if limit > 0:
+                state = clip_gradient(state, limit)
+            action = self.act(params, state.observation, stats)
+            _, after, reward, done, _ = self.env.step_env(jax.random.fold_in(key_steps, t), state, action,
+                                                          self.env_params)  # fmt: skip
+            total = total + jnp.where(alive, reward, 0.0)
+            state = jax.tree.map(lambda new, old: jnp.where(alive, new, old), after, state)
+            return (state, alive & ~done, total, steps + alive.astype(jnp.int32)), None
+
+        carry = (start, jnp.asarray(True), jnp.asarray(0.0, jnp.float32), jnp.asarray(0, jnp.int32))
+        (_, _, total, steps), _ = jax.lax.scan(one_step, carry, jnp.arange(self.max_steps))
+        return total, steps
+
+    def _update(self, state: Any) -> tuple[Any, dict[str, Any]]:
+
+        rng, key = jax.random.split(state.rng)
+        keys = jax.random.split(key, self.settings.episodes)
+
+        def loss(params: Any) -> tuple[Any, tuple[Any, Any]]:
+            returns, steps = jax.vmap(self.episode, in_axes=(None, None, 0))(params, state.obs_stats, keys)
+            return -jnp.mean(returns), (returns, steps)
+
+        (_, (returns, steps)), grads = jax.value_and_grad(loss, has_aux=True)(state.params)
+        grads = jax.tree.map(jnp.nan_to_num, grads)  # Guard: a diverged episode does not poison the weights
+        updates, opt_state = self.optimizer.update(grads, state.opt_state, state.params)
+        params = optax.apply_updates(state.params, updates)
+        state = state.replace(params=params, opt_state=opt_state, rng=rng, updates=state.updates + 1)
+        metrics = {"steps": jnp.sum(steps), "return_mean": jnp.mean(returns), "grad_norm": optax.tree.norm(grads)}
+        return state, metrics

@@ -1,0 +1,82 @@
+"""The hyperparameters of ``dwr-gym train --algo apg --backend jax`` (:mod:`train.learning.jitted.apg`), under the names
+of train/hyperparams/apg.yml; checked here, before jax is imported, so bad values end the command in one line.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+from typing import Any
+
+from dwr_gym.validation import as_float, as_int
+from train.learning.config import ConfigError
+
+#: YAML keys of APG, with their defaults; ``policy_kwargs`` (the network) is read as the ES reads it.
+APG_DEFAULTS: dict[str, Any] = {"episodes": 64, "learning_rate": 3e-4, "max_grad_norm": 1.0, "state_grad_clip": 1.0}
+IGNORED_KEYS = ("policy", "verbose")
+#: Observations of fresh episodes the fixed observation scaling is computed from.
+INITIAL_OBSERVATIONS = 1024
+
+
+@dataclass(frozen=True)
+class APGSettings:
+    """One APG run's hyperparameters, named as in train/hyperparams/apg.yml."""
+
+    episodes: int = 64
+    """Episodes per update (each a fresh start and T_con)."""
+    learning_rate: float = 3e-4
+    """Adam's step size."""
+    max_grad_norm: float = 1.0
+    """The update's gradient is clipped to this global norm."""
+    state_grad_clip: float = 1.0
+    """The cotangent of the env state is clipped to this norm at every step of the backward pass (0: not clipped)."""
+    net_arch: tuple[int, ...] = (64, 64)
+    activation: str = "tanh"
+    ortho_init: bool = True
+    normalize_observations: bool = True
+
+    @classmethod
+    def from_algo_kwargs(cls, algo_kwargs: dict[str, Any]) -> APGSettings:
+        """The settings of resolved hyperparameters; an unknown key or a bad value is a ConfigError of one line."""
+        from train.learning.evolution.settings import POLICY_KEYS, network_fields
+
+        kwargs = {k: v for k, v in algo_kwargs.items() if k not in IGNORED_KEYS}
+        policy = dict(kwargs.pop("policy_kwargs", None) or {})
+        unknown = sorted(set(kwargs) - set(APG_DEFAULTS))
+        if unknown:
+            raise ConfigError(f"hyperparameter(s) {unknown} are not accepted by APG; accepted: "
+                              f"{', '.join(APG_DEFAULTS)}, policy_kwargs")  # fmt: skip
+        unknown = sorted(set(policy) - set(POLICY_KEYS))
+        if unknown:
+            raise ConfigError(f"policy_kwargs {unknown} are not implemented by APG; it implements "
+                              f"{', '.join(POLICY_KEYS)}")  # fmt: skip
+        if algo_kwargs.get("policy", "MlpPolicy") != "MlpPolicy":
+            raise ConfigError(f"policy={algo_kwargs['policy']!r} is invalid: expected 'MlpPolicy'")
+        values = {**APG_DEFAULTS, **kwargs}
+        try:
+            return cls(
+                episodes=as_int("episodes", values["episodes"], 1, 65536, text=True),
+                learning_rate=as_float("learning_rate", values["learning_rate"], 0.0, 100.0, low_inclusive=False,
+                                       text=True),
+                max_grad_norm=as_float("max_grad_norm", values["max_grad_norm"], 0.0, 1e9, low_inclusive=False,
+                                       text=True),
+                state_grad_clip=as_float("state_grad_clip", values["state_grad_clip"], 0.0, 1e9, text=True),
+                **network_fields(policy),
+            )  # fmt: skip
+        except ValueError as error:
+            raise ConfigError(str(error)) from None
+
+    def ppo_settings(self) -> Any:
+        """The jitted PPO's settings of the same network, whose actor is the APG policy."""
+        from train.learning.jitted.policy import PPOSettings
+
+        return PPOSettings(n_envs=1, n_steps=1, batch_size=1, net_arch=self.net_arch, activation=self.activation,
+                           ortho_init=self.ortho_init, normalize_observations=self.normalize_observations)  # fmt: skip
+
+    def as_dict(self) -> dict[str, Any]:
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
+
+def check_apg_kwargs(params: dict[str, Any]) -> dict[str, Any]:
+    """``params`` with its APG values coerced (for config.yaml), or a ConfigError; called by resolve_hyperparams."""
+    settings = APGSettings.from_algo_kwargs(params)
+    return {**params, **{k: getattr(settings, k) for k in APG_DEFAULTS}}

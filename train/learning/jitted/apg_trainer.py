@@ -1,0 +1,92 @@
+"""``dwr-gym train --algo apg --backend jax``: the analytic policy gradients of :mod:`train.learning.jitted.apg` as a
+:class:`train.learning.jitted.run.JitTrainer`, in the same run directory, with the same evaluations, checkpoints,
+resume and Ctrl-C as the jitted PPO and the ES.
+
+The env steps a run counts are the steps of every episode an update plays (an ended episode's held steps are not
+counted). A chunk is a whole number of updates, each one jitted call, so the run checks its budget, its time limit and
+Ctrl-C between two updates. ``--residual --expert ptc`` differentiates through the law too (it runs on jax arrays).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from train.learning.config import ConfigError, TrainConfig
+from train.learning.jitted.apg_settings import APGSettings
+
+
+def apg_policy_kwargs(settings: APGSettings) -> dict[str, Any]:
+    """The SB3 PPO ``policy_kwargs`` of the APG's network (the architecture the exporter builds)."""
+    from train.learning.evolution.settings import TORCH_ACTIVATIONS
+
+    return {"net_arch": list(settings.net_arch), "activation_fn": f"nn.{TORCH_ACTIVATIONS[settings.activation]}",
+            "ortho_init": settings.ortho_init}  # fmt: skip
+
+
+class APGTrainer:
+    """APG as a :class:`train.learning.jitted.run.JitTrainer`: settings checked, env and exporter built before any
+    run directory is made."""
+
+    def __init__(self, config: TrainConfig) -> None:
+        from train.learning.jitted.setup import configure_threads, make_jax_env, use_compilation_cache
+
+        configure_threads(config.threads)
+        self.settings = APGSettings.from_algo_kwargs(config.algo_kwargs)
+        config.num_envs = 1  # (the exporter's native env; the APG's robots are its episodes per update)
+        env, env_params = make_jax_env(config)
+        use_compilation_cache()
+        from train.learning.jitted.apg import JaxAPG
+        from train.learning.jitted.export import SB3Exporter
+        from train.learning.training_env import make_training_env
+
+        self.apg = JaxAPG(self.settings, env, env_params, residual=bool(config.residual))
+        venv = make_training_env(config)
+        self.exporter = SB3Exporter(venv, {"policy_kwargs": apg_policy_kwargs(self.settings)}, config.seed)
+        venv.close()
+
+    def init(self, seed: int) -> Any:
+        return self.apg.init(seed)
+
+    def advance(self, state: Any, steps: int, target: int, stop: Callable[[], bool]) -> tuple[Any, int]:
+        """Updates until ``target`` env steps (or ``stop()``); at least one."""
+        while True:
+            state, metrics = self.apg.update(state)
+            steps += int(metrics["steps"])
+            if steps >= target or stop():
+                return state, steps
+
+    def export(self, state: Any, steps: int) -> Any:
+        import jax
+
+        params, stats = jax.device_get((state.params, state.obs_stats))
+        scaling = (stats.mean, stats.var) if self.settings.normalize_observations else (None, None)
+        return self.exporter.load(params, *scaling, timesteps=steps)
+
+    def steps_to_run(self, config: TrainConfig, done: int) -> int:
+        return max(0, int(config.total_timesteps) - done)
+
+    def start_note(self, config: TrainConfig) -> str | None:
+        s = self.settings
+        return (f"APG: {s.episodes} episodes per update, Adam {s.learning_rate:g}, the state's gradient clipped to "
+                f"{s.state_grad_clip:g} per step")  # fmt: skip
+
+
+def train(
+    config: TrainConfig,
+    command: list[str] | None = None,
+    on_evaluation: Callable[[dict[str, Any]], None] | None = None,
+) -> Path:
+    """Train as configured with APG; returns the run directory (the learner of ``--algo apg --backend jax``, called by
+    :func:`train.learning.training.train`, whose contract it keeps through :func:`train.learning.jitted.run.train_jitted`)."""
+    from train.learning.jitted.run import train_jitted
+    from train.learning.jitted.setup import check_jitted_options
+    from train.threads import torch_threads
+
+    check_jitted_options(config)
+    if config.num_envs not in (None, 1):
+        raise ConfigError(f"--num-envs {config.num_envs} is invalid with --algo apg: its robots are the episodes of an "
+                          "update, a hyperparameter (--hyperparams episodes=64)")  # fmt: skip
+    with torch_threads(config.threads):
+        return train_jitted(config, APGTrainer(config), command, on_evaluation)
