@@ -116,6 +116,25 @@ ENTRIES: dict[str, dict[str, Any]] = {
         "eval_freq": 5_000_000,
         "checkpoint_freq": 5_000_000,
     },
+    # analytic policy gradients through the JAX env (train/hyperparams/apg.yml): an update is some 45,000 env steps
+    # (64 episodes), the curve evaluated every 10 M; from scratch with time-scaled actions, and as a residual on PTC
+    "apg-v2": {
+        "algo": "apg",
+        "backend": "jax",
+        "env_id": V2,
+        "action_time_scale": 10.0,
+        "eval_freq": 10_000_000,
+        "checkpoint_freq": 10_000_000,
+    },
+    "apg-residual-v2": {
+        "algo": "apg",
+        "backend": "jax",
+        "env_id": V2,
+        "residual": True,
+        "expert": "ptc",
+        "eval_freq": 10_000_000,
+        "checkpoint_freq": 10_000_000,
+    },
     "sac-sbx-v2": {"algo": "sac", "backend": "sbx", "env_id": V2},
     "tqc-sbx-v2": {"algo": "tqc", "backend": "sbx", "env_id": V2},
     "crossq-sbx-v2": {"algo": "crossq", "backend": "sbx", "env_id": V2},
