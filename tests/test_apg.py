@@ -5,6 +5,7 @@ evaluate``."""
 
 from __future__ import annotations
 
+import itertools
 import os
 import subprocess
 import sys
@@ -45,9 +46,21 @@ def resolved(**kwargs: Any) -> TrainConfig:
     return resolve_hyperparams(config, set(kwargs))
 
 
+def test_a_linear_schedule_decays_the_rate_to_zero_over_the_budget() -> None:
+    from train.learning.jitted.apg_settings import check_apg_kwargs
+
+    settings = APGSettings.from_algo_kwargs({"learning_rate": "lin_0.001"})
+    assert (settings.learning_rate, settings.linear_schedule) == (0.001, True)
+    assert check_apg_kwargs({"learning_rate": "lin_0.001"})["learning_rate"] == "lin_0.001"  # config.yaml keeps it
+    assert check_apg_kwargs({"learning_rate": 0.001})["learning_rate"] == 0.001
+    with pytest.raises(ConfigError, match=r"^learning_rate=.?lin_x.? is invalid"):
+        APGSettings.from_algo_kwargs({"learning_rate": "lin_x"})
+
+
 def test_the_yaml_is_read_and_apg_needs_the_jax_backend() -> None:
     config = resolved(env_id="DWRPointStabilization-v2", hyperparam_overrides={"episodes": 8})
     assert config.algo_kwargs["episodes"] == 8 and config.algo_kwargs["state_grad_clip"] == 1.0
+    assert config.algo_kwargs["learning_rate"] == "lin_0.0003"
     assert config.total_timesteps > 0
     with pytest.raises(
         ConfigError, match=r"^--algo 'apg' is invalid with --backend sb3: .*apg trains with --backend jax$"
@@ -102,6 +115,29 @@ def test_the_states_gradient_is_clipped_on_the_way_back_only() -> None:
     np.testing.assert_allclose(small, [0.3, 0.4], rtol=1e-6)  # within the limit: unchanged
 
 
+def test_the_schedules_updates_are_what_the_budget_buys() -> None:
+    from dwr_gym.jax_env import make_gymnax_env
+    from train.learning.jitted.apg import JaxAPG
+
+    env, params = make_gymnax_env("DWRPointStabilization-v2", T_con_range=[2.0, 2.2])
+    settings = APGSettings(episodes=4, net_arch=(8,), linear_schedule=True, learning_rate=0.01)
+    apg = JaxAPG(settings, env, params, total_timesteps=4 * 42 * 10)  # ten updates of four episodes of 40-44 steps
+    assert apg.decay_updates == 10
+
+    def moved(before: Any, after: Any) -> float:
+        return max(float(np.max(np.abs(np.asarray(a) - np.asarray(b))))
+                   for a, b in zip(jax.tree.leaves(before.params), jax.tree.leaves(after.params), strict=True))  # fmt: skip
+
+    state = apg.init(0)
+    steps = []
+    for _ in range(12):
+        before, (state, _) = state, apg.update(state)
+        steps.append(moved(before, state))
+    assert steps[0] == pytest.approx(0.01, rel=1e-3)  # Adam's first step: the rate
+    assert all(a > b for a, b in itertools.pairwise(steps[:10]))  # shrinking
+    assert max(steps[10:]) < 1e-8  # past the budget the rate is 0: the weights stay (to float32 rounding)
+
+
 def test_an_update_counts_the_episodes_steps_and_keeps_every_number_finite() -> None:
     apg = small_apg(state_grad_clip=1.0, residual=True)
     state = apg.init(0)
@@ -145,12 +181,14 @@ def cli(*args: str) -> subprocess.CompletedProcess[str]:
 
 
 TINY = ("train", "--algo", "apg", "--backend", "jax", "--env", "DWRPointStabilization-v2", "--eval-episodes", "3",
-        "--no-progress", "--env-kwargs", "T_con_range=[10,11]", "--hyperparams", "episodes=2",
+        "--no-progress", "--env-kwargs", "T_con_range=[10,11]", "--hyperparams", "episodes=2", "learning_rate=0.0003",
         "policy_kwargs=dict(net_arch=[16])")  # fmt: skip
 
 
 @pytest.mark.slow
 def test_cli_trains_resumes_bit_for_bit_and_evaluates(tmp_path: Path) -> None:
+    """(A constant rate: a linear schedule decays over the budget of the command that starts the run, so one resumed
+    with a larger budget follows another schedule than a run started with it.)"""
     from train.learning.agents import load_agent
     from train.learning.runs import read_state
 

@@ -70,15 +70,28 @@ def clip_gradient(tree: Any, limit: float) -> Any:
 class JaxAPG:
     """APG of one configuration on one gymnax-style env: :meth:`init` a state, :meth:`update` it (jitted)."""
 
-    def __init__(self, settings: APGSettings, env: Any, env_params: Any, residual: bool = False) -> None:
+    def __init__(
+        self, settings: APGSettings, env: Any, env_params: Any, residual: bool = False, total_timesteps: float = 0.0
+    ) -> None:
 
         self.settings, self.env, self.env_params, self.residual = settings, env, env_params, residual
         self.obs_dim = int(env.observation_space(env_params).shape[0])
         self.network = make_network(settings.ppo_settings(), int(env.action_space(env_params).shape[0]))
         self.max_steps = int(getattr(env_params, "max_episode_steps", 0) or env_params.max_steps_in_episode)
-        self.optimizer = optax.chain(optax.clip_by_global_norm(settings.max_grad_norm),
-                                     optax.adam(settings.learning_rate))  # fmt: skip
+        rate: Any = settings.learning_rate
+        self.decay_updates = 0
+        if settings.linear_schedule:  # to 0 after the updates the budget buys (episodes of the mean T_con)
+            self.decay_updates = max(1, round(total_timesteps / (settings.episodes * self.mean_episode_steps())))
+            rate = optax.linear_schedule(settings.learning_rate, 0.0, self.decay_updates)
+        self.optimizer = optax.chain(optax.clip_by_global_norm(settings.max_grad_norm), optax.adam(rate))
         self.update = jax.jit(self._update)
+
+    def mean_episode_steps(self) -> float:
+        """The mean length of an episode, in env steps, over :data:`INITIAL_OBSERVATIONS` fresh ones (those of v2 end
+        at T_con; an earlier end makes the schedule's updates more)."""
+        keys = jax.random.split(jax.random.PRNGKey(0), INITIAL_OBSERVATIONS)
+        _, states = jax.vmap(self.env.reset_env, in_axes=(0, None))(keys, self.env_params)
+        return float(jnp.mean(jnp.minimum(states.prescribed_steps, self.max_steps)))
 
     def init(self, seed: int) -> Any:
         """A fresh state: the network initialised from ``seed`` as the jitted PPO's (a residual's near zero), the

@@ -30,9 +30,11 @@ class APGTrainer:
     run directory is made."""
 
     def __init__(self, config: TrainConfig) -> None:
+        from train.learning.hyperparams import fill_budget
         from train.learning.jitted.setup import configure_threads, make_jax_env, use_compilation_cache
 
         configure_threads(config.threads)
+        fill_budget(config)
         self.settings = APGSettings.from_algo_kwargs(config.algo_kwargs)
         config.num_envs = 1  # (the exporter's native env; the APG's robots are its episodes per update)
         env, env_params = make_jax_env(config)
@@ -41,7 +43,8 @@ class APGTrainer:
         from train.learning.jitted.export import SB3Exporter
         from train.learning.training_env import make_training_env
 
-        self.apg = JaxAPG(self.settings, env, env_params, residual=bool(config.residual))
+        self.apg = JaxAPG(self.settings, env, env_params, residual=bool(config.residual),
+                          total_timesteps=float(config.total_timesteps))  # fmt: skip
         venv = make_training_env(config)
         self.exporter = SB3Exporter(venv, {"policy_kwargs": apg_policy_kwargs(self.settings)}, config.seed)
         venv.close()
@@ -69,7 +72,12 @@ class APGTrainer:
 
     def start_note(self, config: TrainConfig) -> str | None:
         s = self.settings
-        return (f"APG: {s.episodes} episodes per update, Adam {s.learning_rate:g}, the state's gradient clipped to "
+        rate = (
+            f"{s.learning_rate:g} to 0 over {self.apg.decay_updates} updates"
+            if s.linear_schedule
+            else f"{s.learning_rate:g}"
+        )
+        return (f"APG: {s.episodes} episodes per update, Adam {rate}, the state's gradient clipped to "
                 f"{s.state_grad_clip:g} per step")  # fmt: skip
 
 
