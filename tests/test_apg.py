@@ -28,6 +28,8 @@ ROOT = Path(__file__).resolve().parent.parent
         ({"learning_rate": 0}, r"^learning_rate=0(\.0)? is invalid"),
         ({"max_grad_norm": -1}, r"^max_grad_norm=-1(\.0)? is invalid"),
         ({"state_grad_clip": -0.5}, r"^state_grad_clip=-0.5 is invalid: expected a finite number in \[0, 1e\+09\]$"),
+        ({"max_return_drop": -1}, r"^max_return_drop=-1(\.0)? is invalid"),
+        ({"learning_rate": "lin_x"}, r"^learning_rate='lin_x' is invalid: expected a number in \(0, 100\], or lin_"),
         ({"n_steps": 64}, r"^hyperparameter\(s\) \['n_steps'\] are not accepted by APG"),
         ({"policy_kwargs": {"log_std_init": -1}}, r"^policy_kwargs \['log_std_init'\] are not implemented by APG"),
     ],
@@ -120,7 +122,11 @@ def test_the_schedules_updates_are_what_the_budget_buys() -> None:
     from train.learning.jitted.apg import JaxAPG
 
     env, params = make_gymnax_env("DWRPointStabilization-v2", T_con_range=[2.0, 2.2])
-    settings = APGSettings(episodes=4, net_arch=(8,), linear_schedule=True, learning_rate=0.01)
+    from train.learning.jitted.apg_settings import MAX_DROP
+
+    settings = APGSettings(
+        episodes=4, net_arch=(8,), linear_schedule=True, learning_rate=0.01, max_return_drop=MAX_DROP
+    )
     apg = JaxAPG(settings, env, params, total_timesteps=4 * 42 * 10)  # ten updates of four episodes of 40-44 steps
     assert apg.decay_updates == 10
 
@@ -138,11 +144,33 @@ def test_the_schedules_updates_are_what_the_budget_buys() -> None:
     assert max(steps[10:]) < 1e-8  # past the budget the rate is 0: the weights stay (to float32 rounding)
 
 
+def test_an_update_that_loses_return_on_its_episodes_is_undone() -> None:
+    """A step far too large (Adam at 5.0 on random weights) loses return on the episodes it was computed on: undone,
+    the weights and Adam's state as before, its replay counted; with the check off it is kept."""
+    from dwr_gym.jax_env import make_gymnax_env
+    from train.learning.jitted.apg import JaxAPG
+    from train.learning.jitted.apg_settings import MAX_DROP
+
+    env, params = make_gymnax_env("DWRPointStabilization-v2", T_con_range=[2.0, 2.2])
+    outcomes = {}
+    for drop in (0.0, MAX_DROP):
+        apg = JaxAPG(APGSettings(episodes=4, net_arch=(8,), learning_rate=5.0, max_return_drop=drop), env, params)
+        state = apg.init(0)
+        after, metrics = apg.update(state)
+        same = all(np.array_equal(a, b) for a, b in zip(jax.tree.leaves((state.params, state.opt_state)),
+                                                         jax.tree.leaves((after.params, after.opt_state)), strict=True))  # fmt: skip
+        outcomes[drop] = (bool(metrics["accepted"]), same, int(metrics["steps"]))
+    (undone, unchanged, checked_steps), (kept, same_after_kept, steps) = outcomes[0.0], outcomes[MAX_DROP]
+    assert (undone, unchanged) == (False, True) and (kept, same_after_kept) == (True, False)
+    assert checked_steps == 2 * steps  # the replay of the same episodes counts
+
+
 def test_an_update_counts_the_episodes_steps_and_keeps_every_number_finite() -> None:
     apg = small_apg(state_grad_clip=1.0, residual=True)
     state = apg.init(0)
     after, metrics = apg.update(state)
-    assert 2 * 40 <= int(metrics["steps"]) <= 2 * 44 and int(after.updates) == 1  # two episodes of T_con 2-2.2 s
+    # two episodes of T_con 2-2.2 s, played again to check the update
+    assert 2 * 2 * 40 <= int(metrics["steps"]) <= 2 * 2 * 44 and int(after.updates) == 1
     assert np.isfinite(float(metrics["return_mean"])) and np.isfinite(float(metrics["grad_norm"]))
     assert all(np.all(np.isfinite(np.asarray(leaf))) for leaf in jax.tree.leaves(after.params))
     changed = [not np.array_equal(a, b) for a, b in zip(jax.tree.leaves(state.params), jax.tree.leaves(after.params),

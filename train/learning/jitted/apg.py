@@ -29,7 +29,7 @@ import jax
 import jax.numpy as jnp
 import optax
 
-from train.learning.jitted.apg_settings import INITIAL_OBSERVATIONS, APGSettings
+from train.learning.jitted.apg_settings import INITIAL_OBSERVATIONS, MAX_DROP, APGSettings
 from train.learning.jitted.policy import make_network
 from train.learning.jitted.ppo import ObservationStatistics
 
@@ -155,6 +155,14 @@ class JaxAPG:
         grads = jax.tree.map(jnp.nan_to_num, grads)  # Guard: a diverged episode does not poison the weights
         updates, opt_state = self.optimizer.update(grads, state.opt_state, state.params)
         params = optax.apply_updates(state.params, updates)
+        accepted = jnp.asarray(True)
+        if self.settings.max_return_drop < MAX_DROP:  # the same episodes again: an update that loses return is undone
+            after, replayed = jax.vmap(self.episode, in_axes=(None, None, 0))(params, state.obs_stats, keys)
+            accepted = jnp.mean(after) >= jnp.mean(returns) - self.settings.max_return_drop
+            steps = steps + replayed
+            params, opt_state = jax.tree.map(lambda new, old: jnp.where(accepted, new, old), (params, opt_state),
+                                             (state.params, state.opt_state))  # fmt: skip
         state = state.replace(params=params, opt_state=opt_state, rng=rng, updates=state.updates + 1)
-        metrics = {"steps": jnp.sum(steps), "return_mean": jnp.mean(returns), "grad_norm": optax.tree.norm(grads)}
+        metrics = {"steps": jnp.sum(steps), "return_mean": jnp.mean(returns), "grad_norm": optax.tree.norm(grads),
+                   "accepted": accepted}  # fmt: skip
         return state, metrics
