@@ -147,12 +147,18 @@ class JaxAPG:
         rng, key = jax.random.split(state.rng)
         keys = jax.random.split(key, self.settings.episodes)
 
-        def loss(params: Any) -> tuple[Any, tuple[Any, Any]]:
-            returns, steps = jax.vmap(self.episode, in_axes=(None, None, 0))(params, state.obs_stats, keys)
-            return -jnp.mean(returns), (returns, steps)
+        def loss(params: Any, key: Any) -> tuple[Any, tuple[Any, Any]]:
+            total, steps = self.episode(params, state.obs_stats, key)
+            return -total, (total, steps)
 
-        (_, (returns, steps)), grads = jax.value_and_grad(loss, has_aux=True)(state.params)
-        grads = jax.tree.map(jnp.nan_to_num, grads)  # Guard: a diverged episode does not poison the weights
+        per_episode, (returns, steps) = jax.vmap(jax.grad(loss, has_aux=True), in_axes=(None, 0))(state.params, keys)
+        # Guard: an episode whose derivative is undefined somewhere (0/0 at the goal, the law's gain at T_con) is left
+        # out of the mean gradient, rather than making the whole update NaN
+        finite = jnp.all(jnp.stack([jnp.all(jnp.isfinite(g.reshape(g.shape[0], -1)), axis=1)
+                                    for g in jax.tree.leaves(per_episode)]), axis=0)  # fmt: skip
+        count = jnp.maximum(jnp.sum(finite), 1)
+        grads = jax.tree.map(lambda g: jnp.sum(jnp.where(finite.reshape((-1,) + (1,) * (g.ndim - 1)), g, 0.0), axis=0)
+                             / count, per_episode)  # fmt: skip
         updates, opt_state = self.optimizer.update(grads, state.opt_state, state.params)
         params = optax.apply_updates(state.params, updates)
         accepted = jnp.asarray(True)
@@ -164,5 +170,5 @@ class JaxAPG:
                                              (state.params, state.opt_state))  # fmt: skip
         state = state.replace(params=params, opt_state=opt_state, rng=rng, updates=state.updates + 1)
         metrics = {"steps": jnp.sum(steps), "return_mean": jnp.mean(returns), "grad_norm": optax.tree.norm(grads),
-                   "accepted": accepted}  # fmt: skip
+                   "accepted": accepted, "undefined_gradients": jnp.sum(~finite)}  # fmt: skip
         return state, metrics

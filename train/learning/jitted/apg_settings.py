@@ -11,10 +11,10 @@ from dwr_gym.validation import as_float, as_int
 from train.learning.config import ConfigError
 
 #: YAML keys of APG, with their defaults; ``policy_kwargs`` (the network) is read as the ES reads it.
-APG_DEFAULTS: dict[str, Any] = {"episodes": 64, "learning_rate": 3e-4, "max_grad_norm": 1.0, "state_grad_clip": 1.0,
-                                 "max_return_drop": 0.0}  # fmt: skip
 #: ``max_return_drop`` at or above this: no update is checked (nor undone).
 MAX_DROP = 1e9
+APG_DEFAULTS: dict[str, Any] = {"episodes": 64, "learning_rate": 3e-4, "max_grad_norm": 1.0, "state_grad_clip": 1.0,
+                                 "max_return_drop": MAX_DROP}  # fmt: skip
 IGNORED_KEYS = ("policy", "verbose")
 #: Observations of fresh episodes the fixed observation scaling is computed from.
 INITIAL_OBSERVATIONS = 1024
@@ -36,11 +36,11 @@ class APGSettings:
     """The update's gradient is clipped to this global norm."""
     state_grad_clip: float = 1.0
     """The cotangent of the env state is clipped to this norm at every step of the backward pass (0: not clipped)."""
-    max_return_drop: float = 0.0
+    max_return_drop: float = MAX_DROP
     """An update after which the same episodes' mean return is lower by more than this is undone (the weights and
-    Adam's state as before it; the replay's env steps count). The optimum of the residual on PTC lies by the cliff
-    of PTC's prescribed-time gain near T_con, and unchecked updates fall off it and back (measured); 1e9: none
-    checked."""
+    Adam's state as before it; the replay's env steps count); :data:`MAX_DROP` (the default): none checked. Off by
+    default because on the residual on PTC it undoes nearly every update (measured: a step along the batch's own
+    gradient lowers that batch's return in 85-100 % of updates, docs/rl-benchmark.md)."""
     net_arch: tuple[int, ...] = (64, 64)
     activation: str = "tanh"
     ortho_init: bool = True
