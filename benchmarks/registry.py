@@ -71,7 +71,6 @@ SUITE: dict[str, str] = {
     "rl-agents": "benchmarks.recipes.rl_agents",
     "rl-anneal": "benchmarks.recipes.rl_anneal",
     "rl-v2": "benchmarks.recipes.rl_v2",
-    "rl-apg": "benchmarks.recipes.rl_apg",
     "rl-time-scale": "benchmarks.recipes.rl_time_scale",
     "rl-time-scale-30min": "benchmarks.recipes.rl_time_scale_30min",
     "robust-rl": "benchmarks.recipes.robust_rl",

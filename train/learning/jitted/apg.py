@@ -6,7 +6,7 @@ jax (:mod:`dwr_gym.jax_env`), so the gradient of an episode's return with respec
 exactly by ``jax.grad`` through the whole episode (Brax's APG, Freeman et al. 2021; SHAC, Xu et al. 2022, without
 its critic). Each update plays ``episodes`` fresh episodes with the deterministic policy (its mean action, clipped:
 no exploration noise, so no noise energy is paid, as ES), ``lax.scan`` over the longest episode with the ended ones
-held, and takes one Adam step on the mean return's gradient. v2's return (:class:`dwr_gym.env`'s docstring) pays the
+held, and takes one Adam step on the mean return's gradient. v2's return (the env's docstring derives it) pays the
 distance and heading at T_con linearly and the energy of every command, so its gradient says how to reach the goal
 pose with less energy; v2's arrival bonus (a step at 1 cm) has no gradient and is not what the learner follows.
 
@@ -73,7 +73,6 @@ class JaxAPG:
     def __init__(
         self, settings: APGSettings, env: Any, env_params: Any, residual: bool = False, total_timesteps: float = 0.0
     ) -> None:
-
         self.settings, self.env, self.env_params, self.residual = settings, env, env_params, residual
         self.obs_dim = int(env.observation_space(env_params).shape[0])
         self.network = make_network(settings.ppo_settings(), int(env.action_space(env_params).shape[0]))
@@ -96,7 +95,6 @@ class JaxAPG:
     def init(self, seed: int) -> Any:
         """A fresh state: the network initialised from ``seed`` as the jitted PPO's (a residual's near zero), the
         observation scaling of fresh episodes."""
-
         rng, key_net, key_obs = jax.random.split(jax.random.PRNGKey(seed), 3)
         params = self.network.init(key_net, jnp.zeros((self.obs_dim,), jnp.float32))
         if self.residual:  # the search starts at the expert (train.learning.jitted.residual)
@@ -114,7 +112,6 @@ class JaxAPG:
 
     def act(self, params: Any, obs: Any, stats: Any) -> Any:
         """The deterministic action: the network's mean on the (scaled) observation, clipped as SB3 clips it."""
-
         if self.settings.normalize_observations:
             obs = stats.normalize(obs)
         mean, _, _ = self.network.apply(params, jnp.asarray(obs, jnp.float32))
@@ -122,7 +119,6 @@ class JaxAPG:
 
     def episode(self, params: Any, stats: Any, key: Any) -> tuple[Any, Any]:
         """One episode's return (differentiable in ``params``) and its env steps."""
-
         key_reset, key_steps = jax.random.split(key)
         _, start = self.env.reset_env(key_reset, self.env_params)
         limit = self.settings.state_grad_clip
@@ -143,7 +139,6 @@ class JaxAPG:
         return total, steps
 
     def _update(self, state: Any) -> tuple[Any, dict[str, Any]]:
-
         rng, key = jax.random.split(state.rng)
         keys = jax.random.split(key, self.settings.episodes)
 
