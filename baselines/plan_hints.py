@@ -16,7 +16,7 @@ its error, which the planner then returns unsolved. It is only a cache:
   by the job's bits alone: whether a nearly infeasible problem converges can turn on them. The ``robust`` agent's jobs
   come from its float32 network, whose outputs can differ from CPU to CPU in the 7th digit (MKL's kernels): only the
   machines the file was recorded on have hints for those (``ship-plan-hints --merge`` adds a machine's);
-- a re-plan warm-started from the plan before has no hint (it converges from that start, one guess);
+- a re-plan warm-started from the plan before has no winner named (it converges from that start, one guess);
 
 - it is read only by the solver it was recorded with (:func:`solver_digest`: the solver's code and CasADi's version);
   any other solver searches every guess, as does any job it does not name;

@@ -42,7 +42,7 @@ def test_each_algorithm_on_each_backend_is_one_entry_and_the_help_lists_them() -
     [({"algo": "es"}, r"^--algo 'es' is invalid with --backend sb3: sb3 trains ppo, .*; es trains with --backend jax$"),
      ({"algo": "sac", "backend": "jax"}, r"^--algo 'sac' is invalid with --backend jax: .*sac trains with --backend sb3 or sbx$"),
      ({"algo": "sac", "backend": "sbx", "residual": True},
-      r"^--residual is invalid with --backend sbx --algo sac: it is implemented by --backend sb3 \(ppo, .*\) or --backend jax \(ppo, es\)$"),
+      r"^--residual is invalid with --backend sbx --algo sac: it is implemented by --backend sb3 \(ppo, .*\) or --backend jax \(ppo, es, apg\)$"),
      ({"algo": "ppo", "backend": "jax", "init_from": "."}, r"^--init-from is invalid with --backend jax --algo ppo: .*--backend sb3"),
      ({"algo": "a2c"}, r"^--algo 'a2c' is invalid: expected one of 'ppo'")],
 )  # fmt: skip

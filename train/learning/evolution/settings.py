@@ -111,7 +111,8 @@ class ESSettings:
 
 
 def network_fields(policy: dict[str, Any]) -> dict[str, Any]:
-    """ESSettings' network fields from ``policy_kwargs`` (checked by train.learning.hyperparams before)."""
+    """The network fields of ESSettings and APGSettings from ``policy_kwargs`` (checked by train.learning.hyperparams
+    before)."""
     from train.learning.jitted.policy import ACTIVATIONS
 
     arch = policy.get("net_arch", [64, 64])
