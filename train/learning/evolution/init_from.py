@@ -16,7 +16,8 @@ from typing import Any
 import numpy as np
 
 from train.learning.config import ConfigError
-from train.learning.evolution.settings import TORCH_ACTIVATIONS, ESSettings
+from train.learning.evolution.settings import ESSettings
+from train.learning.jitted.policy import TORCH_ACTIVATIONS
 from train.learning.runs import saved_model
 
 #: Our activation names by torch's class names.

@@ -9,6 +9,7 @@ from typing import Any
 
 from dwr_gym.validation import as_bool, as_choice, as_float, as_int
 from train.learning.config import ConfigError
+from train.learning.jitted.policy import NETWORK_KEYS, network_fields
 
 #: evosax's class of each strategy (evosax 0.3), by the name the YAML gives it.
 STRATEGIES: dict[str, str] = {
@@ -27,10 +28,7 @@ ES_DEFAULTS: dict[str, Any] = {
     "strategy": "open_es", "population_size": 64, "episodes": 8, "sigma": 0.05, "learning_rate": 0.01,
     "antithetic": True,
 }  # fmt: skip
-#: torch's class name of each activation (``policy_kwargs``' ``activation_fn``, nn.<name>), by our name.
-TORCH_ACTIVATIONS = {"tanh": "Tanh", "relu": "ReLU", "elu": "ELU", "leakyrelu": "LeakyReLU", "silu": "SiLU",
-                     "gelu": "GELU", "sigmoid": "Sigmoid"}  # fmt: skip
-POLICY_KEYS = ("net_arch", "activation_fn", "ortho_init", "normalize_observations")
+POLICY_KEYS = NETWORK_KEYS
 IGNORED_KEYS = ("policy", "verbose")
 MAX_POPULATION = 65536
 
@@ -86,7 +84,7 @@ class ESSettings:
                 sigma=as_float("sigma", values["sigma"], 0.0, 100.0, low_inclusive=False, text=True),
                 learning_rate=as_float("learning_rate", values["learning_rate"], 0.0, 100.0, low_inclusive=False,
                                        text=True),
-                antithetic=antithetic, **network_fields(policy),
+                antithetic=antithetic, **network_fields(policy, "ES"),
             )  # fmt: skip
         except ValueError as error:
             raise ConfigError(str(error)) from None
@@ -108,23 +106,6 @@ class ESSettings:
 
     def as_dict(self) -> dict[str, Any]:
         return {f.name: getattr(self, f.name) for f in fields(self)}
-
-
-def network_fields(policy: dict[str, Any]) -> dict[str, Any]:
-    """The network fields of ESSettings and APGSettings from ``policy_kwargs`` (checked by train.learning.hyperparams
-    before)."""
-    from train.learning.jitted.policy import ACTIVATIONS
-
-    arch = policy.get("net_arch", [64, 64])
-    if isinstance(arch, dict):
-        arch = arch.get("pi", [64, 64])
-    activation = str(policy.get("activation_fn", "nn.Tanh")).split(".")[-1].lower()
-    if activation not in ACTIVATIONS:
-        raise ValueError(f"policy_kwargs activation_fn={policy['activation_fn']!r} is invalid for ES: expected one "
-                         f"of {', '.join('nn.' + a.title() for a in ACTIVATIONS)}")  # fmt: skip
-    return {"net_arch": tuple(int(s) for s in arch), "activation": activation,
-            "ortho_init": as_bool("ortho_init", policy.get("ortho_init", True)),
-            "normalize_observations": as_bool("normalize_observations", policy.get("normalize_observations", True))}  # fmt: skip
 
 
 def check_es_kwargs(params: dict[str, Any]) -> dict[str, Any]:

@@ -18,7 +18,8 @@ from pathlib import Path
 from typing import Any
 
 from train.learning.config import ConfigError, TrainConfig
-from train.learning.evolution.settings import TORCH_ACTIVATIONS, ESSettings
+from train.learning.evolution.settings import ESSettings
+from train.learning.jitted.policy import sb3_network_kwargs
 
 
 def force_host_devices(count: int) -> bool:
@@ -40,8 +41,7 @@ def host_devices(threads: int | None) -> int:
 
 def es_policy_kwargs(settings: ESSettings) -> dict[str, Any]:
     """The SB3 PPO ``policy_kwargs`` of the ES's network (the architecture the exporter builds)."""
-    return {"net_arch": list(settings.net_arch), "activation_fn": f"nn.{TORCH_ACTIVATIONS[settings.activation]}",
-            "ortho_init": settings.ortho_init}  # fmt: skip
+    return sb3_network_kwargs(settings.net_arch, settings.activation, settings.ortho_init)
 
 
 class ESTrainer:

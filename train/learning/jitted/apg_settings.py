@@ -49,7 +49,7 @@ class APGSettings:
     @classmethod
     def from_algo_kwargs(cls, algo_kwargs: dict[str, Any]) -> APGSettings:
         """The settings of resolved hyperparameters; an unknown key or a bad value is a ConfigError of one line."""
-        from train.learning.evolution.settings import POLICY_KEYS, network_fields
+        from train.learning.jitted.policy import NETWORK_KEYS, network_fields
 
         kwargs = {k: v for k, v in algo_kwargs.items() if k not in IGNORED_KEYS}
         policy = dict(kwargs.pop("policy_kwargs", None) or {})
@@ -57,10 +57,10 @@ class APGSettings:
         if unknown:
             raise ConfigError(f"hyperparameter(s) {unknown} are not accepted by APG; accepted: "
                               f"{', '.join(APG_DEFAULTS)}, policy_kwargs")  # fmt: skip
-        unknown = sorted(set(policy) - set(POLICY_KEYS))
+        unknown = sorted(set(policy) - set(NETWORK_KEYS))
         if unknown:
             raise ConfigError(f"policy_kwargs {unknown} are not implemented by APG; it implements "
-                              f"{', '.join(POLICY_KEYS)}")  # fmt: skip
+                              f"{', '.join(NETWORK_KEYS)}")  # fmt: skip
         if algo_kwargs.get("policy", "MlpPolicy") != "MlpPolicy":
             raise ConfigError(f"policy={algo_kwargs['policy']!r} is invalid: expected 'MlpPolicy'")
         values = {**APG_DEFAULTS, **kwargs}
@@ -80,7 +80,7 @@ class APGSettings:
                                        text=True),
                 state_grad_clip=as_float("state_grad_clip", values["state_grad_clip"], 0.0, 1e9, text=True),
                 max_return_drop=as_float("max_return_drop", values["max_return_drop"], 0.0, MAX_DROP, text=True),
-                **network_fields(policy),
+                **network_fields(policy, "APG"),
             )  # fmt: skip
         except ValueError as error:
             raise ConfigError(str(error)) from None

@@ -19,10 +19,9 @@ from train.learning.jitted.apg_settings import APGSettings
 
 def apg_policy_kwargs(settings: APGSettings) -> dict[str, Any]:
     """The SB3 PPO ``policy_kwargs`` of the APG's network (the architecture the exporter builds)."""
-    from train.learning.evolution.settings import TORCH_ACTIVATIONS
+    from train.learning.jitted.policy import sb3_network_kwargs
 
-    return {"net_arch": list(settings.net_arch), "activation_fn": f"nn.{TORCH_ACTIVATIONS[settings.activation]}",
-            "ortho_init": settings.ortho_init}  # fmt: skip
+    return sb3_network_kwargs(settings.net_arch, settings.activation, settings.ortho_init)
 
 
 class APGTrainer:

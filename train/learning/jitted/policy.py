@@ -151,6 +151,38 @@ class PPOSettings:
 
 
 ACTIVATIONS = ("tanh", "relu", "elu", "leakyrelu", "silu", "gelu", "sigmoid")
+#: torch's class name of each activation (``policy_kwargs``' ``activation_fn``, nn.<name>), by our name.
+TORCH_ACTIVATIONS = {"tanh": "Tanh", "relu": "ReLU", "elu": "ELU", "leakyrelu": "LeakyReLU", "silu": "SiLU",
+                     "gelu": "GELU", "sigmoid": "Sigmoid"}  # fmt: skip
+#: The ``policy_kwargs`` of the actor-only learners (ES, APG): the network, and whether observations are scaled.
+NETWORK_KEYS = ("net_arch", "activation_fn", "ortho_init", "normalize_observations")
+
+
+def network_fields(policy: dict[str, Any], learner: str) -> dict[str, Any]:
+    """The network fields (``net_arch``, ``activation``, ``ortho_init``, ``normalize_observations``) of an actor-only
+    learner's settings from ``policy_kwargs`` (checked by train.learning.hyperparams before); a bad activation is a
+    ValueError naming ``learner``."""
+    from dwr_gym.validation import as_bool
+
+    arch = policy.get("net_arch", [64, 64])
+    if isinstance(arch, dict):
+        arch = arch.get("pi", [64, 64])
+    activation = str(policy.get("activation_fn", "nn.Tanh")).split(".")[-1].lower()
+    if activation not in ACTIVATIONS:
+        raise ValueError(f"policy_kwargs activation_fn={policy['activation_fn']!r} is invalid for {learner}: expected "
+                         f"one of {', '.join('nn.' + a.title() for a in ACTIVATIONS)}")  # fmt: skip
+    return {"net_arch": tuple(int(s) for s in arch), "activation": activation,
+            "ortho_init": as_bool("ortho_init", policy.get("ortho_init", True)),
+            "normalize_observations": as_bool("normalize_observations", policy.get("normalize_observations", True))}  # fmt: skip
+
+
+def sb3_network_kwargs(net_arch: tuple[int, ...], activation: str, ortho_init: bool) -> dict[str, Any]:
+    """The SB3 PPO ``policy_kwargs`` of an actor-only learner's network (the architecture the exporter builds)."""
+    return {
+        "net_arch": list(net_arch),
+        "activation_fn": f"nn.{TORCH_ACTIVATIONS[activation]}",
+        "ortho_init": ortho_init,
+    }
 
 
 def activation_function(name: str) -> Any:
