@@ -99,10 +99,9 @@ class ESSettings:
 
     def ppo_settings(self) -> Any:
         """The jitted PPO's settings of the same network, whose actor is the ES policy (train.learning.jitted.policy)."""
-        from train.learning.jitted.policy import PPOSettings
+        from train.learning.jitted.policy import actor_network_settings
 
-        return PPOSettings(n_envs=1, n_steps=1, batch_size=1, net_arch=self.net_arch, activation=self.activation,
-                           ortho_init=self.ortho_init, normalize_observations=self.normalize_observations)  # fmt: skip
+        return actor_network_settings(self)
 
     def as_dict(self) -> dict[str, Any]:
         return {f.name: getattr(self, f.name) for f in fields(self)}

@@ -4,7 +4,7 @@ of train/hyperparams/apg.yml; checked here, before jax is imported, so bad value
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from typing import Any
 
 from dwr_gym.validation import as_float, as_int
@@ -87,13 +87,9 @@ class APGSettings:
 
     def ppo_settings(self) -> Any:
         """The jitted PPO's settings of the same network, whose actor is the APG policy."""
-        from train.learning.jitted.policy import PPOSettings
+        from train.learning.jitted.policy import actor_network_settings
 
-        return PPOSettings(n_envs=1, n_steps=1, batch_size=1, net_arch=self.net_arch, activation=self.activation,
-                           ortho_init=self.ortho_init, normalize_observations=self.normalize_observations)  # fmt: skip
-
-    def as_dict(self) -> dict[str, Any]:
-        return {f.name: getattr(self, f.name) for f in fields(self)}
+        return actor_network_settings(self)
 
 
 def check_apg_kwargs(params: dict[str, Any]) -> dict[str, Any]:

@@ -176,6 +176,13 @@ def network_fields(policy: dict[str, Any], learner: str) -> dict[str, Any]:
             "normalize_observations": as_bool("normalize_observations", policy.get("normalize_observations", True))}  # fmt: skip
 
 
+def actor_network_settings(settings: Any) -> PPOSettings:
+    """The jitted PPO's settings of an actor-only learner's network (``settings`` has ``net_arch``, ``activation``,
+    ``ortho_init`` and ``normalize_observations``): :func:`make_network` builds its actor from them."""
+    return PPOSettings(n_envs=1, n_steps=1, batch_size=1, net_arch=settings.net_arch, activation=settings.activation,
+                       ortho_init=settings.ortho_init, normalize_observations=settings.normalize_observations)  # fmt: skip
+
+
 def sb3_network_kwargs(net_arch: tuple[int, ...], activation: str, ortho_init: bool) -> dict[str, Any]:
     """The SB3 PPO ``policy_kwargs`` of an actor-only learner's network (the architecture the exporter builds)."""
     return {
