@@ -72,6 +72,7 @@ SUITE: dict[str, str] = {
     "rl-anneal": "benchmarks.recipes.rl_anneal",
     "rl-v2": "benchmarks.recipes.rl_v2",
     "rl-time-scale": "benchmarks.recipes.rl_time_scale",
+    "rl-apg": "benchmarks.recipes.rl_apg",
     "rl-time-scale-30min": "benchmarks.recipes.rl_time_scale_30min",
     "robust-rl": "benchmarks.recipes.robust_rl",
 }

@@ -29,6 +29,9 @@ ROOT = Path(__file__).resolve().parent.parent
         ({"max_grad_norm": -1}, r"^max_grad_norm=-1(\.0)? is invalid"),
         ({"state_grad_clip": -0.5}, r"^state_grad_clip=-0.5 is invalid: expected a finite number in \[0, 1e\+09\]$"),
         ({"max_return_drop": -1}, r"^max_return_drop=-1(\.0)? is invalid"),
+        ({"keep_best": -1}, r"^keep_best=-1 is invalid: expected an integer in \[0, 1e\+06\]$"),
+        ({"keep_best": 2.5}, r"^keep_best=2.5 is invalid"),
+        ({"validation_episodes": 0}, r"^validation_episodes=0 is invalid: expected an integer in \[1, 65536\]$"),
         ({"learning_rate": "lin_x"}, r"^learning_rate='lin_x' is invalid: expected a number in \(0, 100\], or lin_"),
         ({"n_steps": 64}, r"^hyperparameter\(s\) \['n_steps'\] are not accepted by APG"),
         ({"policy_kwargs": {"log_std_init": -1}}, r"^policy_kwargs \['log_std_init'\] are not implemented by APG"),
@@ -165,17 +168,82 @@ def test_an_update_that_loses_return_on_its_episodes_is_undone() -> None:
     assert checked_steps == 2 * steps  # the replay of the same episodes counts
 
 
+def test_keep_best_exports_the_best_policy_its_validation_measured() -> None:
+    """With ``keep_best`` the exported network is the one of highest mean return on the run's fixed validation
+    episodes, whichever came later; a network of NaN weights is never kept; without it, the last."""
+    from dwr_gym.jax_env import make_gymnax_env
+    from train.learning.jitted.apg import JaxAPG
+
+    env, params = make_gymnax_env("DWRPointStabilization-v2", T_con_range=[2.0, 2.2])
+    apg = JaxAPG(APGSettings(episodes=2, net_arch=(8,), keep_best=1, validation_episodes=3), env, params)
+    state = apg.init(0)
+    leaves, tree = jax.tree.flatten(state.params)
+    candidates = [state.params] + [
+        jax.tree.unflatten(tree, [jax.random.normal(jax.random.PRNGKey(10 * i + j), x.shape) * 3.0
+                                  for j, x in enumerate(leaves)])  # fmt: skip
+        for i in range(3)
+    ]
+    returns = []
+    for candidate in candidates:
+        state, metrics = apg.validate(state.replace(params=candidate))
+        returns.append(float(metrics["validation_return"]))
+        assert int(metrics["steps"]) == 3 * 40 or 3 * 40 < int(metrics["steps"]) <= 3 * 44
+    best = int(np.argmax(returns))
+    assert len(set(returns)) == len(returns) and float(state.best_return) == max(returns)
+    for kept, expected in zip(jax.tree.leaves(apg.exported_params(state)), jax.tree.leaves(candidates[best]),
+                              strict=True):  # fmt: skip
+        assert np.array_equal(kept, expected)
+    broken = jax.tree.map(lambda x: x * np.nan, state.params)
+    after, metrics = apg.validate(state.replace(params=broken))
+    assert not bool(metrics["kept"])  # (the env holds a NaN action's robot still: its return is finite, and low)
+    assert float(after.best_return) == max(returns)
+    last = JaxAPG(APGSettings(episodes=2, net_arch=(8,)), env, params)
+    assert last.exported_params(state) is state.params  # keep_best off: the last policy
+
+
 def test_an_update_counts_the_episodes_steps_and_keeps_every_number_finite() -> None:
     apg = small_apg(state_grad_clip=1.0, residual=True)
     state = apg.init(0)
     after, metrics = apg.update(state)
     assert 2 * 40 <= int(metrics["steps"]) <= 2 * 44 and int(after.updates) == 1  # two episodes of T_con 2-2.2 s
-    assert int(metrics["undefined_gradients"]) == 0
+    assert not bool(metrics["skipped"])
     assert np.isfinite(float(metrics["return_mean"])) and np.isfinite(float(metrics["grad_norm"]))
     assert all(np.all(np.isfinite(np.asarray(leaf))) for leaf in jax.tree.leaves(after.params))
     changed = [not np.array_equal(a, b) for a, b in zip(jax.tree.leaves(state.params), jax.tree.leaves(after.params),
                                                           strict=True)]  # fmt: skip
     assert any(changed)
+
+
+def test_an_update_whose_gradient_is_undefined_is_skipped() -> None:
+    """One episode whose derivative is NaN (here sqrt at 0, as 0/0 at the goal) makes the batch's gradient undefined:
+    the update is skipped, reported, and no weight becomes NaN; the next defined batch moves them again."""
+    import jax.numpy as jnp
+
+    from train.learning.jitted.apg import JaxAPG
+
+    class Undefined(JaxAPG):
+        poisoned = True
+
+        def episode(self, params: Any, stats: Any, key: Any) -> tuple[Any, Any]:
+            total, steps = super().episode(params, stats, key)
+            kernel = jax.tree.leaves(params)[-1]
+            nan = jnp.sqrt(jnp.sum(kernel * 0.0)) if self.poisoned else 0.0  # d/dx sqrt(0 * x) = inf * 0
+            return total + nan, steps
+
+    base = small_apg(residual=True)
+    apg = Undefined(base.settings, base.env, base.env_params, residual=True)
+    state = apg.init(0)
+    after, metrics = apg.update(state)
+    assert bool(metrics["skipped"]) and np.isfinite(float(metrics["return_mean"]))
+    for a, b in zip(jax.tree.leaves(state.params), jax.tree.leaves(after.params), strict=True):
+        assert np.array_equal(a, b)  # Adam's first step on a zero gradient: none
+    apg.poisoned = False
+    apg.update = jax.jit(apg._update)
+    moved, metrics = apg.update(after)
+    assert not bool(metrics["skipped"])
+    assert all(np.all(np.isfinite(np.asarray(leaf))) for leaf in jax.tree.leaves(moved.params))
+    assert any(not np.array_equal(a, b) for a, b in zip(jax.tree.leaves(after.params), jax.tree.leaves(moved.params),
+                                                        strict=True))  # fmt: skip
 
 
 def test_the_exported_agent_acts_as_the_trained_policy() -> None:
@@ -210,12 +278,13 @@ def cli(*args: str) -> subprocess.CompletedProcess[str]:
 
 TINY = ("train", "--algo", "apg", "--backend", "jax", "--env", "DWRPointStabilization-v2", "--eval-episodes", "3",
         "--no-progress", "--env-kwargs", "T_con_range=[10,11]", "--hyperparams", "episodes=2", "learning_rate=0.0003",
-        "policy_kwargs=dict(net_arch=[16])")  # fmt: skip
+        "policy_kwargs=dict(net_arch=[16])", "keep_best=2", "validation_episodes=2")  # fmt: skip
 
 
 @pytest.mark.slow
 def test_cli_trains_resumes_bit_for_bit_and_evaluates(tmp_path: Path) -> None:
-    """(A constant rate: a linear schedule decays over the budget of the command that starts the run, so one resumed
+    """(With keep_best, the validations before every second update resume as they ran. A constant rate: a linear
+    schedule decays over the budget of the command that starts the run, so one resumed
     with a larger budget follows another schedule than a run started with it.)"""
     from train.learning.agents import load_agent
     from train.learning.runs import read_state

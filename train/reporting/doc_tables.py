@@ -279,6 +279,8 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "rl-v2": ("docs/rl_benchmark/v2.json", lambda data: rl_table(data, "random")),
     "rl-v2-per-T_con": ("docs/rl_benchmark/v2.json", lambda data: rl_table(data, "per-T_con")),
     "rl-time-scale": ("docs/rl_benchmark/time_scale.json", lambda data: rl_table(data, "random")),
+    "rl-apg": ("docs/rl_benchmark/apg.json", lambda data: rl_table(data, "random")),
+    "rl-apg-per-T_con": ("docs/rl_benchmark/apg.json", lambda data: rl_table(data, "per-T_con")),
     "rl-time-scale-per-T_con": ("docs/rl_benchmark/time_scale.json", lambda data: rl_table(data, "per-T_con")),
     "rl-time-scale-long": ("docs/rl_benchmark/time_scale_long.json", lambda data: rl_table(data, "random")),
     "rl-time-scale-long-per-T_con": (

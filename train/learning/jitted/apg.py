@@ -17,7 +17,8 @@ which model-free RL does not have (the docs say so where it is compared).
 
 The policy is the actor of the jitted PPO's network (:func:`train.learning.jitted.policy.make_network`), exported
 as an SB3 PPO model (:class:`train.learning.jitted.export.SB3Exporter`) like the ES's; the observations are scaled by
-the mean and deviation of 1,024 first observations, fixed, folded into the exported first layer.
+the mean and deviation of 1,024 first observations, fixed, folded into the exported first layer. With ``keep_best``
+the run exports the best policy measured on its own validation episodes (:meth:`JaxAPG.validate`), not the last.
 """
 
 from __future__ import annotations
@@ -35,13 +36,17 @@ from train.learning.jitted.ppo import ObservationStatistics
 
 
 class APGState(flax.struct.PyTreeNode):
-    """Everything a run continues from: the network, Adam's state, the observation scaling, the key, the updates."""
+    """Everything a run continues from: the network, Adam's state, the observation scaling, the key, the updates, and
+    for ``keep_best`` the best network measured, its mean return and the key of its validation episodes."""
 
     params: Any
     opt_state: Any
     obs_stats: Any
     rng: Any
     updates: Any
+    best_params: Any
+    best_return: Any
+    validation_key: Any
 
 
 def clip_gradient(tree: Any, limit: float) -> Any:
@@ -84,6 +89,7 @@ class JaxAPG:
             rate = optax.linear_schedule(settings.learning_rate, 0.0, self.decay_updates)
         self.optimizer = optax.chain(optax.clip_by_global_norm(settings.max_grad_norm), optax.adam(rate))
         self.update = jax.jit(self._update)
+        self.validate = jax.jit(self._validate)
 
     def mean_episode_steps(self) -> float:
         """The mean length of an episode, in env steps, over :data:`INITIAL_OBSERVATIONS` fresh ones (those of v2 end
@@ -95,7 +101,7 @@ class JaxAPG:
     def init(self, seed: int) -> Any:
         """A fresh state: the network initialised from ``seed`` as the jitted PPO's (a residual's near zero), the
         observation scaling of fresh episodes."""
-        rng, key_net, key_obs = jax.random.split(jax.random.PRNGKey(seed), 3)
+        rng, key_net, key_obs, key_val = jax.random.split(jax.random.PRNGKey(seed), 4)
         params = self.network.init(key_net, jnp.zeros((self.obs_dim,), jnp.float32))
         if self.residual:  # the search starts at the expert (train.learning.jitted.residual)
             from train.learning.jitted.residual import near_zero_head
@@ -107,7 +113,8 @@ class JaxAPG:
             obs, _ = jax.vmap(self.env.reset_env, in_axes=(0, None))(keys, self.env_params)
             stats = stats.update(jnp.asarray(obs, jnp.float32))
         state = APGState(params=params, opt_state=self.optimizer.init(params), obs_stats=stats, rng=rng,
-                         updates=jnp.asarray(0, jnp.int32))  # fmt: skip
+                         updates=jnp.asarray(0, jnp.int32), best_params=params,
+                         best_return=jnp.asarray(-jnp.inf, jnp.float32), validation_key=key_val)  # fmt: skip
         return jax.tree.map(lambda x: jnp.asarray(x, x.dtype), state)  # no weak types: one compilation
 
     def act(self, params: Any, obs: Any, stats: Any) -> Any:
@@ -138,22 +145,39 @@ class JaxAPG:
         (_, _, total, steps), _ = jax.lax.scan(one_step, carry, jnp.arange(self.max_steps))
         return total, steps
 
+    def exported_params(self, state: Any) -> Any:
+        """The network a run exports: with ``keep_best`` the best measured (:meth:`validate`), else the last."""
+        return state.best_params if self.settings.keep_best else state.params
+
+    def _validate(self, state: Any) -> tuple[Any, dict[str, Any]]:
+        """The policy's mean return on the run's ``validation_episodes`` fixed episodes; kept as the best when higher
+        than the best so far (a network with a non-finite weight, or its non-finite return, never is: the env holds a
+        NaN action's robot still, so such a network can score above a poor one)."""
+        keys = jax.random.split(state.validation_key, self.settings.validation_episodes)
+        returns, steps = jax.vmap(self.episode, in_axes=(None, None, 0))(state.params, state.obs_stats, keys)
+        mean = jnp.mean(returns)
+        finite = jnp.all(jnp.stack([jnp.all(jnp.isfinite(leaf)) for leaf in jax.tree.leaves(state.params)]))
+        better = finite & jnp.isfinite(mean) & (mean > state.best_return)
+        state = state.replace(best_params=jax.tree.map(lambda new, old: jnp.where(better, new, old), state.params,
+                                                       state.best_params),
+                              best_return=jnp.where(better, mean, state.best_return))  # fmt: skip
+        return state, {"steps": jnp.sum(steps), "validation_return": mean, "kept": better}
+
     def _update(self, state: Any) -> tuple[Any, dict[str, Any]]:
         rng, key = jax.random.split(state.rng)
         keys = jax.random.split(key, self.settings.episodes)
 
-        def loss(params: Any, key: Any) -> tuple[Any, tuple[Any, Any]]:
-            total, steps = self.episode(params, state.obs_stats, key)
-            return -total, (total, steps)
+        def loss(params: Any) -> tuple[Any, tuple[Any, Any]]:
+            returns, steps = jax.vmap(self.episode, in_axes=(None, None, 0))(params, state.obs_stats, keys)
+            return -jnp.mean(returns), (returns, steps)
 
-        per_episode, (returns, steps) = jax.vmap(jax.grad(loss, has_aux=True), in_axes=(None, 0))(state.params, keys)
-        # Guard: an episode whose derivative is undefined somewhere (0/0 at the goal, the law's gain at T_con) is left
-        # out of the mean gradient, rather than making the whole update NaN
-        finite = jnp.all(jnp.stack([jnp.all(jnp.isfinite(g.reshape(g.shape[0], -1)), axis=1)
-                                    for g in jax.tree.leaves(per_episode)]), axis=0)  # fmt: skip
-        count = jnp.maximum(jnp.sum(finite), 1)
-        grads = jax.tree.map(lambda g: jnp.sum(jnp.where(finite.reshape((-1,) + (1,) * (g.ndim - 1)), g, 0.0), axis=0)
-                             / count, per_episode)  # fmt: skip
+        grads, (returns, steps) = jax.grad(loss, has_aux=True)(state.params)
+        # Guard: an episode whose derivative is undefined somewhere (0/0 at the goal, the law's gain at T_con) makes the
+        # batch's gradient NaN; that update is skipped (a zero gradient; Adam's moments carry on) rather than poisoning
+        # the weights. Leaving such episodes out of the mean instead (a per-episode gradient, twice the time) was
+        # measured to break the residual on PTC within 2.5 M env steps in every run (docs/rl-benchmark.md)
+        finite = jnp.all(jnp.stack([jnp.all(jnp.isfinite(g)) for g in jax.tree.leaves(grads)]))
+        grads = jax.tree.map(lambda g: jnp.where(finite, g, 0.0), grads)
         updates, opt_state = self.optimizer.update(grads, state.opt_state, state.params)
         params = optax.apply_updates(state.params, updates)
         accepted = jnp.asarray(True)
@@ -165,5 +189,5 @@ class JaxAPG:
                                              (state.params, state.opt_state))  # fmt: skip
         state = state.replace(params=params, opt_state=opt_state, rng=rng, updates=state.updates + 1)
         metrics = {"steps": jnp.sum(steps), "return_mean": jnp.mean(returns), "grad_norm": optax.tree.norm(grads),
-                   "accepted": accepted, "undefined_gradients": jnp.sum(~finite)}  # fmt: skip
+                   "accepted": accepted, "skipped": ~finite}  # fmt: skip
         return state, metrics

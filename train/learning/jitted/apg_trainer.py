@@ -52,8 +52,13 @@ class APGTrainer:
         return self.apg.init(seed)
 
     def advance(self, state: Any, steps: int, target: int, stop: Callable[[], bool]) -> tuple[Any, int]:
-        """Updates until ``target`` env steps (or ``stop()``); at least one."""
+        """Updates until ``target`` env steps (or ``stop()``); at least one. With ``keep_best`` the policy is
+        validated before the first update and after every ``keep_best``-th (those env steps count)."""
+        every = self.settings.keep_best
         while True:
+            if every and int(state.updates) % every == 0:
+                state, metrics = self.apg.validate(state)
+                steps += int(metrics["steps"])
             state, metrics = self.apg.update(state)
             steps += int(metrics["steps"])
             if steps >= target or stop():
@@ -62,7 +67,7 @@ class APGTrainer:
     def export(self, state: Any, steps: int) -> Any:
         import jax
 
-        params, stats = jax.device_get((state.params, state.obs_stats))
+        params, stats = jax.device_get((self.apg.exported_params(state), state.obs_stats))
         scaling = (stats.mean, stats.var) if self.settings.normalize_observations else (None, None)
         return self.exporter.load(params, *scaling, timesteps=steps)
 
@@ -76,8 +81,10 @@ class APGTrainer:
             if s.linear_schedule
             else f"{s.learning_rate:g}"
         )
+        kept = (f"; the best policy on {s.validation_episodes} validation episodes (every {s.keep_best} updates) is "
+                "the one exported" if s.keep_best else "")
         return (f"APG: {s.episodes} episodes per update, Adam {rate}, the state's gradient clipped to "
-                f"{s.state_grad_clip:g} per step")  # fmt: skip
+                f"{s.state_grad_clip:g} per step{kept}")  # fmt: skip
 
 
 def train(
