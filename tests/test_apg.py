@@ -178,11 +178,12 @@ def test_keep_best_exports_the_best_policy_its_validation_measured() -> None:
     apg = JaxAPG(APGSettings(episodes=2, net_arch=(8,), keep_best=1, validation_episodes=3), env, params)
     state = apg.init(0)
     leaves, tree = jax.tree.flatten(state.params)
-    candidates = [state.params] + [
-        jax.tree.unflatten(tree, [jax.random.normal(jax.random.PRNGKey(10 * i + j), x.shape) * 3.0
-                                  for j, x in enumerate(leaves)])  # fmt: skip
-        for i in range(3)
-    ]
+
+    def random_network(i: int) -> Any:
+        return jax.tree.unflatten(tree, [jax.random.normal(jax.random.PRNGKey(10 * i + j), x.shape) * 3.0
+                                         for j, x in enumerate(leaves)])  # fmt: skip
+
+    candidates = [state.params] + [random_network(i) for i in range(3)]
     returns = []
     for candidate in candidates:
         state, metrics = apg.validate(state.replace(params=candidate))

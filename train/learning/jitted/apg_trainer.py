@@ -81,8 +81,12 @@ class APGTrainer:
             if s.linear_schedule
             else f"{s.learning_rate:g}"
         )
-        kept = (f"; the best policy on {s.validation_episodes} validation episodes (every {s.keep_best} updates) is "
-                "the one exported" if s.keep_best else "")
+        kept = (
+            f"; the best policy on {s.validation_episodes} validation episodes (every {s.keep_best} updates) is "
+            "the one exported"
+            if s.keep_best
+            else ""
+        )
         return (f"APG: {s.episodes} episodes per update, Adam {rate}, the state's gradient clipped to "
                 f"{s.state_grad_clip:g} per step{kept}")  # fmt: skip
 
