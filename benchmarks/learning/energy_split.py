@@ -21,7 +21,7 @@ ROOT = Path(__file__).resolve().parents[2]
 JSON_PATH = ROOT / "docs" / "rl_benchmark" / "energy_split.json"
 #: The policies whose energy is split: the optimum, the two laws the residual agents start from, the shipped v2 agents.
 CONTROLLERS = ("optimal", "ptc", "pt-astolfi")
-AGENTS = ("es_residual_v2", "residual_ppo_jax_v2")
+AGENTS = ("es_residual_v2", "residual_ppo_jax_v2", "apg_residual_v2")
 #: The laws' own gains (baselines' defaults: the paper's for PTC), marked in the gains table.
 DEFAULTS = {"ptc": {"K1": 2.0, "K2": 10.0}, "pt-astolfi": {"k_rho": 1.5, "k_alpha": 4.7, "k_beta": -1.7}}
 
