@@ -71,7 +71,7 @@ def test_the_yaml_is_read_and_apg_needs_the_jax_backend() -> None:
         ConfigError, match=r"^--algo 'apg' is invalid with --backend sb3: .*apg trains with --backend jax$"
     ):
         TrainConfig(algo="apg").validate()
-    assert resolved(residual=True, expert="ptc").algo_kwargs["episodes"] == 16  # residual_apg.yml
+    assert resolved(residual=True, expert="ptc").algo_kwargs["episodes"] == 64  # residual_apg.yml
 
 
 jax = pytest.importorskip("jax")
