@@ -6,19 +6,15 @@ evaluate``."""
 from __future__ import annotations
 
 import itertools
-import os
-import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
 
+from tests.jitted_runs import assert_resume_is_bit_for_bit, cli
 from train.learning.config import ConfigError, TrainConfig
 from train.learning.jitted.apg_settings import APGSettings
-
-ROOT = Path(__file__).resolve().parent.parent
 
 
 @pytest.mark.parametrize(
@@ -271,12 +267,6 @@ def test_the_exported_agent_acts_as_the_trained_policy() -> None:
     np.testing.assert_allclose(actions, expected, atol=1e-4)
 
 
-def cli(*args: str) -> subprocess.CompletedProcess[str]:
-    env = {**os.environ, "PYTHONPATH": str(ROOT), "OMP_NUM_THREADS": "1"}
-    return subprocess.run([sys.executable, "-m", "train.cli", *args], cwd=ROOT, env=env, text=True,
-                          capture_output=True, timeout=600)  # fmt: skip
-
-
 TINY = ("train", "--algo", "apg", "--backend", "jax", "--env", "DWRPointStabilization-v2", "--eval-episodes", "3",
         "--no-progress", "--env-kwargs", "T_con_range=[10,11]", "--hyperparams", "episodes=2", "learning_rate=0.0003",
         "policy_kwargs=dict(net_arch=[16])", "keep_best=2", "validation_episodes=2")  # fmt: skip
@@ -287,22 +277,7 @@ def test_cli_trains_resumes_bit_for_bit_and_evaluates(tmp_path: Path) -> None:
     """(With keep_best, the validations before every second update resume as they ran. A constant rate: a linear
     schedule decays over the budget of the command that starts the run, so one resumed
     with a larger budget follows another schedule than a run started with it.)"""
-    from train.learning.agents import load_agent
-    from train.learning.runs import read_state
-
-    straight, split = tmp_path / "straight", tmp_path / "split"
-    common = ("--eval-freq", "1000", "--checkpoint-freq", "1000")
-    done = cli(*TINY, *common, "--total-timesteps", "3000", "--run-dir", str(straight))
-    assert done.returncode == 0, done.stderr
-    done = cli(*TINY, *common, "--total-timesteps", "1500", "--run-dir", str(split))
-    assert done.returncode == 0, done.stderr
-    done = cli("train", "--resume", str(split), "--total-timesteps", "3000", "--no-progress")
-    assert done.returncode == 0, done.stderr
-    assert read_state(split)["timesteps"] == read_state(straight)["timesteps"] and read_state(split)["finished"]
-    _, resumed = load_agent(split)
-    _, uninterrupted = load_agent(straight)
-    for a, b in zip(resumed.policy.state_dict().values(), uninterrupted.policy.state_dict().values(), strict=True):
-        assert np.array_equal(a.numpy(), b.numpy())  # the resumed run is the uninterrupted one, bit for bit
+    split = assert_resume_is_bit_for_bit(TINY, 3000, 1000, tmp_path)
     import yaml
 
     saved = yaml.safe_load((split / "config.yaml").read_text())

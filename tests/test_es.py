@@ -4,8 +4,6 @@ that acts as the evolved policy, and runs that resume bit for bit and load in ``
 
 from __future__ import annotations
 
-import os
-import subprocess
 import sys
 from pathlib import Path
 from typing import Any
@@ -13,6 +11,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from tests.jitted_runs import assert_resume_is_bit_for_bit, cli
 from train.learning.config import ConfigError, TrainConfig
 from train.learning.evolution.settings import ESSettings
 
@@ -160,34 +159,13 @@ def test_the_exported_agent_acts_as_the_evolved_policy(small_es: Any) -> None:
     np.testing.assert_allclose(actions, expected, atol=1e-4)  # (float32, the scaling folded into the first layer)
 
 
-def cli(*args: str) -> subprocess.CompletedProcess[str]:
-    env = {**os.environ, "PYTHONPATH": str(ROOT), "OMP_NUM_THREADS": "1"}
-    return subprocess.run([sys.executable, "-m", "train.cli", *args], cwd=ROOT, env=env, text=True,
-                          capture_output=True, timeout=600)  # fmt: skip
-
-
 TINY = ("train", "--algo", "es", "--backend", "jax", "--eval-episodes", "3", "--no-progress", "--env-kwargs",
         "T_con_range=[10,11]", "--hyperparams", "population_size=4", "episodes=2", "policy_kwargs=dict(net_arch=[16])")  # fmt: skip
 
 
 @pytest.mark.slow
 def test_cli_trains_resumes_bit_for_bit_and_evaluates(tmp_path: Path) -> None:
-    from train.learning.agents import load_agent
-    from train.learning.runs import read_state
-
-    straight, split = tmp_path / "straight", tmp_path / "split"
-    common = ("--eval-freq", "2000", "--checkpoint-freq", "2000")
-    done = cli(*TINY, *common, "--total-timesteps", "6000", "--run-dir", str(straight))
-    assert done.returncode == 0, done.stderr
-    done = cli(*TINY, *common, "--total-timesteps", "3000", "--run-dir", str(split))
-    assert done.returncode == 0, done.stderr
-    done = cli("train", "--resume", str(split), "--total-timesteps", "6000", "--no-progress")
-    assert done.returncode == 0, done.stderr
-    assert read_state(split)["timesteps"] == read_state(straight)["timesteps"] and read_state(split)["finished"]
-    _, resumed = load_agent(split)
-    _, uninterrupted = load_agent(straight)
-    for a, b in zip(resumed.policy.state_dict().values(), uninterrupted.policy.state_dict().values(), strict=True):
-        assert np.array_equal(a.numpy(), b.numpy())  # the resumed run is the uninterrupted one, bit for bit
+    split = assert_resume_is_bit_for_bit(TINY, 6000, 2000, tmp_path)
     import yaml
 
     saved = yaml.safe_load((split / "config.yaml").read_text())

@@ -4,21 +4,17 @@ from, and what it cannot start from is refused in one line."""
 
 from __future__ import annotations
 
-import os
-import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
 
+from tests.jitted_runs import cli
 from train.learning.config import ConfigError
 
 jax = pytest.importorskip("jax")
 pytest.importorskip("evosax")
-
-ROOT = Path(__file__).resolve().parent.parent
 
 
 def saved_ppo(run_dir: Path, learned_from: str = "expert") -> Any:
@@ -90,12 +86,6 @@ def test_what_es_cannot_start_from_is_refused_in_one_line(tmp_path: Path) -> Non
         with pytest.raises(ConfigError, match=message) as error:
             saved_actor(str(path))
         assert str(path) in str(error.value) and "\n" not in str(error.value)
-
-
-def cli(*args: str) -> subprocess.CompletedProcess[str]:
-    env = {**os.environ, "PYTHONPATH": str(ROOT), "OMP_NUM_THREADS": "1"}
-    return subprocess.run([sys.executable, "-m", "train.cli", *args], cwd=ROOT, env=env, text=True,
-                          capture_output=True, timeout=600)  # fmt: skip
 
 
 @pytest.mark.slow

@@ -9,7 +9,7 @@ from typing import Any
 
 from dwr_gym.validation import as_bool, as_choice, as_float, as_int
 from train.learning.config import ConfigError
-from train.learning.jitted.policy import NETWORK_KEYS, network_fields
+from train.learning.jitted.policy import actor_hyperparameters, network_fields
 
 #: evosax's class of each strategy (evosax 0.3), by the name the YAML gives it.
 STRATEGIES: dict[str, str] = {
@@ -28,8 +28,6 @@ ES_DEFAULTS: dict[str, Any] = {
     "strategy": "open_es", "population_size": 64, "episodes": 8, "sigma": 0.05, "learning_rate": 0.01,
     "antithetic": True,
 }  # fmt: skip
-POLICY_KEYS = NETWORK_KEYS
-IGNORED_KEYS = ("policy", "verbose")
 MAX_POPULATION = 65536
 
 
@@ -60,20 +58,7 @@ class ESSettings:
     @classmethod
     def from_algo_kwargs(cls, algo_kwargs: dict[str, Any]) -> ESSettings:
         """The settings of resolved hyperparameters; an unknown key or a bad value is a ConfigError of one line."""
-        kwargs = {k: v for k, v in algo_kwargs.items() if k not in IGNORED_KEYS}
-        policy = dict(kwargs.pop("policy_kwargs", None) or {})
-        unknown = sorted(set(kwargs) - set(ES_DEFAULTS))
-        if unknown:
-            raise ConfigError(f"hyperparameter(s) {unknown} are not accepted by ES; accepted: "
-                              f"{', '.join(ES_DEFAULTS)}, policy_kwargs")  # fmt: skip
-        unknown = sorted(set(policy) - set(POLICY_KEYS))
-        if unknown:
-            raise ConfigError(
-                f"policy_kwargs {unknown} are not implemented by ES; it implements {', '.join(POLICY_KEYS)}"
-            )
-        values = {**ES_DEFAULTS, **kwargs}
-        if algo_kwargs.get("policy", "MlpPolicy") != "MlpPolicy":
-            raise ConfigError(f"policy={algo_kwargs['policy']!r} is invalid: expected 'MlpPolicy'")
+        values, policy = actor_hyperparameters(algo_kwargs, ES_DEFAULTS, "ES")
         try:
             strategy = as_choice("strategy", values["strategy"], STRATEGIES)
             antithetic = as_bool("antithetic", values["antithetic"])

@@ -72,6 +72,11 @@ def clip_gradient(tree: Any, limit: float) -> Any:
     return identity(tree)
 
 
+def all_finite(tree: Any) -> Any:
+    """True (a jax bool) where every number of ``tree`` is finite."""
+    return jnp.all(jnp.stack([jnp.all(jnp.isfinite(leaf)) for leaf in jax.tree.leaves(tree)]))
+
+
 class JaxAPG:
     """APG of one configuration on one gymnax-style env: :meth:`init` a state, :meth:`update` it (jitted)."""
 
@@ -156,8 +161,7 @@ class JaxAPG:
         keys = jax.random.split(state.validation_key, self.settings.validation_episodes)
         returns, steps = jax.vmap(self.episode, in_axes=(None, None, 0))(state.params, state.obs_stats, keys)
         mean = jnp.mean(returns)
-        finite = jnp.all(jnp.stack([jnp.all(jnp.isfinite(leaf)) for leaf in jax.tree.leaves(state.params)]))
-        better = finite & jnp.isfinite(mean) & (mean > state.best_return)
+        better = all_finite(state.params) & jnp.isfinite(mean) & (mean > state.best_return)
         state = state.replace(best_params=jax.tree.map(lambda new, old: jnp.where(better, new, old), state.params,
                                                        state.best_params),
                               best_return=jnp.where(better, mean, state.best_return))  # fmt: skip
@@ -176,7 +180,7 @@ class JaxAPG:
         # batch's gradient NaN; that update is skipped (a zero gradient; Adam's moments carry on) rather than poisoning
         # the weights. Leaving such episodes out of the mean instead (a per-episode gradient, twice the time) was
         # measured to break the residual on PTC within 2.5 M env steps in every run (docs/rl-benchmark.md)
-        finite = jnp.all(jnp.stack([jnp.all(jnp.isfinite(g)) for g in jax.tree.leaves(grads)]))
+        finite = all_finite(grads)
         grads = jax.tree.map(lambda g: jnp.where(finite, g, 0.0), grads)
         updates, opt_state = self.optimizer.update(grads, state.opt_state, state.params)
         params = optax.apply_updates(state.params, updates)

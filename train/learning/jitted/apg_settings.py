@@ -15,7 +15,6 @@ from train.learning.config import ConfigError
 MAX_DROP = 1e9
 APG_DEFAULTS: dict[str, Any] = {"episodes": 64, "learning_rate": 3e-4, "max_grad_norm": 1.0, "state_grad_clip": 1.0,
                                  "max_return_drop": MAX_DROP, "keep_best": 0, "validation_episodes": 256}  # fmt: skip
-IGNORED_KEYS = ("policy", "verbose")
 #: Observations of fresh episodes the fixed observation scaling is computed from.
 INITIAL_OBSERVATIONS = 1024
 
@@ -57,21 +56,9 @@ class APGSettings:
     @classmethod
     def from_algo_kwargs(cls, algo_kwargs: dict[str, Any]) -> APGSettings:
         """The settings of resolved hyperparameters; an unknown key or a bad value is a ConfigError of one line."""
-        from train.learning.jitted.policy import NETWORK_KEYS, network_fields
+        from train.learning.jitted.policy import actor_hyperparameters, network_fields
 
-        kwargs = {k: v for k, v in algo_kwargs.items() if k not in IGNORED_KEYS}
-        policy = dict(kwargs.pop("policy_kwargs", None) or {})
-        unknown = sorted(set(kwargs) - set(APG_DEFAULTS))
-        if unknown:
-            raise ConfigError(f"hyperparameter(s) {unknown} are not accepted by APG; accepted: "
-                              f"{', '.join(APG_DEFAULTS)}, policy_kwargs")  # fmt: skip
-        unknown = sorted(set(policy) - set(NETWORK_KEYS))
-        if unknown:
-            raise ConfigError(f"policy_kwargs {unknown} are not implemented by APG; it implements "
-                              f"{', '.join(NETWORK_KEYS)}")  # fmt: skip
-        if algo_kwargs.get("policy", "MlpPolicy") != "MlpPolicy":
-            raise ConfigError(f"policy={algo_kwargs['policy']!r} is invalid: expected 'MlpPolicy'")
-        values = {**APG_DEFAULTS, **kwargs}
+        values, policy = actor_hyperparameters(algo_kwargs, APG_DEFAULTS, "APG")
         rate = values["learning_rate"]
         linear = isinstance(rate, str) and rate.startswith("lin_")
         try:

@@ -158,6 +158,27 @@ TORCH_ACTIVATIONS = {"tanh": "Tanh", "relu": "ReLU", "elu": "ELU", "leakyrelu": 
 NETWORK_KEYS = ("net_arch", "activation_fn", "ortho_init", "normalize_observations")
 
 
+def actor_hyperparameters(
+    algo_kwargs: dict[str, Any], defaults: dict[str, Any], learner: str
+) -> tuple[dict[str, Any], dict[str, Any]]:
+    """An actor-only learner's (ES, APG) resolved hyperparameters split in two: its own values (``defaults`` with the
+    given ones) and ``policy_kwargs``; an unknown key of either, or a policy other than MlpPolicy, is a ConfigError of
+    one line naming ``learner``."""
+    kwargs = {k: v for k, v in algo_kwargs.items() if k not in ("policy", "verbose")}
+    policy = dict(kwargs.pop("policy_kwargs", None) or {})
+    unknown = sorted(set(kwargs) - set(defaults))
+    if unknown:
+        raise ConfigError(f"hyperparameter(s) {unknown} are not accepted by {learner}; accepted: "
+                          f"{', '.join(defaults)}, policy_kwargs")  # fmt: skip
+    unknown = sorted(set(policy) - set(NETWORK_KEYS))
+    if unknown:
+        raise ConfigError(f"policy_kwargs {unknown} are not implemented by {learner}; it implements "
+                          f"{', '.join(NETWORK_KEYS)}")  # fmt: skip
+    if algo_kwargs.get("policy", "MlpPolicy") != "MlpPolicy":
+        raise ConfigError(f"policy={algo_kwargs['policy']!r} is invalid: expected 'MlpPolicy'")
+    return {**defaults, **kwargs}, policy
+
+
 def network_fields(policy: dict[str, Any], learner: str) -> dict[str, Any]:
     """The network fields (``net_arch``, ``activation``, ``ortho_init``, ``normalize_observations``) of an actor-only
     learner's settings from ``policy_kwargs`` (checked by train.learning.hyperparams before); a bad activation is a
