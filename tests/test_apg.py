@@ -60,7 +60,7 @@ def test_a_linear_schedule_decays_the_rate_to_zero_over_the_budget() -> None:
 
 def test_the_yaml_is_read_and_apg_needs_the_jax_backend() -> None:
     config = resolved(env_id="DWRPointStabilization-v2", hyperparam_overrides={"episodes": 8})
-    assert config.algo_kwargs["episodes"] == 8 and config.algo_kwargs["state_grad_clip"] == 1.0
+    assert config.algo_kwargs["episodes"] == 8 and config.algo_kwargs["state_grad_clip"] == 64.0
     assert config.algo_kwargs["learning_rate"] == "lin_0.0003"
     assert config.total_timesteps > 0
     with pytest.raises(
@@ -114,6 +114,25 @@ def test_the_states_gradient_is_clipped_on_the_way_back_only() -> None:
     np.testing.assert_allclose(gradient(x["a"]), [0.6, 0.8], rtol=1e-6)  # norm 50 clipped to 1, same direction
     small = jax.grad(lambda a: jnp.sum(clip_gradient(a, 1.0) * jnp.array([0.3, 0.4])))(x["a"])
     np.testing.assert_allclose(small, [0.3, 0.4], rtol=1e-6)  # within the limit: unchanged
+
+
+def test_the_state_clip_is_each_episodes_whatever_the_batch() -> None:
+    """An update's gradient is the mean of its episodes' gradients, each clipped (state_grad_clip) as it would be
+    alone: the clip's effect does not change with ``episodes`` (the mean's own gradient would scale each episode's
+    cotangent by 1/episodes, and the clip with it)."""
+    import jax.numpy as jnp
+
+    apg = small_apg(state_grad_clip=4.0)
+    state = apg.init(0)
+    state = state.replace(params=jax.tree.map(lambda x: x * 20.0 if x.ndim == 2 else x, state.params))
+    _, key = jax.random.split(state.rng)  # the update's episodes
+    keys = jax.random.split(key, apg.settings.episodes)
+    alone = [jax.grad(lambda p, k=k: apg.episode(p, state.obs_stats, k)[0])(state.params) for k in keys]
+    mean = jnp.concatenate([-(a + b).ravel() / 2 for a, b in zip(*map(jax.tree.leaves, alone), strict=True)])
+    _, metrics = apg.update(state)
+    assert float(metrics["grad_norm"]) == pytest.approx(float(jnp.linalg.norm(mean)), rel=1e-4)
+    unclipped = small_apg(state_grad_clip=0.0).update(state)[1]  # (the clip is active here: the test can fail)
+    assert float(unclipped["grad_norm"]) > 1.15 * float(metrics["grad_norm"])
 
 
 def test_the_schedules_updates_are_what_the_budget_buys() -> None:

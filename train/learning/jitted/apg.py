@@ -173,9 +173,13 @@ class JaxAPG:
 
         def loss(params: Any) -> tuple[Any, tuple[Any, Any]]:
             returns, steps = jax.vmap(self.episode, in_axes=(None, None, 0))(params, state.obs_stats, keys)
-            return -jnp.mean(returns), (returns, steps)
+            return -jnp.sum(returns), (returns, steps)
 
+        # The sum's gradient, then divided: each episode's state cotangent enters the backward pass at the scale of
+        # its own return, so state_grad_clip clips each episode's as that episode's gradient alone would be clipped
+        # (the mean's would be 1/episodes of it, and the clip's effect would change with the batch's size)
         grads, (returns, steps) = jax.grad(loss, has_aux=True)(state.params)
+        grads = jax.tree.map(lambda g: g / self.settings.episodes, grads)
         # Guard: an episode whose derivative is undefined somewhere (0/0 at the goal, the law's gain at T_con) makes the
         # batch's gradient NaN; that update is skipped (a zero gradient; Adam's moments carry on) rather than poisoning
         # the weights. Leaving such episodes out of the mean instead (a per-episode gradient, twice the time) was

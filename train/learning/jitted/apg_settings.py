@@ -13,7 +13,7 @@ from train.learning.config import ConfigError
 #: YAML keys of APG, with their defaults; ``policy_kwargs`` (the network) is read as the ES reads it.
 #: ``max_return_drop`` at or above this: no update is checked (nor undone).
 MAX_DROP = 1e9
-APG_DEFAULTS: dict[str, Any] = {"episodes": 64, "learning_rate": 3e-4, "max_grad_norm": 1.0, "state_grad_clip": 1.0,
+APG_DEFAULTS: dict[str, Any] = {"episodes": 64, "learning_rate": 3e-4, "max_grad_norm": 1.0, "state_grad_clip": 64.0,
                                  "max_return_drop": MAX_DROP, "keep_best": 0, "validation_episodes": 256}  # fmt: skip
 #: Observations of fresh episodes the fixed observation scaling is computed from.
 INITIAL_OBSERVATIONS = 1024
@@ -33,8 +33,11 @@ class APGSettings:
     swings between 0.45 and 9 from one evaluation to the next)."""
     max_grad_norm: float = 1.0
     """The update's gradient is clipped to this global norm."""
-    state_grad_clip: float = 1.0
-    """The cotangent of the env state is clipped to this norm at every step of the backward pass (0: not clipped)."""
+    state_grad_clip: float = 64.0
+    """The cotangent of the env state is clipped to this norm at every step of the backward pass (0: not clipped),
+    each episode's as its own return's gradient alone would be, whatever ``episodes`` is. (Until 2026-11-27 the clip
+    acted on the batch mean's gradient, where each episode's cotangent is 1/``episodes`` of its own: the shipped
+    ``state_grad_clip: 1`` at 64 episodes was this 64, which the yml files now say.)"""
     max_return_drop: float = MAX_DROP
     """An update after which the same episodes' mean return is lower by more than this is undone (the weights and
     Adam's state as before it; the replay's env steps count); :data:`MAX_DROP` (the default): none checked. Off by

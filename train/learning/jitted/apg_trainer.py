@@ -88,7 +88,7 @@ class APGTrainer:
             else ""
         )
         return (f"APG: {s.episodes} episodes per update, Adam {rate}, the state's gradient clipped to "
-                f"{s.state_grad_clip:g} per step{kept}")  # fmt: skip
+                f"{s.state_grad_clip:g} per step in each episode{kept}")  # fmt: skip
 
 
 def train(
