@@ -40,6 +40,7 @@ SUITE: dict[str, str] = {
     "rl-rushing": "benchmarks.learning.rl_rushing",
     "incentives": "benchmarks.learning.incentives",
     "energy-split": "benchmarks.learning.energy_split",
+    "open-loop-bound": "benchmarks.learning.open_loop_bound",
     "ship-rl-agents": "benchmarks.learning.ship_rl_agents",
     "per-t-con": "benchmarks.learning.per_t_con",
     "prescribed-time-goal": "benchmarks.learning.prescribed_time_goal",
@@ -73,6 +74,7 @@ SUITE: dict[str, str] = {
     "rl-v2": "benchmarks.recipes.rl_v2",
     "rl-time-scale": "benchmarks.recipes.rl_time_scale",
     "rl-apg": "benchmarks.recipes.rl_apg",
+    "rl-apg-scratch": "benchmarks.recipes.rl_apg_scratch",
     "rl-time-scale-30min": "benchmarks.recipes.rl_time_scale_30min",
     "robust-rl": "benchmarks.recipes.robust_rl",
 }

@@ -117,14 +117,13 @@ ENTRIES: dict[str, dict[str, Any]] = {
         "checkpoint_freq": 5_000_000,
     },
     # analytic policy gradients through the JAX env (train/hyperparams/apg.yml): an update is some 45,000 env steps
-    # (64 episodes), the curve evaluated every 10 M; from scratch with time-scaled actions, and as a residual on PTC
+    # (64 episodes); from scratch (the curve evaluated every 25 M), and as a residual on PTC (every 10 M)
     "apg-v2": {
         "algo": "apg",
         "backend": "jax",
         "env_id": V2,
-        "action_time_scale": 10.0,
-        "eval_freq": 10_000_000,
-        "checkpoint_freq": 10_000_000,
+        "eval_freq": 25_000_000,
+        "checkpoint_freq": 25_000_000,
     },
     "apg-residual-v2": {
         "algo": "apg",

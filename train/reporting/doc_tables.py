@@ -281,6 +281,8 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "rl-time-scale": ("docs/rl_benchmark/time_scale.json", lambda data: rl_table(data, "random")),
     "rl-apg": ("docs/rl_benchmark/apg.json", lambda data: rl_table(data, "random")),
     "rl-apg-per-T_con": ("docs/rl_benchmark/apg.json", lambda data: rl_table(data, "per-T_con")),
+    "rl-apg-scratch": ("docs/rl_benchmark/apg_scratch.json", lambda data: rl_table(data, "random")),
+    "rl-apg-scratch-per-T_con": ("docs/rl_benchmark/apg_scratch.json", lambda data: rl_table(data, "per-T_con")),
     "rl-time-scale-per-T_con": ("docs/rl_benchmark/time_scale.json", lambda data: rl_table(data, "per-T_con")),
     "rl-time-scale-long": ("docs/rl_benchmark/time_scale_long.json", lambda data: rl_table(data, "random")),
     "rl-time-scale-long-per-T_con": (
@@ -304,6 +306,7 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "incentives-rushing": ("docs/rl_benchmark/incentives.json", lambda data: incentive_tables.rushing_table(data)),
     "energy-split": ("docs/rl_benchmark/energy_split.json", lambda data: energy_tables.split_table(data)),
     "law-gains": ("docs/rl_benchmark/energy_split.json", lambda data: energy_tables.gains_table(data)),
+    "open-loop-bound": ("docs/rl_benchmark/open_loop_bound.json", lambda data: energy_tables.open_loop_table(data)),
     "sbx-speed": ("docs/rl_benchmark/sbx_speed.json", sbx_speed_table),
     "sbx-v1": ("docs/rl_benchmark/sbx_v1.json", lambda data: rl_table(data, "random")),
     "sbx-v2": ("docs/rl_benchmark/sbx_v2.json", lambda data: rl_table(data, "random")),

@@ -52,4 +52,27 @@ def gains_table(data: dict[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
-__all__ = ["gains_table", "split_table"]
+def open_loop_table(data: dict[str, Any]) -> str:
+    """Per law: the law alone and the best residual sequence found for each episode (and the action alone, no law)."""
+    from train.evaluation.open_loop import summary
+
+    lines = ["| actions | sequence | in time | E/opt | energy | final heading [rad] | v2 return |", "|---" * 7 + "|"]
+    for variant in data["variants"]:
+        settings = variant["settings"]
+        law = settings["expert"]
+        label = f"residual on {law} (scale {settings['residual_scale']:g})" if law else "the action, no law"
+        rows = (("the law alone", variant["law"]), ("best found per episode", variant["best"])) if law else (
+            ("best found per episode", variant["best"]),)  # fmt: skip
+        for which, episodes in rows:
+            mean = summary(episodes)
+            ratio = "-" if mean["energy_ratio"] != mean["energy_ratio"] else f"{mean['energy_ratio']:.2f}"
+            lines.append(f"| {label} | {which} | {mean['in_time']:.2f} | {ratio} | {mean['energy']:.3f} "
+                         f"| {mean['final_heading']:.2f} | {mean['return']:.2f} |")  # fmt: skip
+    first = data["variants"][0]["settings"]
+    lines += ["", f"Means over {first['n']} random episodes of {first['env_id']} (seed {first['seed']}), each "
+              f"optimised on its own: {first['iterations']} Adam steps of {first['learning_rate']:g} on its return; "
+              "E/opt over the episodes in time, against the cached optimum of the goal pose."]  # fmt: skip
+    return "\n".join(lines) + "\n"
+
+
+__all__ = ["gains_table", "open_loop_table", "split_table"]

@@ -1,0 +1,161 @@
+"""What a policy could reach at best: each episode's whole command sequence optimised on its own (open loop).
+
+A learner's policy maps the observation to one action, the same map for every episode; the best it can do on an
+episode is at most what the best *sequence* of actions does on that episode alone. :func:`open_loop_bound` finds such
+sequences: for each of ``n`` v2 episodes it optimises the actions of all its steps (a residual on a law, or the
+action itself) by Adam on the episode's own return, differentiated through the JAX env (and the law) as the APG
+learner differentiates it, and keeps the best sequence met. What it reaches bounds what a residual on that law, with
+that residual scale, can reach (up to the optimiser's own shortfall, which the run without a law measures: there the
+bound should come near the optimum, E/opt 1).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+#: Per-episode measures of :func:`open_loop_bound`, in its rows.
+MEASURES = ("in_time", "energy", "final_heading", "return")
+
+
+def _episode_fn(env: Any, env_params: Any, max_steps: int) -> Any:
+    """(actions (max_steps, 2) unbounded, start state) -> (return, final state), actions squashed by tanh."""
+    import jax
+    import jax.numpy as jnp
+
+    def run(z: Any, start: Any) -> tuple[Any, Any]:
+        def one_step(carry: tuple[Any, Any, Any], action: Any) -> tuple[tuple[Any, Any, Any], None]:
+            state, alive, total = carry
+            _, after, reward, done, _ = env.step_env(jax.random.PRNGKey(0), state, jnp.tanh(action), env_params)
+            total = total + jnp.where(alive, reward, 0.0)
+            state = jax.tree.map(lambda new, old: jnp.where(alive, new, old), after, state)
+            return (state, alive & ~done, total), None
+
+        carry = (start, jnp.asarray(True), jnp.asarray(0.0, jnp.float32))
+        (final, _, total), _ = jax.lax.scan(one_step, carry, z)
+        return total, final
+
+    return run
+
+
+def open_loop_bound(
+    expert: str | None = "ptc",
+    residual_scale: float = 0.5,
+    n: int = 32,
+    iterations: int = 1000,
+    learning_rate: float = 0.02,
+    seed: int = 0,
+    env_id: str = "DWRPointStabilization-v2",
+    progress: bool = False,
+    **env_kwargs: Any,
+) -> dict[str, Any]:
+    """The best action sequence found for each of ``n`` episodes of ``env_id`` (drawn from ``seed``) by ``iterations``
+    Adam steps on its return; with ``expert`` the actions are residuals on that law at ``residual_scale`` (the
+    training's ``clip(expert + scale * residual)``), else the env's action; ``env_kwargs`` go to the env (the
+    optimum's E/opt, :func:`energy_ratios`, assumes none). Returns the per-episode rows of the law
+    alone (the zero sequence) and of the best sequences, and the episodes' starts, goals and T_con for the optimum."""
+    import jax
+    import jax.numpy as jnp
+    import optax
+
+    from dwr_gym.jax_env import make_gymnax_env
+
+    env, env_params = make_gymnax_env(env_id, **env_kwargs)
+    if expert is not None:
+        from baselines.registry import make_controller
+        from train.learning.jitted.residual import ResidualGymnaxEnv
+
+        env = ResidualGymnaxEnv(env, make_controller(expert), env_params.u_max, env_params.omega_max, residual_scale)
+    max_steps = int(env_params.max_episode_steps)
+    keys = jax.random.split(jax.random.PRNGKey(seed), n)
+    _, starts = jax.vmap(env.reset_env, in_axes=(0, None))(keys, env_params)
+    run = _episode_fn(env, env_params, max_steps)
+    batch = jax.jit(jax.vmap(run))
+
+    def loss(z: Any) -> tuple[Any, Any]:
+        returns, _ = jax.vmap(run)(z, starts)
+        return -jnp.sum(returns), returns
+
+    optimizer = optax.adam(learning_rate)
+
+    @jax.jit
+    def step(z: Any, opt_state: Any) -> tuple[Any, Any, Any]:
+        grads, returns = jax.grad(loss, has_aux=True)(z)
+        grads = jnp.where(jnp.isfinite(grads), grads, 0.0)  # a step at 0/0 (the goal) moves nothing there
+        updates, opt_state = optimizer.update(grads, opt_state, z)
+        return optax.apply_updates(z, updates), opt_state, returns
+
+    z = jnp.zeros((n, max_steps, 2), jnp.float32)
+    opt_state = optimizer.init(z)
+    best_z, best_return = z, jnp.full((n,), -jnp.inf)
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=iterations, desc=f"open loop ({expert or 'no law'})", unit="it")
+    for _ in range(iterations):
+        new_z, opt_state, returns = step(z, opt_state)
+        better = jnp.isfinite(returns) & (returns > best_return)  # the returns are those of z, before the step
+        best_z = jnp.where(better[:, None, None], z, best_z)
+        best_return = jnp.where(better, returns, best_return)
+        z = new_z
+        if bar is not None:
+            bar.update(1)
+    if bar is not None:
+        bar.close()
+
+    def rows(sequences: Any) -> list[dict[str, float]]:
+        returns, final = batch(sequences, starts)
+        in_time = np.asarray(final.is_success, bool)
+        return [{"in_time": float(in_time[i]), "energy": float(final.energy[i]),
+                 "final_heading": abs(float(final.heading_error[i])), "return": float(returns[i])}
+                for i in range(n)]  # fmt: skip
+
+    return {
+        "law": rows(jnp.zeros_like(z)),
+        "best": rows(best_z),
+        "starts": np.stack([np.asarray(starts.x), np.asarray(starts.y), np.asarray(starts.psi)], 1).tolist(),
+        "goals": np.stack(
+            [np.asarray(starts.goal_x), np.asarray(starts.goal_y), np.asarray(starts.goal_psi)], 1
+        ).tolist(),
+        "T_con": np.asarray(starts.T_con, float).tolist(),
+        "settings": {
+            "expert": expert,
+            "residual_scale": residual_scale,
+            "n": n,
+            "iterations": iterations,
+            "learning_rate": learning_rate,
+            "seed": seed,
+            "env_id": env_id,
+        },
+    }
+
+
+def energy_ratios(result: dict[str, Any], workers: int = 0) -> dict[str, Any]:
+    """``result`` of :func:`open_loop_bound` with each row's E/opt (its energy over the cached optimum of the goal
+    pose, :func:`train.evaluation.optimum.optimal_energies`; None where the episode is not in time or has no
+    optimum), as the benchmark's tables compute it."""
+    from dwr_gym.params import EnvParams
+    from train.env_ids import env_keywords
+    from train.evaluation.optimum import optimal_energies
+
+    kwargs = env_keywords(result["settings"]["env_id"], {})
+    params = EnvParams.from_kwargs(**{k: v for k, v in kwargs.items() if k in EnvParams.__dataclass_fields__})
+    optimum, _ = optimal_energies(params, np.asarray(result["starts"]), np.asarray(result["goals"]),
+                                  np.asarray(result["T_con"]), heading=True, workers=workers)  # fmt: skip
+    for key in ("law", "best"):
+        for row, best in zip(result[key], optimum, strict=True):
+            valid = row["in_time"] > 0 and np.isfinite(best) and best > 0
+            row["energy_ratio"] = row["energy"] / float(best) if valid else None
+    return result
+
+
+def summary(rows: list[dict[str, Any]]) -> dict[str, float]:
+    """Means of the rows' measures (E/opt over the episodes in time that have one, NaN where none has)."""
+    means = {m: float(np.mean([row[m] for row in rows])) for m in MEASURES}
+    ratios = [row["energy_ratio"] for row in rows if row.get("energy_ratio") is not None]
+    return {**means, "energy_ratio": float(np.mean(ratios)) if ratios else float("nan")}
+
+
+__all__ = ["MEASURES", "energy_ratios", "open_loop_bound", "summary"]
