@@ -45,4 +45,4 @@ def test_the_table_has_the_law_and_the_best_and_marks_a_missing_e_opt(on_ptc: di
     law_line = next(line for line in text.splitlines() if "the law alone" in line)
     best_line = next(line for line in text.splitlines() if "best found per episode" in line)
     assert "residual on ptc (scale 0.5)" in law_line and "| 2.50 |" in law_line
-    assert "| - |" in best_line and "30 Adam steps" in text
+    assert "| - | - |" in best_line and "30 Adam steps" in text

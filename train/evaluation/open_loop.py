@@ -17,6 +17,8 @@ import numpy as np
 
 #: Per-episode measures of :func:`open_loop_bound`, in its rows.
 MEASURES = ("in_time", "energy", "final_heading", "return")
+#: The residual goal's final heading (issue 40) [rad]: :func:`summary` gives the share of episodes within it.
+HEADING_GOAL = 0.15
 
 
 def _episode_fn(env: Any, env_params: Any, max_steps: int) -> Any:
@@ -152,10 +154,14 @@ def energy_ratios(result: dict[str, Any], workers: int = 0) -> dict[str, Any]:
 
 
 def summary(rows: list[dict[str, Any]]) -> dict[str, float]:
-    """Means of the rows' measures (E/opt over the episodes in time that have one, NaN where none has)."""
+    """Means of the rows' measures, E/opt's mean and median over the episodes in time that have one (NaN where none
+    has), and the share of episodes within :data:`HEADING_GOAL`."""
     means = {m: float(np.mean([row[m] for row in rows])) for m in MEASURES}
     ratios = [row["energy_ratio"] for row in rows if row.get("energy_ratio") is not None]
-    return {**means, "energy_ratio": float(np.mean(ratios)) if ratios else float("nan")}
+    nan = float("nan")
+    return {**means, "energy_ratio": float(np.mean(ratios)) if ratios else nan,
+            "energy_ratio_median": float(np.median(ratios)) if ratios else nan,
+            "heading_goal_share": float(np.mean([row["final_heading"] <= HEADING_GOAL for row in rows]))}  # fmt: skip
 
 
 __all__ = ["MEASURES", "energy_ratios", "open_loop_bound", "summary"]

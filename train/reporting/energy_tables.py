@@ -56,7 +56,8 @@ def open_loop_table(data: dict[str, Any]) -> str:
     """Per law: the law alone and the best residual sequence found for each episode (and the action alone, no law)."""
     from train.evaluation.open_loop import summary
 
-    lines = ["| actions | sequence | in time | E/opt | energy | final heading [rad] | v2 return |", "|---" * 7 + "|"]
+    lines = ["| actions | sequence | in time | E/opt: mean | E/opt: median | energy | final heading [rad] | heading <= "
+             "0.15 rad | v2 return |", "|---" * 9 + "|"]  # fmt: skip
     for variant in data["variants"]:
         settings = variant["settings"]
         law = settings["expert"]
@@ -65,9 +66,10 @@ def open_loop_table(data: dict[str, Any]) -> str:
             ("best found per episode", variant["best"]),)  # fmt: skip
         for which, episodes in rows:
             mean = summary(episodes)
-            ratio = "-" if mean["energy_ratio"] != mean["energy_ratio"] else f"{mean['energy_ratio']:.2f}"
-            lines.append(f"| {label} | {which} | {mean['in_time']:.2f} | {ratio} | {mean['energy']:.3f} "
-                         f"| {mean['final_heading']:.2f} | {mean['return']:.2f} |")  # fmt: skip
+            ratio, median = ("-" if v != v else f"{v:.2f}" for v in (mean["energy_ratio"], mean["energy_ratio_median"]))
+            lines.append(f"| {label} | {which} | {mean['in_time']:.2f} | {ratio} | {median} | {mean['energy']:.3f} "
+                         f"| {mean['final_heading']:.2f} | {100 * mean['heading_goal_share']:.0f} % "
+                         f"| {mean['return']:.2f} |")  # fmt: skip
     first = data["variants"][0]["settings"]
     lines += ["", f"Means over {first['n']} random episodes of {first['env_id']} (seed {first['seed']}), each "
               f"optimised on its own: {first['iterations']} Adam steps of {first['learning_rate']:g} on its return; "
