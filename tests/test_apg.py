@@ -61,7 +61,7 @@ def test_a_linear_schedule_decays_the_rate_to_zero_over_the_budget() -> None:
 def test_the_yaml_is_read_and_apg_needs_the_jax_backend() -> None:
     config = resolved(env_id="DWRPointStabilization-v2", hyperparam_overrides={"episodes": 8})
     assert config.algo_kwargs["episodes"] == 8 and config.algo_kwargs["state_grad_clip"] == 4.0
-    assert config.algo_kwargs["learning_rate"] == 0.001 and config.algo_kwargs["keep_best"] == 20
+    assert config.algo_kwargs["learning_rate"] == "lin_0.001" and config.algo_kwargs["keep_best"] == 20
     assert config.total_timesteps > 0
     with pytest.raises(
         ConfigError, match=r"^--algo 'apg' is invalid with --backend sb3: .*apg trains with --backend jax$"
