@@ -21,8 +21,8 @@ MEASURES = ("in_time", "energy", "final_heading", "return")
 HEADING_GOAL = 0.15
 
 
-def _episode_fn(env: Any, env_params: Any, max_steps: int) -> Any:
-    """(actions (max_steps, 2) unbounded, start state) -> (return, final state), actions squashed by tanh."""
+def _episode_fn(env: Any, env_params: Any) -> Any:
+    """(actions (steps, 2) unbounded, start state) -> (return, final state), actions squashed by tanh."""
     import jax
     import jax.numpy as jnp
 
@@ -72,7 +72,7 @@ def open_loop_bound(
     max_steps = int(env_params.max_episode_steps)
     keys = jax.random.split(jax.random.PRNGKey(seed), n)
     _, starts = jax.vmap(env.reset_env, in_axes=(0, None))(keys, env_params)
-    run = _episode_fn(env, env_params, max_steps)
+    run = _episode_fn(env, env_params)
     batch = jax.jit(jax.vmap(run))
 
     def loss(z: Any) -> tuple[Any, Any]:
