@@ -22,23 +22,72 @@ HEADING_GOAL = 0.15
 
 
 def _episode_fn(env: Any, env_params: Any) -> Any:
-    """(actions (steps, 2) unbounded, start state) -> (return, final state), actions squashed by tanh."""
+    """(actions (steps, 2) unbounded, start state) -> (return, (final state, observations, alive)), actions squashed by
+    tanh; ``observations`` (steps, obs) are those each action was taken on, ``alive`` (steps,) where it was."""
     import jax
     import jax.numpy as jnp
 
     def run(z: Any, start: Any) -> tuple[Any, Any]:
-        def one_step(carry: tuple[Any, Any, Any], action: Any) -> tuple[tuple[Any, Any, Any], None]:
+        def one_step(carry: tuple[Any, Any, Any], action: Any) -> tuple[tuple[Any, Any, Any], tuple[Any, Any]]:
             state, alive, total = carry
             _, after, reward, done, _ = env.step_env(jax.random.PRNGKey(0), state, jnp.tanh(action), env_params)
             total = total + jnp.where(alive, reward, 0.0)
+            seen = (state.observation, alive)
             state = jax.tree.map(lambda new, old: jnp.where(alive, new, old), after, state)
-            return (state, alive & ~done, total), None
+            return (state, alive & ~done, total), seen
 
         carry = (start, jnp.asarray(True), jnp.asarray(0.0, jnp.float32))
-        (final, _, total), _ = jax.lax.scan(one_step, carry, z)
-        return total, final
+        (final, _, total), (observations, alive) = jax.lax.scan(one_step, carry, z)
+        return total, (final, observations, alive)
 
     return run
+
+
+def best_sequences(
+    env: Any, env_params: Any, starts: Any, iterations: int, learning_rate: float, progress: str | None = None
+) -> tuple[Any, Any]:
+    """The best unbounded action sequences (episodes, steps, 2) met in ``iterations`` Adam steps of ``learning_rate``
+    on each episode's own return from ``starts`` (a batch of env states), from zero; and the played sequences'
+    rollouts (return, (final state, observations, alive)) of :func:`_episode_fn`. ``progress``: a bar's label."""
+    import jax
+    import jax.numpy as jnp
+    import optax
+
+    run = jax.vmap(_episode_fn(env, env_params))
+    n = int(jnp.shape(starts.T_con)[0])
+
+    def loss(z: Any) -> tuple[Any, Any]:
+        returns, _ = run(z, starts)
+        return -jnp.sum(returns), returns
+
+    optimizer = optax.adam(learning_rate)
+
+    @jax.jit
+    def step(z: Any, opt_state: Any) -> tuple[Any, Any, Any]:
+        grads, returns = jax.grad(loss, has_aux=True)(z)
+        grads = jnp.where(jnp.isfinite(grads), grads, 0.0)  # a step at 0/0 (the goal) moves nothing there
+        updates, opt_state = optimizer.update(grads, opt_state, z)
+        return optax.apply_updates(z, updates), opt_state, returns
+
+    z = jnp.zeros((n, int(env_params.max_episode_steps), 2), jnp.float32)
+    opt_state = optimizer.init(z)
+    best_z, best_return = z, jnp.full((n,), -jnp.inf)
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=iterations, desc=progress, unit="it")
+    for _ in range(iterations):
+        new_z, opt_state, returns = step(z, opt_state)
+        better = jnp.isfinite(returns) & (returns > best_return)  # the returns are those of z, before the step
+        best_z = jnp.where(better[:, None, None], z, best_z)
+        best_return = jnp.where(better, returns, best_return)
+        z = new_z
+        if bar is not None:
+            bar.update(1)
+    if bar is not None:
+        bar.close()
+    return best_z, jax.jit(run)(best_z, starts)
 
 
 def open_loop_bound(
@@ -59,7 +108,6 @@ def open_loop_bound(
     alone (the zero sequence) and of the best sequences, and the episodes' starts, goals and T_con for the optimum."""
     import jax
     import jax.numpy as jnp
-    import optax
 
     from dwr_gym.jax_env import make_gymnax_env
 
@@ -69,53 +117,21 @@ def open_loop_bound(
         from train.learning.jitted.residual import ResidualGymnaxEnv
 
         env = ResidualGymnaxEnv(env, make_controller(expert), env_params.u_max, env_params.omega_max, residual_scale)
-    max_steps = int(env_params.max_episode_steps)
     keys = jax.random.split(jax.random.PRNGKey(seed), n)
     _, starts = jax.vmap(env.reset_env, in_axes=(0, None))(keys, env_params)
-    run = _episode_fn(env, env_params)
-    batch = jax.jit(jax.vmap(run))
-
-    def loss(z: Any) -> tuple[Any, Any]:
-        returns, _ = jax.vmap(run)(z, starts)
-        return -jnp.sum(returns), returns
-
-    optimizer = optax.adam(learning_rate)
-
-    @jax.jit
-    def step(z: Any, opt_state: Any) -> tuple[Any, Any, Any]:
-        grads, returns = jax.grad(loss, has_aux=True)(z)
-        grads = jnp.where(jnp.isfinite(grads), grads, 0.0)  # a step at 0/0 (the goal) moves nothing there
-        updates, opt_state = optimizer.update(grads, opt_state, z)
-        return optax.apply_updates(z, updates), opt_state, returns
-
-    z = jnp.zeros((n, max_steps, 2), jnp.float32)
-    opt_state = optimizer.init(z)
-    best_z, best_return = z, jnp.full((n,), -jnp.inf)
-    bar = None
-    if progress:
-        from tqdm.auto import tqdm
-
-        bar = tqdm(total=iterations, desc=f"open loop ({expert or 'no law'})", unit="it")
-    for _ in range(iterations):
-        new_z, opt_state, returns = step(z, opt_state)
-        better = jnp.isfinite(returns) & (returns > best_return)  # the returns are those of z, before the step
-        best_z = jnp.where(better[:, None, None], z, best_z)
-        best_return = jnp.where(better, returns, best_return)
-        z = new_z
-        if bar is not None:
-            bar.update(1)
-    if bar is not None:
-        bar.close()
+    batch = jax.jit(jax.vmap(_episode_fn(env, env_params)))
+    label = f"open loop ({expert or 'no law'})" if progress else None
+    best_z, _ = best_sequences(env, env_params, starts, iterations, learning_rate, label)
 
     def rows(sequences: Any) -> list[dict[str, float]]:
-        returns, final = batch(sequences, starts)
+        returns, (final, _, _) = batch(sequences, starts)
         in_time = np.asarray(final.is_success, bool)
         return [{"in_time": float(in_time[i]), "energy": float(final.energy[i]),
                  "final_heading": abs(float(final.heading_error[i])), "return": float(returns[i])}
                 for i in range(n)]  # fmt: skip
 
     return {
-        "law": rows(jnp.zeros_like(z)),
+        "law": rows(jnp.zeros_like(best_z)),
         "best": rows(best_z),
         "starts": np.stack([np.asarray(starts.x), np.asarray(starts.y), np.asarray(starts.psi)], 1).tolist(),
         "goals": np.stack(
@@ -164,4 +180,4 @@ def summary(rows: list[dict[str, Any]]) -> dict[str, float]:
             "heading_goal_share": float(np.mean([row["final_heading"] <= HEADING_GOAL for row in rows]))}  # fmt: skip
 
 
-__all__ = ["MEASURES", "energy_ratios", "open_loop_bound", "summary"]
+__all__ = ["MEASURES", "best_sequences", "energy_ratios", "open_loop_bound", "summary"]

@@ -90,7 +90,11 @@ class JaxAPG:
         rate: Any = settings.learning_rate
         self.decay_updates = 0
         if settings.linear_schedule:  # to 0 after the updates the budget buys (episodes of the mean T_con)
-            self.decay_updates = max(1, round(total_timesteps / (settings.episodes * self.mean_episode_steps())))
+            from train.learning.jitted.apg_teacher import teacher_steps
+
+            mean_steps = self.mean_episode_steps()
+            budget = max(0.0, total_timesteps - teacher_steps(settings, mean_steps))  # (0 without a teacher)
+            self.decay_updates = max(1, round(budget / (settings.episodes * mean_steps)))
             rate = optax.linear_schedule(settings.learning_rate, 0.0, self.decay_updates)
         self.optimizer = optax.chain(optax.clip_by_global_norm(settings.max_grad_norm), optax.adam(rate))
         self.update = jax.jit(self._update)

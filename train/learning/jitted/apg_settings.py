@@ -14,7 +14,9 @@ from train.learning.config import ConfigError
 #: ``max_return_drop`` at or above this: no update is checked (nor undone).
 MAX_DROP = 1e9
 APG_DEFAULTS: dict[str, Any] = {"episodes": 64, "learning_rate": 3e-4, "max_grad_norm": 1.0, "state_grad_clip": 64.0,
-                                 "max_return_drop": MAX_DROP, "keep_best": 0, "validation_episodes": 256}  # fmt: skip
+                                 "max_return_drop": MAX_DROP, "keep_best": 0, "validation_episodes": 256,
+                                 "teacher_episodes": 0, "teacher_iterations": 400, "teacher_learning_rate": 0.02,
+                                 "clone_steps": 4000}  # fmt: skip
 #: Observations of fresh episodes the fixed observation scaling is computed from.
 INITIAL_OBSERVATIONS = 1024
 
@@ -51,6 +53,16 @@ class APGSettings:
     evaluation to the next (docs/rl-benchmark.md); this keeps the run's result on the good side of the swing."""
     validation_episodes: int = 256
     """The fixed episodes of ``keep_best`` (their env steps count in the run's)."""
+    teacher_episodes: int = 0
+    """With > 0, the policy starts cloned from the best command sequences of this many fresh episodes, each found on its
+    own by ``teacher_iterations`` Adam steps of ``teacher_learning_rate`` on its return
+    (:mod:`train.learning.jitted.apg_teacher`; their env steps count); 0, the default: from its initial weights."""
+    teacher_iterations: int = 400
+    """Adam steps of the teacher's search, on each episode's sequence."""
+    teacher_learning_rate: float = 0.02
+    """Adam's step size of the teacher's search (on the actions before their tanh)."""
+    clone_steps: int = 4000
+    """Least-squares steps of the cloning (minibatches of 4,096 observation-action pairs)."""
     net_arch: tuple[int, ...] = (64, 64)
     activation: str = "tanh"
     ortho_init: bool = True
@@ -80,6 +92,11 @@ class APGSettings:
                 max_return_drop=as_float("max_return_drop", values["max_return_drop"], 0.0, MAX_DROP, text=True),
                 keep_best=as_int("keep_best", values["keep_best"], 0, 1_000_000, text=True),
                 validation_episodes=as_int("validation_episodes", values["validation_episodes"], 1, 65536, text=True),
+                teacher_episodes=as_int("teacher_episodes", values["teacher_episodes"], 0, 65536, text=True),
+                teacher_iterations=as_int("teacher_iterations", values["teacher_iterations"], 1, 1_000_000, text=True),
+                teacher_learning_rate=as_float("teacher_learning_rate", values["teacher_learning_rate"], 0.0, 100.0,
+                                               low_inclusive=False, text=True),
+                clone_steps=as_int("clone_steps", values["clone_steps"], 1, 10_000_000, text=True),
                 **network_fields(policy, "APG"),
             )  # fmt: skip
         except ValueError as error:

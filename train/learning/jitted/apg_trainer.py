@@ -35,6 +35,8 @@ class APGTrainer:
         configure_threads(config.threads)
         fill_budget(config)
         self.settings = APGSettings.from_algo_kwargs(config.algo_kwargs)
+        self.progress = bool(config.progress)
+        self.teacher_measures: dict[str, float] = {}
         config.num_envs = 1  # (the exporter's native env; the APG's robots are its episodes per update)
         env, env_params = make_jax_env(config)
         use_compilation_cache()
@@ -53,8 +55,15 @@ class APGTrainer:
 
     def advance(self, state: Any, steps: int, target: int, stop: Callable[[], bool]) -> tuple[Any, int]:
         """Updates until ``target`` env steps (or ``stop()``); at least one. With ``keep_best`` the policy is
-        validated before the first update and after every ``keep_best``-th (those env steps count)."""
+        validated before the first update and after every ``keep_best``-th (those env steps count). With
+        ``teacher_episodes``, a run's first call clones the policy from the open-loop teacher first."""
         every = self.settings.keep_best
+        if self.settings.teacher_episodes and int(state.updates) == 0:  # (a resumed run has been taught already)
+            from train.learning.jitted.apg_teacher import clone_from_teacher
+
+            state, measures = clone_from_teacher(self.apg, state, progress=self.progress)
+            steps += int(measures["steps"])
+            self.teacher_measures = measures
         while True:
             if every and int(state.updates) % every == 0:
                 state, metrics = self.apg.validate(state)
@@ -87,8 +96,14 @@ class APGTrainer:
             if s.keep_best
             else ""
         )
+        taught = (
+            f"; the policy first cloned from the best sequences of {s.teacher_episodes} episodes "
+            f"({s.teacher_iterations} Adam steps each)"
+            if s.teacher_episodes
+            else ""
+        )
         return (f"APG: {s.episodes} episodes per update, Adam {rate}, the state's gradient clipped to "
-                f"{s.state_grad_clip:g} per step in each episode{kept}")  # fmt: skip
+                f"{s.state_grad_clip:g} per step in each episode{kept}{taught}")  # fmt: skip
 
 
 def train(
