@@ -15,8 +15,8 @@ from train.learning.config import ConfigError
 from train.learning.jitted.apg_settings import APGSettings
 
 pytest.importorskip("jax")
-import jax  # noqa: E402
-import jax.numpy as jnp  # noqa: E402
+import jax
+import jax.numpy as jnp
 
 
 @pytest.mark.parametrize(
