@@ -75,6 +75,7 @@ SUITE: dict[str, str] = {
     "rl-time-scale": "benchmarks.recipes.rl_time_scale",
     "rl-apg": "benchmarks.recipes.rl_apg",
     "rl-apg-scratch": "benchmarks.recipes.rl_apg_scratch",
+    "rl-apg-teacher": "benchmarks.recipes.rl_apg_teacher",
     "rl-time-scale-30min": "benchmarks.recipes.rl_time_scale_30min",
     "robust-rl": "benchmarks.recipes.robust_rl",
 }

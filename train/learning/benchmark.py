@@ -125,6 +125,15 @@ ENTRIES: dict[str, dict[str, Any]] = {
         "eval_freq": 25_000_000,
         "checkpoint_freq": 25_000_000,
     },
+    # the same, its policy first cloned from an open-loop teacher (train/hyperparams/apg_teacher.yml)
+    "apg-teacher-v2": {
+        "algo": "apg",
+        "backend": "jax",
+        "env_id": V2,
+        "hyperparams": str(HYPERPARAMS_DIR / "apg_teacher.yml"),
+        "eval_freq": 25_000_000,
+        "checkpoint_freq": 25_000_000,
+    },
     "apg-residual-v2": {
         "algo": "apg",
         "backend": "jax",
