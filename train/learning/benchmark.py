@@ -134,6 +134,16 @@ ENTRIES: dict[str, dict[str, Any]] = {
         "eval_freq": 25_000_000,
         "checkpoint_freq": 25_000_000,
     },
+    # and with time-scaled actions (the action times min(1, 10 s / T_con): one behaviour for every T_con)
+    "apg-teacher-time-scaled-v2": {
+        "algo": "apg",
+        "backend": "jax",
+        "env_id": V2,
+        "hyperparams": str(HYPERPARAMS_DIR / "apg_teacher.yml"),
+        "action_time_scale": 10.0,
+        "eval_freq": 25_000_000,
+        "checkpoint_freq": 25_000_000,
+    },
     "apg-residual-v2": {
         "algo": "apg",
         "backend": "jax",
