@@ -101,5 +101,7 @@ def test_the_cli_says_it_is_taught_and_counts_the_lesson(tmp_path: Path) -> None
 
     done = cli(*TAUGHT, "--total-timesteps", "1000", "--eval-freq", "1000", "--run-dir", str(tmp_path / "run"))
     assert done.returncode == 0, done.stderr
-    assert "first cloned from the best sequences of 2 episodes (3 Adam steps each)" in done.stdout + done.stderr
+    said = done.stdout + done.stderr
+    assert "first cloned from the best sequences of 2 episodes (3 Adam steps each)" in said
+    assert "open-loop teacher: " in said and "of its 2 sequences in time" in said and "nan" not in said
     assert read_state(tmp_path / "run")["timesteps"] >= 2 * 200 * 4  # the lesson's plays, at least 200 steps each

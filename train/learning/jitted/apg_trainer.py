@@ -9,6 +9,7 @@ Ctrl-C between two updates. ``--residual --expert ptc`` differentiates through t
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -36,7 +37,6 @@ class APGTrainer:
         fill_budget(config)
         self.settings = APGSettings.from_algo_kwargs(config.algo_kwargs)
         self.progress = bool(config.progress)
-        self.teacher_measures: dict[str, float] = {}
         config.num_envs = 1  # (the exporter's native env; the APG's robots are its episodes per update)
         env, env_params = make_jax_env(config)
         use_compilation_cache()
@@ -63,7 +63,9 @@ class APGTrainer:
 
             state, measures = clone_from_teacher(self.apg, state, progress=self.progress)
             steps += int(measures["steps"])
-            self.teacher_measures = measures
+            print(f"open-loop teacher: {measures['teacher_in_time']:.0%} of its {self.settings.teacher_episodes} "
+                  f"sequences in time, mean return {measures['teacher_return']:.2f}; cloned (least squares "
+                  f"{measures['clone_loss']:.2g}) in {int(measures['steps']):,} env steps", file=sys.stderr)  # fmt: skip
         while True:
             if every and int(state.updates) % every == 0:
                 state, metrics = self.apg.validate(state)
