@@ -18,7 +18,9 @@ which model-free RL does not have (the docs say so where it is compared).
 The policy is the actor of the jitted PPO's network (:func:`train.learning.jitted.policy.make_network`), exported
 as an SB3 PPO model (:class:`train.learning.jitted.export.SB3Exporter`) like the ES's; the observations are scaled by
 the mean and deviation of 1,024 first observations, fixed, folded into the exported first layer. With ``keep_best``
-the run exports the best policy measured on its own validation episodes (:meth:`JaxAPG.validate`), not the last.
+the run exports the best policy measured on its own validation episodes (:meth:`JaxAPG.validate`), not the last. With
+``teacher_episodes`` the updates start from a policy cloned from open-loop sequences
+(:mod:`train.learning.jitted.apg_teacher`).
 """
 
 from __future__ import annotations
