@@ -13,6 +13,10 @@ from benchmarks.core.docs import Schema, table
 main = recipe_main(__file__)
 
 V2 = Schema({"budget": dict, "machine": str, "summary": dict, "references": dict, "best_seed": dict})
-NAMES = ("rl-apg-teacher", "rl-apg-teacher-per-T_con", "rl-apg-teacher-time-scaled",
-         "rl-apg-teacher-time-scaled-per-T_con")
+NAMES = (
+    "rl-apg-teacher",
+    "rl-apg-teacher-per-T_con",
+    "rl-apg-teacher-time-scaled",
+    "rl-apg-teacher-time-scaled-per-T_con",
+)
 BLOCKS = tuple(table(name, V2) for name in NAMES)

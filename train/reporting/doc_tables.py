@@ -285,10 +285,14 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "rl-apg-scratch-per-T_con": ("docs/rl_benchmark/apg_scratch.json", lambda data: rl_table(data, "per-T_con")),
     "rl-apg-teacher": ("docs/rl_benchmark/apg_teacher.json", lambda data: rl_table(data, "random")),
     "rl-apg-teacher-per-T_con": ("docs/rl_benchmark/apg_teacher.json", lambda data: rl_table(data, "per-T_con")),
-    "rl-apg-teacher-time-scaled": ("docs/rl_benchmark/apg_teacher_time_scaled.json",
-                                   lambda data: rl_table(data, "random")),
-    "rl-apg-teacher-time-scaled-per-T_con": ("docs/rl_benchmark/apg_teacher_time_scaled.json",
-                                             lambda data: rl_table(data, "per-T_con")),
+    "rl-apg-teacher-time-scaled": (
+        "docs/rl_benchmark/apg_teacher_time_scaled.json",
+        lambda data: rl_table(data, "random"),
+    ),
+    "rl-apg-teacher-time-scaled-per-T_con": (
+        "docs/rl_benchmark/apg_teacher_time_scaled.json",
+        lambda data: rl_table(data, "per-T_con"),
+    ),
     "rl-time-scale-per-T_con": ("docs/rl_benchmark/time_scale.json", lambda data: rl_table(data, "per-T_con")),
     "rl-time-scale-long": ("docs/rl_benchmark/time_scale_long.json", lambda data: rl_table(data, "random")),
     "rl-time-scale-long-per-T_con": (
