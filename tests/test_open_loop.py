@@ -1,4 +1,4 @@
-"""The open-loop bound (train/evaluation/open_loop.py): what the best action sequence of each episode reaches."""
+"""The open-loop bound (train/learning/jitted/open_loop_bound.py, train/evaluation/open_loop.py): what the best action sequence of each episode reaches."""
 
 from __future__ import annotations
 
@@ -10,7 +10,8 @@ import pytest
 pytest.importorskip("jax")
 pytest.importorskip("optax")
 
-from train.evaluation.open_loop import MEASURES, open_loop_bound, summary
+from train.evaluation.open_loop import MEASURES, summary
+from train.learning.jitted.open_loop_bound import open_loop_bound
 from train.reporting.energy_tables import open_loop_table
 
 SHORT = {"T_con_range": [2.0, 2.2]}  # 40-44 steps: a quick optimisation

@@ -4,7 +4,7 @@
     python -m benchmarks run open-loop-bound --n 4 --iterations 50   # a quick look (printed, nothing written)
 
 A residual policy is one map from observation to action for every episode; on each episode it does at most what the
-best residual *sequence* for that episode does. This finds such sequences (train/evaluation/open_loop.py: Adam on the
+best residual *sequence* for that episode does. This finds such sequences (train/learning/jitted/open_loop_bound.py: Adam on the
 episode's v2 return through the JAX env and the law, the gradient APG follows, without its per-step clip or its
 policy) for the residual on PTC and on pt-astolfi at the training's scale 0.5, and for the action itself without a
 law (how close the optimiser comes to the optimum). ``--docs`` writes docs/rl_benchmark/open_loop_bound.json, from
@@ -28,7 +28,8 @@ VARIANTS: tuple[tuple[str | None, float], ...] = (("ptc", 0.5), ("pt-astolfi", 0
 
 
 def main(argv: list[str] | None = None) -> int:
-    from train.evaluation.open_loop import energy_ratios, open_loop_bound, summary
+    from train.evaluation.open_loop import energy_ratios, summary
+    from train.learning.jitted.open_loop_bound import open_loop_bound
 
     parser = parser_for("open-loop-bound", __doc__)
     parser.add_argument("--n", type=int, default=32, help="episodes, each optimised on its own (default: 32)")

@@ -1,8 +1,9 @@
 """What a policy could reach at best: each episode's whole command sequence optimised on its own (open loop).
 
 A learner's policy maps the observation to one action, the same map for every episode; the best it can do on an
-episode is at most what the best *sequence* of actions does on that episode alone. :func:`open_loop_bound` finds such
-sequences: for each of ``n`` v2 episodes it optimises the actions of all its steps (a residual on a law, or the
+episode is at most what the best *sequence* of actions does on that episode alone. :func:`best_sequences` finds such
+sequences (:func:`train.learning.jitted.open_loop_bound.open_loop_bound` on drawn episodes, the APG teacher on its own):
+for each of ``n`` v2 episodes it optimises the actions of all its steps (a residual on a law, or the
 action itself) by Adam on the episode's own return, differentiated through the JAX env (and the law) as the APG
 learner differentiates it, and keeps the best sequence met. What it reaches bounds what a residual on that law, with
 that residual scale, can reach (up to the optimiser's own shortfall, which the run without a law measures: there the
@@ -15,13 +16,13 @@ from typing import Any
 
 import numpy as np
 
-#: Per-episode measures of :func:`open_loop_bound`, in its rows.
+#: Per-episode measures of :func:`train.learning.jitted.open_loop_bound.open_loop_bound`, in its rows.
 MEASURES = ("in_time", "energy", "final_heading", "return")
 #: The residual goal's final heading (issue 40) [rad]: :func:`summary` gives the share of episodes within it.
 HEADING_GOAL = 0.15
 
 
-def _episode_fn(env: Any, env_params: Any) -> Any:
+def episode_fn(env: Any, env_params: Any) -> Any:
     """(actions (steps, 2) unbounded, start state) -> (return, (final state, observations, alive)), actions squashed by
     tanh; ``observations`` (steps, obs) are those each action was taken on, ``alive`` (steps,) where it was."""
     import jax
@@ -48,12 +49,12 @@ def best_sequences(
 ) -> tuple[Any, Any]:
     """The best unbounded action sequences (episodes, steps, 2) met in ``iterations`` Adam steps of ``learning_rate``
     on each episode's own return from ``starts`` (a batch of env states), from zero; and the played sequences'
-    rollouts (return, (final state, observations, alive)) of :func:`_episode_fn`. ``progress``: a bar's label."""
+    rollouts (return, (final state, observations, alive)) of :func:`episode_fn`. ``progress``: a bar's label."""
     import jax
     import jax.numpy as jnp
     import optax
 
-    run = jax.vmap(_episode_fn(env, env_params))
+    run = jax.vmap(episode_fn(env, env_params))
     n = int(jnp.shape(starts.T_con)[0])
 
     def loss(z: Any) -> tuple[Any, Any]:
@@ -90,68 +91,8 @@ def best_sequences(
     return best_z, jax.jit(run)(best_z, starts)
 
 
-def open_loop_bound(
-    expert: str | None = "ptc",
-    residual_scale: float = 0.5,
-    n: int = 32,
-    iterations: int = 1000,
-    learning_rate: float = 0.02,
-    seed: int = 0,
-    env_id: str = "DWRPointStabilization-v2",
-    progress: bool = False,
-    **env_kwargs: Any,
-) -> dict[str, Any]:
-    """The best action sequence found for each of ``n`` episodes of ``env_id`` (drawn from ``seed``) by ``iterations``
-    Adam steps on its return; with ``expert`` the actions are residuals on that law at ``residual_scale`` (the
-    training's ``clip(expert + scale * residual)``), else the env's action; ``env_kwargs`` go to the env (the
-    optimum's E/opt, :func:`energy_ratios`, assumes none). Returns the per-episode rows of the law
-    alone (the zero sequence) and of the best sequences, and the episodes' starts, goals and T_con for the optimum."""
-    import jax
-    import jax.numpy as jnp
-
-    from dwr_gym.jax_env import make_gymnax_env
-
-    env, env_params = make_gymnax_env(env_id, **env_kwargs)
-    if expert is not None:
-        from baselines.registry import make_controller
-        from train.learning.jitted.residual import ResidualGymnaxEnv
-
-        env = ResidualGymnaxEnv(env, make_controller(expert), env_params.u_max, env_params.omega_max, residual_scale)
-    keys = jax.random.split(jax.random.PRNGKey(seed), n)
-    _, starts = jax.vmap(env.reset_env, in_axes=(0, None))(keys, env_params)
-    batch = jax.jit(jax.vmap(_episode_fn(env, env_params)))
-    label = f"open loop ({expert or 'no law'})" if progress else None
-    best_z, _ = best_sequences(env, env_params, starts, iterations, learning_rate, label)
-
-    def rows(sequences: Any) -> list[dict[str, float]]:
-        returns, (final, _, _) = batch(sequences, starts)
-        in_time = np.asarray(final.is_success, bool)
-        return [{"in_time": float(in_time[i]), "energy": float(final.energy[i]),
-                 "final_heading": abs(float(final.heading_error[i])), "return": float(returns[i])}
-                for i in range(n)]  # fmt: skip
-
-    return {
-        "law": rows(jnp.zeros_like(best_z)),
-        "best": rows(best_z),
-        "starts": np.stack([np.asarray(starts.x), np.asarray(starts.y), np.asarray(starts.psi)], 1).tolist(),
-        "goals": np.stack(
-            [np.asarray(starts.goal_x), np.asarray(starts.goal_y), np.asarray(starts.goal_psi)], 1
-        ).tolist(),
-        "T_con": np.asarray(starts.T_con, float).tolist(),
-        "settings": {
-            "expert": expert,
-            "residual_scale": residual_scale,
-            "n": n,
-            "iterations": iterations,
-            "learning_rate": learning_rate,
-            "seed": seed,
-            "env_id": env_id,
-        },
-    }
-
-
 def energy_ratios(result: dict[str, Any], workers: int = 0) -> dict[str, Any]:
-    """``result`` of :func:`open_loop_bound` with each row's E/opt (its energy over the cached optimum of the goal
+    """``result`` of :func:`train.learning.jitted.open_loop_bound.open_loop_bound` with each row's E/opt (its energy over the cached optimum of the goal
     pose, :func:`train.evaluation.optimum.optimal_energies`; None where the episode is not in time or has no
     optimum), as the benchmark's tables compute it."""
     from dwr_gym.params import EnvParams
@@ -180,4 +121,4 @@ def summary(rows: list[dict[str, Any]]) -> dict[str, float]:
             "heading_goal_share": float(np.mean([row["final_heading"] <= HEADING_GOAL for row in rows]))}  # fmt: skip
 
 
-__all__ = ["MEASURES", "best_sequences", "energy_ratios", "open_loop_bound", "summary"]
+__all__ = ["HEADING_GOAL", "MEASURES", "best_sequences", "energy_ratios", "episode_fn", "summary"]
