@@ -92,9 +92,9 @@ def best_sequences(
 
 
 def energy_ratios(result: dict[str, Any], workers: int = 0) -> dict[str, Any]:
-    """``result`` of :func:`train.learning.jitted.open_loop_bound.open_loop_bound` with each row's E/opt (its energy over the cached optimum of the goal
-    pose, :func:`train.evaluation.optimum.optimal_energies`; None where the episode is not in time or has no
-    optimum), as the benchmark's tables compute it."""
+    """``result`` of :func:`train.learning.jitted.open_loop_bound.open_loop_bound` with each row's E/opt (its energy
+    over the cached optimum of the goal pose, :func:`train.evaluation.optimum.optimal_energies`; None where the
+    episode is not in time or has no optimum), as the benchmark's tables compute it."""
     from dwr_gym.params import EnvParams
     from train.env_ids import env_keywords
     from train.evaluation.optimum import optimal_energies

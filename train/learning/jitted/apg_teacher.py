@@ -57,15 +57,17 @@ def clone_from_teacher(apg: Any, state: Any, progress: bool = False) -> tuple[An
         return jnp.mean((mean - y) ** 2)
 
     @jax.jit
-    def fit(params: Any, opt_state: Any, key: Any) -> tuple[Any, Any, Any]:
-        rows = jax.random.randint(key, (CLONE_BATCH,), 0, inputs.shape[0])
-        value, grads = jax.value_and_grad(loss)(params, inputs[rows], targets[rows])
+    def fit(params: Any, opt_state: Any, key: Any, x: Any, y: Any) -> tuple[Any, Any, Any]:
+        rows = jax.random.randint(
+            key, (CLONE_BATCH,), 0, x.shape[0]
+        )  # (the pairs passed in, not baked into the program)
+        value, grads = jax.value_and_grad(loss)(params, x[rows], y[rows])
         updates, opt_state = optimizer.update(grads, opt_state, params)
         return optax.apply_updates(params, updates), opt_state, value
 
     params, opt_state, value = state.params, optimizer.init(state.params), jnp.asarray(jnp.nan)
     for key in jax.random.split(key_clone, settings.clone_steps):
-        params, opt_state, value = fit(params, opt_state, key)
+        params, opt_state, value = fit(params, opt_state, key, inputs, targets)
     state = state.replace(params=params, opt_state=apg.optimizer.init(params), best_params=params, rng=rng)
     measures = {
         "steps": float(teacher_steps(settings, float(jnp.mean(jnp.sum(alive, axis=1))))),

@@ -29,7 +29,7 @@ def open_loop_bound(
     """The best action sequence found for each of ``n`` episodes of ``env_id`` (drawn from ``seed``) by ``iterations``
     Adam steps on its return; with ``expert`` the actions are residuals on that law at ``residual_scale`` (the
     training's ``clip(expert + scale * residual)``), else the env's action; ``env_kwargs`` go to the env (the
-    optimum's E/opt, :func:`energy_ratios`, assumes none). Returns the per-episode rows of the law
+    optimum's E/opt, :func:`train.evaluation.open_loop.energy_ratios`, assumes none). Returns the per-episode rows of the law
     alone (the zero sequence) and of the best sequences, and the episodes' starts, goals and T_con for the optimum."""
     import jax
     import jax.numpy as jnp
@@ -46,18 +46,18 @@ def open_loop_bound(
     _, starts = jax.vmap(env.reset_env, in_axes=(0, None))(keys, env_params)
     batch = jax.jit(jax.vmap(episode_fn(env, env_params)))
     label = f"open loop ({expert or 'no law'})" if progress else None
-    best_z, _ = best_sequences(env, env_params, starts, iterations, learning_rate, label)
+    best_z, best_played = best_sequences(env, env_params, starts, iterations, learning_rate, label)
 
-    def rows(sequences: Any) -> list[dict[str, float]]:
-        returns, (final, _, _) = batch(sequences, starts)
+    def rows(played: Any) -> list[dict[str, float]]:
+        returns, (final, _, _) = played
         in_time = np.asarray(final.is_success, bool)
         return [{"in_time": float(in_time[i]), "energy": float(final.energy[i]),
                  "final_heading": abs(float(final.heading_error[i])), "return": float(returns[i])}
                 for i in range(n)]  # fmt: skip
 
     return {
-        "law": rows(jnp.zeros_like(best_z)),
-        "best": rows(best_z),
+        "law": rows(batch(jnp.zeros_like(best_z), starts)),
+        "best": rows(best_played),
         "starts": np.stack([np.asarray(starts.x), np.asarray(starts.y), np.asarray(starts.psi)], 1).tolist(),
         "goals": np.stack(
             [np.asarray(starts.goal_x), np.asarray(starts.goal_y), np.asarray(starts.goal_psi)], 1
