@@ -76,6 +76,7 @@ SUITE: dict[str, str] = {
     "rl-apg": "benchmarks.recipes.rl_apg",
     "rl-apg-scratch": "benchmarks.recipes.rl_apg_scratch",
     "rl-apg-teacher": "benchmarks.recipes.rl_apg_teacher",
+    "rl-apg-teacher-30min": "benchmarks.recipes.rl_apg_teacher_30min",
     "rl-time-scale-30min": "benchmarks.recipes.rl_time_scale_30min",
     "robust-rl": "benchmarks.recipes.robust_rl",
 }

@@ -144,6 +144,18 @@ ENTRIES: dict[str, dict[str, Any]] = {
         "eval_freq": 25_000_000,
         "checkpoint_freq": 25_000_000,
     },
+    # and the same for the goal's whole 30 minutes a seed: 700 M env steps (the 400 M runs took about 15 minutes of a
+    # core alone and were still climbing when their rate reached 0), its rate decaying over them
+    "apg-teacher-time-scaled-30min-v2": {
+        "algo": "apg",
+        "backend": "jax",
+        "env_id": V2,
+        "hyperparams": str(HYPERPARAMS_DIR / "apg_teacher.yml"),
+        "action_time_scale": 10.0,
+        "total_timesteps": 700_000_000,
+        "eval_freq": 50_000_000,
+        "checkpoint_freq": 50_000_000,
+    },
     "apg-residual-v2": {
         "algo": "apg",
         "backend": "jax",
