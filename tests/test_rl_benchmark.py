@@ -235,3 +235,18 @@ def test_the_reference_laws_run_on_the_agents_env_id_and_v2_agents_ship_under_th
     assert references_env([*v2, parse_entry("ppo-jax")]) == "DWRPointStabilization-v1"
     assert references_env([parse_entry("ppo")]) == "DWRPointStabilization-v1"
     assert shipped_name("es-residual-v2") == "es_residual_v2" and shipped_name("sac-tuned") == "sac_tuned_v1"
+
+
+def test_shipped_configs_name_no_directory_of_the_machine_that_trained_them() -> None:
+    """Shipping makes the benchmark's absolute hyperparameter paths relative to the repository, and no shipped
+    config.yaml names an absolute path inside a checkout."""
+    from pathlib import Path
+
+    from benchmarks.learning.ship_rl_agents import ROOT, portable_config
+
+    text = "hyperparams: /tmp/wt3/train/hyperparams/apg.yml\nrun_dir: results/x\nother: /data/a.yml\n"
+    assert portable_config(text, Path("/tmp/wt3")) == (
+        "hyperparams: train/hyperparams/apg.yml\nrun_dir: results/x\nother: /data/a.yml\n"
+    )
+    for config in sorted((ROOT / "train" / "pretrained").glob("*/config.yaml")):
+        assert "/train/hyperparams/" not in config.read_text().replace(" train/hyperparams/", ""), config

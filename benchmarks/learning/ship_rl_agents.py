@@ -62,6 +62,12 @@ def shipped_name(entry: str) -> str:
     return name if name[-3:-1] == "_v" and name[-1].isdigit() else f"{name}_v1"
 
 
+def portable_config(text: str, root: Path = ROOT) -> str:
+    """A run's config.yaml ``text`` with the paths inside the repository ``root`` made relative to it: a benchmark
+    names its hyperparameter files by absolute path, which would ship this machine's directories to users."""
+    return text.replace(f"{root.as_posix().rstrip('/')}/", "")
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = parser_for("ship-rl-agents", __doc__)
     parser.add_argument("out", help="the --out of dwr-gym benchmark")
@@ -88,7 +94,7 @@ def main(argv: list[str] | None = None) -> int:
         target = ROOT / "train" / "pretrained" / directory
         shutil.rmtree(target, ignore_errors=True)
         target.mkdir(parents=True)
-        shutil.copy(run / "config.yaml", target / "config.yaml")
+        (target / "config.yaml").write_text(portable_config((run / "config.yaml").read_text()))
         shutil.copy(run / "evaluations.csv", target / "evaluations.csv")
         shutil.copy(run / "model.zip", target / "model.zip")
         if (run / "model_obs_norm.npz").is_file():
