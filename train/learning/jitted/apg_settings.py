@@ -16,7 +16,7 @@ MAX_DROP = 1e9
 APG_DEFAULTS: dict[str, Any] = {"episodes": 64, "learning_rate": 3e-4, "max_grad_norm": 1.0, "state_grad_clip": 64.0,
                                  "max_return_drop": MAX_DROP, "keep_best": 0, "validation_episodes": 256,
                                  "teacher_episodes": 0, "teacher_iterations": 400, "teacher_learning_rate": 0.02,
-                                 "clone_steps": 4000}  # fmt: skip
+                                 "clone_steps": 4000, "teacher_rounds": 1}  # fmt: skip
 #: Observations of fresh episodes the fixed observation scaling is computed from.
 INITIAL_OBSERVATIONS = 1024
 
@@ -63,6 +63,9 @@ class APGSettings:
     """Adam's step size of the teacher's search (on the actions before their tanh)."""
     clone_steps: int = 4000
     """Least-squares steps of the cloning (minibatches of 4,096 observation-action pairs)."""
+    teacher_rounds: int = 1
+    """Rounds of the lesson: 1 clones the teacher's sequences once; each further round (DAgger) plays the cloned policy
+    on ``teacher_episodes`` fresh episodes, teaches the best sequence from a drawn state of each, and refits on all."""
     net_arch: tuple[int, ...] = (64, 64)
     activation: str = "tanh"
     ortho_init: bool = True
@@ -97,6 +100,7 @@ class APGSettings:
                 teacher_learning_rate=as_float("teacher_learning_rate", values["teacher_learning_rate"], 0.0, 100.0,
                                                low_inclusive=False, text=True),
                 clone_steps=as_int("clone_steps", values["clone_steps"], 1, 10_000_000, text=True),
+                teacher_rounds=as_int("teacher_rounds", values["teacher_rounds"], 1, 1000, text=True),
                 **network_fields(policy, "APG"),
             )  # fmt: skip
         except ValueError as error:

@@ -11,6 +11,11 @@ updates then go on from that policy, on the reward, and correct what cloning alo
 sequences' states). This is guided policy search's idea (Levine & Koltun 2013) in its simplest form: the teacher is
 computed from the reward and the env's derivative only (no law, no optimal-control solver, nothing at run time), so
 the learner stays "from the reward". Its env steps (each iteration plays every episode once) count in the budget.
+
+With ``teacher_rounds`` > 1 the lesson goes on as DAgger (Ross et al. 2011) does: each further round plays the cloned
+policy on ``teacher_episodes`` fresh episodes, stops each at a uniformly drawn step, searches the best sequence from
+that state to T_con, and refits the policy on every pair taught so far, so that the states the policy itself reaches
+are taught too, not only the teacher's.
 """
 
 from __future__ import annotations
@@ -24,14 +29,41 @@ CLONE_LEARNING_RATE = 1e-3
 
 
 def teacher_steps(settings: Any, mean_episode_steps: float) -> float:
-    """The env steps the teacher spends, about: every iteration, and the final rollout, plays each episode once."""
-    return settings.teacher_episodes * mean_episode_steps * (settings.teacher_iterations + 1)
+    """The env steps the teacher spends, about: every iteration, and the final rollout, plays each episode once; a
+    further round (``teacher_rounds``) plays the policy's episodes once and searches from half-way on average."""
+    per_search = settings.teacher_episodes * mean_episode_steps * (settings.teacher_iterations + 1)
+    rounds = getattr(settings, "teacher_rounds", 1) - 1
+    return per_search * (1 + 0.5 * rounds) + rounds * settings.teacher_episodes * mean_episode_steps
+
+
+def visited_states(apg: Any, params: Any, stats: Any, starts: Any, key: Any) -> tuple[Any, Any, Any]:
+    """Each of ``starts``' episodes played by the policy ``params`` (its mean action) until a step drawn uniformly
+    in [0, T_con): (the state there, whether the episode was still running there, the env steps played)."""
+    import jax
+    import jax.numpy as jnp
+
+    stops = jnp.floor(jax.random.uniform(key, starts.T_con.shape) * starts.prescribed_steps).astype(jnp.int32)
+
+    def play(start: Any, stop: Any) -> tuple[Any, Any, Any]:
+        def one_step(carry: tuple[Any, Any, Any], t: Any) -> tuple[tuple[Any, Any, Any], None]:
+            state, alive, steps = carry
+            running = alive & (t < stop)
+            action = apg.act(params, state.observation, stats)
+            _, after, _, done, _ = apg.env.step_env(jax.random.PRNGKey(0), state, action, apg.env_params)
+            state = jax.tree.map(lambda new, old: jnp.where(running, new, old), after, state)
+            return (state, jnp.where(running, ~done, alive), steps + running.astype(jnp.int32)), None
+
+        carry = (start, jnp.asarray(True), jnp.asarray(0, jnp.int32))
+        (state, alive, steps), _ = jax.lax.scan(one_step, carry, jnp.arange(apg.max_steps))
+        return state, alive, steps
+
+    return jax.jit(jax.vmap(play))(starts, stops)
 
 
 def clone_from_teacher(apg: Any, state: Any, progress: bool = False) -> tuple[Any, dict[str, float]]:
     """``state`` (an :class:`train.learning.jitted.apg.APGState` before its first update) with its policy cloned from
     the teacher's sequences (and kept as the best so far, with a fresh Adam state); and the teacher's measures: its
-    env steps, its sequences' share in time and mean return, the cloning's last loss."""
+    env steps, its first sequences' share in time and mean return, the cloning's last loss."""
     import jax
     import jax.numpy as jnp
     import optax
@@ -40,15 +72,6 @@ def clone_from_teacher(apg: Any, state: Any, progress: bool = False) -> tuple[An
 
     settings, env, env_params = apg.settings, apg.env, apg.env_params
     rng, key_starts, key_clone = jax.random.split(state.rng, 3)
-    keys = jax.random.split(key_starts, settings.teacher_episodes)
-    _, starts = jax.vmap(env.reset_env, in_axes=(0, None))(keys, env_params)
-    label = "open-loop teacher" if progress else None
-    sequences, (returns, (final, observations, alive)) = best_sequences(
-        env, env_params, starts, settings.teacher_iterations, settings.teacher_learning_rate, label
-    )
-    mask = alive.reshape(-1)
-    inputs = observations.reshape(-1, observations.shape[-1])[mask]
-    targets = jnp.tanh(sequences).reshape(-1, 2)[mask]
     optimizer = optax.adam(optax.cosine_decay_schedule(CLONE_LEARNING_RATE, settings.clone_steps))
 
     def loss(params: Any, x: Any, y: Any) -> Any:
@@ -58,24 +81,53 @@ def clone_from_teacher(apg: Any, state: Any, progress: bool = False) -> tuple[An
 
     @jax.jit
     def fit(params: Any, opt_state: Any, key: Any, x: Any, y: Any) -> tuple[Any, Any, Any]:
-        rows = jax.random.randint(
-            key, (CLONE_BATCH,), 0, x.shape[0]
-        )  # (the pairs passed in, not baked into the program)
+        rows = jax.random.randint(key, (CLONE_BATCH,), 0, x.shape[0])  # (the pairs passed in, not baked in)
         value, grads = jax.value_and_grad(loss)(params, x[rows], y[rows])
         updates, opt_state = optimizer.update(grads, opt_state, params)
         return optax.apply_updates(params, updates), opt_state, value
 
-    params, opt_state, value = state.params, optimizer.init(state.params), jnp.asarray(jnp.nan)
-    for key in jax.random.split(key_clone, settings.clone_steps):
-        params, opt_state, value = fit(params, opt_state, key, inputs, targets)
+    def fitted(params: Any, key: Any, x: Any, y: Any) -> tuple[Any, Any]:
+        opt_state, value = optimizer.init(params), jnp.asarray(jnp.nan)
+        for step_key in jax.random.split(key, settings.clone_steps):
+            params, opt_state, value = fit(params, opt_state, step_key, x, y)
+        return params, value
+
+    def taught(starts: Any, round_: int) -> tuple[Any, Any, Any, Any]:
+        """The best sequences from ``starts``: their pairs (observations, actions), rollouts and env steps played."""
+        label = f"open-loop teacher, round {round_ + 1}" if progress else None
+        sequences, (returns, (final, observations, alive)) = best_sequences(
+            env, env_params, starts, settings.teacher_iterations, settings.teacher_learning_rate, label
+        )
+        return sequences, returns, final, (observations, alive)
+
+    keys = jax.random.split(key_starts, settings.teacher_episodes)
+    _, starts = jax.vmap(env.reset_env, in_axes=(0, None))(keys, env_params)
+    sequences, returns, final, (observations, alive) = taught(starts, 0)
+    mask = alive.reshape(-1)
+    inputs = observations.reshape(-1, observations.shape[-1])[mask]
+    targets = jnp.tanh(sequences).reshape(-1, 2)[mask]
+    steps = float(jnp.sum(alive)) * (settings.teacher_iterations + 1)
+    params, value = fitted(state.params, key_clone, inputs, targets)
+    for round_ in range(1, settings.teacher_rounds):  # DAgger: the states the policy reaches, taught too
+        rng, key_starts, key_stops, key_clone = jax.random.split(rng, 4)
+        _, starts = jax.vmap(env.reset_env, in_axes=(0, None))(jax.random.split(key_starts, len(keys)), env_params)
+        visited, running, played = visited_states(apg, params, state.obs_stats, starts, key_stops)
+        more, _, _, (observations, alive) = taught(visited, round_)
+        alive = alive & running[:, None]  # (an episode that left the arena before its stop teaches nothing)
+        mask = alive.reshape(-1)
+        inputs = jnp.concatenate([inputs, observations.reshape(-1, observations.shape[-1])[mask]])
+        targets = jnp.concatenate([targets, jnp.tanh(more).reshape(-1, 2)[mask]])
+        steps += float(jnp.sum(played)) + float(jnp.sum(alive)) * (settings.teacher_iterations + 1)
+        params, value = fitted(params, key_clone, inputs, targets)
     state = state.replace(params=params, opt_state=apg.optimizer.init(params), best_params=params, rng=rng)
     measures = {
-        "steps": float(teacher_steps(settings, float(jnp.mean(jnp.sum(alive, axis=1))))),
+        "steps": steps,
         "teacher_in_time": float(jnp.mean(final.is_success)),
         "teacher_return": float(jnp.mean(returns)),
         "clone_loss": float(value),
+        "pairs": float(inputs.shape[0]),
     }
     return state, measures
 
 
-__all__ = ["CLONE_BATCH", "CLONE_LEARNING_RATE", "clone_from_teacher", "teacher_steps"]
+__all__ = ["CLONE_BATCH", "CLONE_LEARNING_RATE", "clone_from_teacher", "teacher_steps", "visited_states"]

@@ -63,9 +63,12 @@ class APGTrainer:
 
             state, measures = clone_from_teacher(self.apg, state, progress=self.progress)
             steps += int(measures["steps"])
+            rounds = self.settings.teacher_rounds
+            dagger = f" after {rounds} rounds ({int(measures['pairs']):,} pairs)" if rounds > 1 else ""
             print(f"open-loop teacher: {measures['teacher_in_time']:.0%} of its {self.settings.teacher_episodes} "
                   f"sequences in time, mean return {measures['teacher_return']:.2f}; cloned (least squares "
-                  f"{measures['clone_loss']:.2g}) in {int(measures['steps']):,} env steps", file=sys.stderr)  # fmt: skip
+                  f"{measures['clone_loss']:.2g}){dagger} in {int(measures['steps']):,} env steps",
+                  file=sys.stderr)  # fmt: skip
         while True:
             if every and int(state.updates) % every == 0:
                 state, metrics = self.apg.validate(state)
@@ -101,6 +104,7 @@ class APGTrainer:
         taught = (
             f"; the policy first cloned from the best sequences of {s.teacher_episodes} episodes "
             f"({s.teacher_iterations} Adam steps each)"
+            + (f", then {s.teacher_rounds - 1} DAgger rounds from its own states" if s.teacher_rounds > 1 else "")
             if s.teacher_episodes
             else ""
         )
