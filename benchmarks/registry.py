@@ -41,6 +41,7 @@ SUITE: dict[str, str] = {
     "incentives": "benchmarks.learning.incentives",
     "energy-split": "benchmarks.learning.energy_split",
     "open-loop-bound": "benchmarks.learning.open_loop_bound",
+    "apg-clone-rounds": "benchmarks.learning.apg_clone_rounds",
     "ship-rl-agents": "benchmarks.learning.ship_rl_agents",
     "per-t-con": "benchmarks.learning.per_t_con",
     "prescribed-time-goal": "benchmarks.learning.prescribed_time_goal",

@@ -317,6 +317,10 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "energy-split": ("docs/rl_benchmark/energy_split.json", lambda data: energy_tables.split_table(data)),
     "law-gains": ("docs/rl_benchmark/energy_split.json", lambda data: energy_tables.gains_table(data)),
     "open-loop-bound": ("docs/rl_benchmark/open_loop_bound.json", lambda data: energy_tables.open_loop_table(data)),
+    "apg-clone-rounds": (
+        "docs/rl_benchmark/apg_clone_rounds.json",
+        lambda data: energy_tables.clone_rounds_table(data),
+    ),
     "sbx-speed": ("docs/rl_benchmark/sbx_speed.json", sbx_speed_table),
     "sbx-v1": ("docs/rl_benchmark/sbx_v1.json", lambda data: rl_table(data, "random")),
     "sbx-v2": ("docs/rl_benchmark/sbx_v2.json", lambda data: rl_table(data, "random")),

@@ -77,4 +77,23 @@ def open_loop_table(data: dict[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
-__all__ = ["gains_table", "open_loop_table", "split_table"]
+def clone_rounds_table(data: dict[str, Any]) -> str:
+    """APG's cloned policy alone, before any update, per number of teacher rounds (benchmarks/learning/apg_clone_rounds)."""
+    bands = list(data["rows"][0]["in_time_by_T_con"])
+    lines = ["| teacher_rounds | lesson env steps | pairs | teacher's sequences in time | clone: in time | "
+             + " | ".join(f"T_con {band} s" for band in bands)
+             + " | return | final distance (median) [m] | final heading [rad] |",
+             "|---" * (8 + len(bands)) + "|"]  # fmt: skip
+    for row in data["rows"]:
+        lines.append(f"| {row['rounds']} | {row['lesson_steps'] / 1e6:.0f} M | {row['pairs']:,.0f} "
+                     f"| {row['teacher_in_time']:.2f} | {row['in_time']:.2f} | "
+                     + " | ".join(f"{row['in_time_by_T_con'][band]:.2f}" for band in bands)
+                     + f" | {row['return']:.2f} | {row['final_distance_median']:.3f} | {row['final_heading']:.2f} |")  # fmt: skip
+    first = data["rows"][0]
+    lines += ["", f"{first['episodes']} episodes a round, {first['iterations']} Adam steps each (seed 0); the clone's "
+              f"mean action on {data['eval_episodes']} fresh episodes of {data['env_id']}, actions time-scaled by "
+              f"{data['action_time_scale']:g} s; no APG update."]  # fmt: skip
+    return "\n".join(lines) + "\n"
+
+
+__all__ = ["clone_rounds_table", "gains_table", "open_loop_table", "split_table"]
