@@ -156,6 +156,18 @@ ENTRIES: dict[str, dict[str, Any]] = {
         "eval_freq": 50_000_000,
         "checkpoint_freq": 50_000_000,
     },
+    # and with the lesson as DAgger (teacher_rounds 3 of 256 episodes: about the env steps of one round of 512)
+    "apg-dagger-time-scaled-30min-v2": {
+        "algo": "apg",
+        "backend": "jax",
+        "env_id": V2,
+        "hyperparams": str(HYPERPARAMS_DIR / "apg_teacher.yml"),
+        "hyperparam_overrides": {"teacher_episodes": 256, "teacher_rounds": 3},
+        "action_time_scale": 10.0,
+        "total_timesteps": 700_000_000,
+        "eval_freq": 50_000_000,
+        "checkpoint_freq": 50_000_000,
+    },
     "apg-residual-v2": {
         "algo": "apg",
         "backend": "jax",
