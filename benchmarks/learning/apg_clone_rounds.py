@@ -1,6 +1,6 @@
 """What APG's open-loop teacher gives before any update: the cloned policy alone, after 1 and more DAgger rounds.
 
-    python -m benchmarks run apg-clone-rounds --docs     # rounds 1 and 3, 256 episodes a round (about 10 min, 1 core)
+    python -m benchmarks run apg-clone-rounds --docs     # rounds 1, 3 and 6 of 256 episodes (about 25 min, 1 core)
     python -m benchmarks run apg-clone-rounds --rounds 1 2 --episodes 16 --iterations 50   # a quick look, printed
 
 For each number of ``teacher_rounds`` (train/learning/jitted/apg_teacher.py), on DWRPointStabilization-v2 with
@@ -79,7 +79,7 @@ def measure(rounds: int, episodes: int, iterations: int, n_eval: int, time_scale
 
 def main(argv: list[str] | None = None) -> int:
     parser = parser_for("apg-clone-rounds", __doc__)
-    parser.add_argument("--rounds", type=int, nargs="+", default=[1, 3], help="teacher_rounds to measure (1 3)")
+    parser.add_argument("--rounds", type=int, nargs="+", default=[1, 3, 6], help="teacher_rounds to measure (1 3 6)")
     parser.add_argument("--episodes", type=int, default=256, help="teacher_episodes, a round (default: 256)")
     parser.add_argument("--iterations", type=int, default=400, help="teacher_iterations (default: 400)")
     parser.add_argument("--eval", type=int, default=512, help="fresh episodes the clone is played on (default: 512)")
