@@ -1,4 +1,4 @@
-"""APG from an open-loop teacher, time-scaled, on DWRPointStabilization-v2 at the goal's 30 minutes a seed, five seeds.
+"""APG from an open-loop teacher (one round or DAgger), time-scaled, on DWRPointStabilization-v2 at 30 minutes a seed.
 
     python -m benchmarks run rl-apg-teacher-30min
 

@@ -284,6 +284,11 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "rl-apg-scratch": ("docs/rl_benchmark/apg_scratch.json", lambda data: rl_table(data, "random")),
     "rl-apg-scratch-per-T_con": ("docs/rl_benchmark/apg_scratch.json", lambda data: rl_table(data, "per-T_con")),
     "rl-apg-teacher": ("docs/rl_benchmark/apg_teacher.json", lambda data: rl_table(data, "random")),
+    "rl-apg-teacher-30min": ("docs/rl_benchmark/apg_teacher_30min.json", lambda data: rl_table(data, "random")),
+    "rl-apg-teacher-30min-per-T_con": (
+        "docs/rl_benchmark/apg_teacher_30min.json",
+        lambda data: rl_table(data, "per-T_con"),
+    ),
     "rl-apg-teacher-per-T_con": ("docs/rl_benchmark/apg_teacher.json", lambda data: rl_table(data, "per-T_con")),
     "rl-apg-teacher-time-scaled": (
         "docs/rl_benchmark/apg_teacher_time_scaled.json",

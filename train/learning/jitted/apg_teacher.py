@@ -93,7 +93,8 @@ def clone_from_teacher(apg: Any, state: Any, progress: bool = False) -> tuple[An
         return params, value
 
     def taught(starts: Any, round_: int) -> tuple[Any, Any, Any, Any]:
-        """The best sequences from ``starts``: their pairs (observations, actions), rollouts and env steps played."""
+        """The best sequences from ``starts``, their returns and final states, and the (observations, alive) they
+        were played on."""
         label = f"open-loop teacher, round {round_ + 1}" if progress else None
         sequences, (returns, (final, observations, alive)) = best_sequences(
             env, env_params, starts, settings.teacher_iterations, settings.teacher_learning_rate, label
