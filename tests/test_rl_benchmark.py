@@ -244,9 +244,11 @@ def test_shipped_configs_name_no_directory_of_the_machine_that_trained_them() ->
 
     from benchmarks.learning.ship_rl_agents import ROOT, portable_config
 
-    text = "hyperparams: /tmp/wt3/train/hyperparams/apg.yml\nrun_dir: results/x\nother: /data/a.yml\n"
+    text = "hyperparams: /tmp/wt3/train/hyperparams/apg.yml\nrun_dir: /tmp/wt3/results/x\nother: /data/a.yml\n"
     assert portable_config(text, Path("/tmp/wt3")) == (
         "hyperparams: train/hyperparams/apg.yml\nrun_dir: results/x\nother: /data/a.yml\n"
     )
+    # a run made in another checkout: its hyperparameter files too
+    assert portable_config("- /work/copy/train/hyperparams/a.yml\n", Path("/tmp/wt3")) == "- train/hyperparams/a.yml\n"
     for config in sorted((ROOT / "train" / "pretrained").glob("*/config.yaml")):
         assert "/train/hyperparams/" not in config.read_text().replace(" train/hyperparams/", ""), config

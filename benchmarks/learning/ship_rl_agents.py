@@ -11,6 +11,7 @@ learning_curve.png.
 from __future__ import annotations
 
 import json
+import re
 import shutil
 from pathlib import Path
 
@@ -63,9 +64,11 @@ def shipped_name(entry: str) -> str:
 
 
 def portable_config(text: str, root: Path = ROOT) -> str:
-    """A run's config.yaml ``text`` with the paths inside the repository ``root`` made relative to it: a benchmark
+    """A run's config.yaml ``text`` with the paths inside the repository ``root`` made relative to it, and so the
+    absolute paths of any checkout's train/hyperparams/ (a copy of the repository the run was made in): a benchmark
     names its hyperparameter files by absolute path, which would ship this machine's directories to users."""
-    return text.replace(f"{root.as_posix().rstrip('/')}/", "")
+    text = text.replace(f"{root.as_posix().rstrip('/')}/", "")
+    return re.sub(r"(?<![\w.-])/[^\s'\"]*?/(train/hyperparams/)", r"\1", text)
 
 
 def main(argv: list[str] | None = None) -> int:
