@@ -21,7 +21,6 @@ import numpy as np
 from train.env_ids import env_keywords
 
 #: The shipped agents by path that are not registered names (their rows are in the RL benchmark).
-EXTRA_PRETRAINED = ("sac_tuned_v1", "tqc_tuned_v1")
 CONTROLLERS = ("optimal", "ptc", "pt-astolfi")
 
 
@@ -44,13 +43,15 @@ def controller_policy(name: str, params: Any, **overrides: Any) -> Any:
 
 
 def shipped_agents() -> dict[str, Any]:
-    """{name: policy} of every agent in train/pretrained (the registered names and those loaded by path)."""
+    """{name: policy} of every agent in train/pretrained (the registered names, and the directory's name of those
+    loaded by path)."""
     from train.learning.agents import PRETRAINED_DIR, load_agent, pretrained_paths
 
     paths = dict(pretrained_paths())
-    for name in EXTRA_PRETRAINED:
-        if (PRETRAINED_DIR / name / "model.zip").is_file():
-            paths[name] = PRETRAINED_DIR / name
+    registered = {path.resolve() for path in paths.values()}
+    for path in sorted(PRETRAINED_DIR.iterdir()):  # and every other shipped agent, by its directory's name
+        if (path / "model.zip").is_file() and path.resolve() not in registered:
+            paths[path.name] = path
     return {name: load_agent(path)[1] for name, path in sorted(paths.items())}
 
 
