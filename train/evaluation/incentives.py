@@ -20,7 +20,6 @@ import numpy as np
 
 from train.env_ids import env_keywords
 
-#: The shipped agents by path that are not registered names (their rows are in the RL benchmark).
 CONTROLLERS = ("optimal", "ptc", "pt-astolfi")
 
 
