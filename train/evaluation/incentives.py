@@ -20,6 +20,7 @@ import numpy as np
 
 from train.env_ids import env_keywords
 
+#: The controllers ranked beside the shipped agents.
 CONTROLLERS = ("optimal", "ptc", "pt-astolfi")
 
 
