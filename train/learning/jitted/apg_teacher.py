@@ -32,7 +32,7 @@ def teacher_steps(settings: Any, mean_episode_steps: float) -> float:
     """The env steps the teacher spends, about: every iteration, and the final rollout, plays each episode once; a
     further round (``teacher_rounds``) plays the policy's episodes once and searches from half-way on average."""
     per_search = settings.teacher_episodes * mean_episode_steps * (settings.teacher_iterations + 1)
-    rounds = getattr(settings, "teacher_rounds", 1) - 1
+    rounds = settings.teacher_rounds - 1
     return per_search * (1 + 0.5 * rounds) + rounds * settings.teacher_episodes * mean_episode_steps
 
 
