@@ -25,6 +25,14 @@ from train.learning.jitted.apg_settings import APGSettings
         ({"max_grad_norm": -1}, r"^max_grad_norm=-1(\.0)? is invalid"),
         ({"state_grad_clip": -0.5}, r"^state_grad_clip=-0.5 is invalid: expected a finite number in \[0, 1e\+09\]$"),
         ({"max_return_drop": -1}, r"^max_return_drop=-1(\.0)? is invalid"),
+        (
+            {"state_grad_clip_final": 0},
+            r"^state_grad_clip_final=0(\.0)? is invalid: expected a finite number in \(0, 1e\+09\]$",
+        ),
+        (
+            {"state_grad_clip": 0, "state_grad_clip_final": 4},
+            r"^state_grad_clip_final=4 is invalid with state_grad_clip=0 \(no clip to decay from\)",
+        ),
         ({"keep_best": -1}, r"^keep_best=-1 is invalid: expected an integer in \[0, 1e\+06\]$"),
         ({"keep_best": 2.5}, r"^keep_best=2.5 is invalid"),
         ({"validation_episodes": 0}, r"^validation_episodes=0 is invalid: expected an integer in \[1, 65536\]$"),
@@ -162,6 +170,30 @@ def test_the_schedules_updates_are_what_the_budget_buys() -> None:
     assert max(steps[10:]) < 1e-8  # past the budget the rate is 0: the weights stay (to float32 rounding)
 
 
+def test_a_decaying_clip_goes_from_the_first_to_the_final_over_the_budget() -> None:
+    """``state_grad_clip_final``: the update's clip is ``state_grad_clip`` at the first update, the final one from the
+    last update the budget buys on (geometric in between), and an update then is the fixed final clip's, bit for bit."""
+    from dwr_gym.jax_env import make_gymnax_env
+    from train.learning.jitted.apg import JaxAPG
+
+    env, params = make_gymnax_env("DWRPointStabilization-v2", T_con_range=[2.0, 2.2])
+    decaying = JaxAPG(APGSettings(episodes=4, net_arch=(8,), state_grad_clip=16.0, state_grad_clip_final=0.25),
+                      env, params, total_timesteps=4 * 42 * 10)  # fmt: skip
+    assert decaying.decay_updates == 10
+    clips = [float(decaying.state_grad_clip(u)) for u in (0, 5, 10, 20)]
+    assert clips == pytest.approx([16.0, 2.0, 0.25, 0.25], rel=1e-5)
+    fixed = JaxAPG(APGSettings(episodes=4, net_arch=(8,), state_grad_clip=0.25), env, params)
+    state = fixed.init(0)
+    state = state.replace(params=jax.tree.map(lambda x: x * 20.0 if x.ndim == 2 else x, state.params))
+    late = state.replace(updates=state.updates + 10)
+    _, at_final = fixed.update(late)
+    _, at_end = decaying.update(late)
+    _, at_start = decaying.update(state)
+    assert float(at_end["grad_norm"]) == float(at_final["grad_norm"])
+    start, end = float(at_start["grad_norm"]), float(at_end["grad_norm"])
+    assert abs(start - end) > 0.1 * end  # (the clips differ where they act: the test can fail)
+
+
 def test_an_update_that_loses_return_on_its_episodes_is_undone() -> None:
     """A step far too large (Adam at 5.0 on random weights) loses return on the episodes it was computed on: undone,
     the weights and Adam's state as before, its replay counted; with the check off it is kept."""
@@ -240,8 +272,8 @@ def test_an_update_whose_gradient_is_undefined_is_skipped() -> None:
     class Undefined(JaxAPG):
         poisoned = True
 
-        def episode(self, params: Any, stats: Any, key: Any) -> tuple[Any, Any]:
-            total, steps = super().episode(params, stats, key)
+        def episode(self, params: Any, stats: Any, key: Any, limit: Any = None) -> tuple[Any, Any]:
+            total, steps = super().episode(params, stats, key, limit)
             kernel = jax.tree.leaves(params)[-1]
             nan = jnp.sqrt(jnp.sum(kernel * 0.0)) if self.poisoned else 0.0  # d/dx sqrt(0 * x) = inf * 0
             return total + nan, steps

@@ -168,6 +168,20 @@ ENTRIES: dict[str, dict[str, Any]] = {
         "eval_freq": 50_000_000,
         "checkpoint_freq": 50_000_000,
     },
+    # the state's gradient clip decaying from 16 to 4 over the run (state_grad_clip_final): the wide clip's arrival and
+    # heading first, the recipe's energy last (the clip probes, docs/rl-benchmark.md); 560 M env steps, the goal's 30
+    # minutes of a core (the 700 M runs took about 37)
+    "apg-clip-decay-time-scaled-30min-v2": {
+        "algo": "apg",
+        "backend": "jax",
+        "env_id": V2,
+        "hyperparams": str(HYPERPARAMS_DIR / "apg_teacher.yml"),
+        "hyperparam_overrides": {"state_grad_clip": 16.0, "state_grad_clip_final": 4.0},
+        "action_time_scale": 10.0,
+        "total_timesteps": 560_000_000,
+        "eval_freq": 40_000_000,
+        "checkpoint_freq": 40_000_000,
+    },
     "apg-residual-v2": {
         "algo": "apg",
         "backend": "jax",

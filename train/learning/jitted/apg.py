@@ -53,25 +53,26 @@ class APGState(flax.struct.PyTreeNode):
 
 def clip_gradient(tree: Any, limit: float) -> Any:
     """``tree`` unchanged on the way forward; on the way back its cotangent (the floating leaves together) clipped to
-    the norm ``limit``."""
+    the norm ``limit`` (a number, or a jax scalar)."""
 
     def floating(leaf: Any) -> bool:
         return hasattr(leaf, "dtype") and jnp.issubdtype(leaf.dtype, jnp.floating)
 
     @jax.custom_vjp
-    def identity(x: Any) -> Any:
+    def identity(x: Any, bound: Any) -> Any:
         return x
 
-    def forward(x: Any) -> tuple[Any, None]:
-        return x, None
+    def forward(x: Any, bound: Any) -> tuple[Any, Any]:
+        return x, bound
 
-    def backward(_: None, cotangent: Any) -> tuple[Any]:
+    def backward(bound: Any, cotangent: Any) -> tuple[Any, Any]:
         norm = jnp.sqrt(sum(jnp.sum(leaf**2) for leaf in jax.tree.leaves(cotangent) if floating(leaf)) + 1e-12)
-        factor = jnp.minimum(1.0, limit / norm)
-        return (jax.tree.map(lambda leaf: leaf * factor if floating(leaf) else leaf, cotangent),)
+        factor = jnp.minimum(1.0, bound / norm)
+        return jax.tree.map(lambda leaf: leaf * factor if floating(leaf) else leaf, cotangent), jnp.zeros_like(bound)
 
     identity.defvjp(forward, backward)
-    return identity(tree)
+    # (the limit an argument, not a closure: a traced one, the decaying clip's, is then allowed)
+    return identity(tree, jnp.asarray(limit, jnp.float32))
 
 
 def all_finite(tree: Any) -> Any:
@@ -91,16 +92,27 @@ class JaxAPG:
         self.max_steps = int(getattr(env_params, "max_episode_steps", 0) or env_params.max_steps_in_episode)
         rate: Any = settings.learning_rate
         self.decay_updates = 0
-        if settings.linear_schedule:  # to 0 after the updates the budget buys (episodes of the mean T_con)
+        if settings.linear_schedule or settings.state_grad_clip_final is not None:
+            # to 0 (the rate) or to the final clip after the updates the budget buys (episodes of the mean T_con)
             from train.learning.jitted.apg_teacher import teacher_steps
 
             mean_steps = self.mean_episode_steps()
             budget = max(0.0, total_timesteps - teacher_steps(settings, mean_steps))  # (0 without a teacher)
             self.decay_updates = max(1, round(budget / (settings.episodes * mean_steps)))
+        if settings.linear_schedule:
             rate = optax.linear_schedule(settings.learning_rate, 0.0, self.decay_updates)
         self.optimizer = optax.chain(optax.clip_by_global_norm(settings.max_grad_norm), optax.adam(rate))
         self.update = jax.jit(self._update)
         self.validate = jax.jit(self._validate)
+
+    def state_grad_clip(self, updates: Any) -> Any:
+        """The state's gradient clip at update ``updates``: ``state_grad_clip``, or with ``state_grad_clip_final`` its
+        geometric decay to that over :attr:`decay_updates` (then held)."""
+        start, final = self.settings.state_grad_clip, self.settings.state_grad_clip_final
+        if final is None:
+            return start
+        fraction = jnp.minimum(1.0, jnp.asarray(updates, jnp.float32) / self.decay_updates)
+        return start * (final / start) ** fraction
 
     def mean_episode_steps(self) -> float:
         """The mean length of an episode, in env steps, over :data:`INITIAL_OBSERVATIONS` fresh ones (those of v2 end
@@ -135,15 +147,16 @@ class JaxAPG:
         mean, _, _ = self.network.apply(params, jnp.asarray(obs, jnp.float32))
         return jnp.clip(mean, -1.0, 1.0)
 
-    def episode(self, params: Any, stats: Any, key: Any) -> tuple[Any, Any]:
-        """One episode's return (differentiable in ``params``) and its env steps."""
+    def episode(self, params: Any, stats: Any, key: Any, limit: Any = None) -> tuple[Any, Any]:
+        """One episode's return (differentiable in ``params``, the state's gradient clipped to ``limit``, by default
+        ``state_grad_clip``) and its env steps."""
         key_reset, key_steps = jax.random.split(key)
         _, start = self.env.reset_env(key_reset, self.env_params)
-        limit = self.settings.state_grad_clip
+        limit = self.settings.state_grad_clip if limit is None else limit
 
         def one_step(carry: tuple[Any, ...], t: Any) -> tuple[tuple[Any, ...], None]:
             state, alive, total, steps = carry
-            if limit > 0:
+            if self.settings.state_grad_clip > 0:
                 state = clip_gradient(state, limit)
             action = self.act(params, state.observation, stats)
             _, after, reward, done, _ = self.env.step_env(jax.random.fold_in(key_steps, t), state, action,
@@ -177,8 +190,10 @@ class JaxAPG:
         rng, key = jax.random.split(state.rng)
         keys = jax.random.split(key, self.settings.episodes)
 
+        limit = self.state_grad_clip(state.updates)
+
         def loss(params: Any) -> tuple[Any, tuple[Any, Any]]:
-            returns, steps = jax.vmap(self.episode, in_axes=(None, None, 0))(params, state.obs_stats, keys)
+            returns, steps = jax.vmap(self.episode, in_axes=(None, None, 0, None))(params, state.obs_stats, keys, limit)
             return -jnp.sum(returns), (returns, steps)
 
         # The sum's gradient, then divided: each episode's state cotangent enters the backward pass at the scale of

@@ -14,9 +14,9 @@ from train.learning.config import ConfigError
 #: ``max_return_drop`` at or above this: no update is checked (nor undone).
 MAX_DROP = 1e9
 APG_DEFAULTS: dict[str, Any] = {"episodes": 64, "learning_rate": 3e-4, "max_grad_norm": 1.0, "state_grad_clip": 64.0,
-                                 "max_return_drop": MAX_DROP, "keep_best": 0, "validation_episodes": 256,
-                                 "teacher_episodes": 0, "teacher_iterations": 400, "teacher_learning_rate": 0.02,
-                                 "clone_steps": 4000, "teacher_rounds": 1}  # fmt: skip
+                                 "state_grad_clip_final": None, "max_return_drop": MAX_DROP, "keep_best": 0,
+                                 "validation_episodes": 256, "teacher_episodes": 0, "teacher_iterations": 400,
+                                 "teacher_learning_rate": 0.02, "clone_steps": 4000, "teacher_rounds": 1}  # fmt: skip
 #: Observations of fresh episodes the fixed observation scaling is computed from.
 INITIAL_OBSERVATIONS = 1024
 
@@ -40,6 +40,10 @@ class APGSettings:
     each episode's as its own return's gradient alone would be, whatever ``episodes`` is. (Until 2026-11-27 the clip
     acted on the batch mean's gradient, where each episode's cotangent is 1/``episodes`` of its own: the shipped
     ``state_grad_clip: 1`` at 64 episodes was this 64, which the yml files now say.)"""
+    state_grad_clip_final: float | None = None
+    """With a value, the clip decays geometrically from ``state_grad_clip`` to this over the updates the budget buys
+    (then stays there): a wide clip first, which lets the pose at T_con into the gradient and learns to arrive, and a
+    tight one last, which weighs the energy more (docs/rl-benchmark.md, the clip probes); None (the default): fixed."""
     max_return_drop: float = MAX_DROP
     """An update after which the same episodes' mean return is lower by more than this is undone (the weights and
     Adam's state as before it; the replay's env steps count); :data:`MAX_DROP` (the default): none checked. Off by
@@ -92,6 +96,7 @@ class APGSettings:
                 max_grad_norm=as_float("max_grad_norm", values["max_grad_norm"], 0.0, 1e9, low_inclusive=False,
                                        text=True),
                 state_grad_clip=as_float("state_grad_clip", values["state_grad_clip"], 0.0, 1e9, text=True),
+                state_grad_clip_final=final_clip(values["state_grad_clip_final"], values["state_grad_clip"]),
                 max_return_drop=as_float("max_return_drop", values["max_return_drop"], 0.0, MAX_DROP, text=True),
                 keep_best=as_int("keep_best", values["keep_best"], 0, 1_000_000, text=True),
                 validation_episodes=as_int("validation_episodes", values["validation_episodes"], 1, 65536, text=True),
@@ -111,6 +116,19 @@ class APGSettings:
         from train.learning.jitted.policy import actor_network_settings
 
         return actor_network_settings(self)
+
+
+def final_clip(value: Any, start: Any) -> float | None:
+    """``state_grad_clip_final`` checked: None, or a number in (0, 1e9] with a clip to start from."""
+    if value is None:
+        return None
+    final = as_float("state_grad_clip_final", value, 0.0, 1e9, low_inclusive=False, text=True)
+    if float(start) == 0.0:
+        raise ValueError(
+            f"state_grad_clip_final={value!r} is invalid with state_grad_clip=0 (no clip to decay from): "
+            "expected a state_grad_clip > 0, or no state_grad_clip_final"
+        )
+    return final
 
 
 def check_apg_kwargs(params: dict[str, Any]) -> dict[str, Any]:

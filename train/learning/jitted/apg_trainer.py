@@ -108,8 +108,13 @@ class APGTrainer:
             if s.teacher_episodes
             else ""
         )
-        return (f"APG: {s.episodes} episodes per update, Adam {rate}, the state's gradient clipped to "
-                f"{s.state_grad_clip:g} per step in each episode{kept}{taught}")  # fmt: skip
+        clip = (
+            f"{s.state_grad_clip:g}"
+            if s.state_grad_clip_final is None
+            else f"{s.state_grad_clip:g} decaying to {s.state_grad_clip_final:g} over {self.apg.decay_updates} updates"
+        )
+        return (f"APG: {s.episodes} episodes per update, Adam {rate}, the state's gradient clipped to {clip} per step "
+                f"in each episode{kept}{taught}")  # fmt: skip
 
 
 def train(
