@@ -1,0 +1,96 @@
+"""The tables of the RL benchmark's pages (docs/rl-benchmark.md, docs/rl-libraries.md and the README's summary), each
+from the JSON that ``dwr-gym benchmark`` or a benchmark script wrote: :data:`RL_TABLES`, which
+:data:`train.reporting.doc_tables.TABLES` includes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+RL_TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
+    "rl-benchmark": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "random")),
+    "rl-residual": ("docs/rl_benchmark/residual.json", lambda data: rl_table(data, "residual")),
+    "rl-sweep": ("docs/rl_benchmark/sweep.json", lambda data: rl_table(data, "sweep")),
+    "rl-sweep-jax": ("docs/rl_benchmark/sweep_ppo_jax.json", lambda data: rl_table(data, "sweep")),
+    "rl-sweep-sac": ("docs/rl_benchmark/sweep_sac.json", lambda data: rl_table(data, "sweep")),
+    "rl-sweep-tqc": ("docs/rl_benchmark/sweep_tqc.json", lambda data: rl_table(data, "sweep")),
+    "rl-anneal": ("docs/rl_benchmark/anneal.json", lambda data: rl_table(data, "random")),
+    "rl-goals": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "goals")),
+    "rl-benchmark-readme": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "readme")),
+    "rl-benchmark-disturbed": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "disturbed")),
+    "rl-v2": ("docs/rl_benchmark/v2.json", lambda data: rl_table(data, "random")),
+    "rl-v2-per-T_con": ("docs/rl_benchmark/v2.json", lambda data: rl_table(data, "per-T_con")),
+    "rl-time-scale": ("docs/rl_benchmark/time_scale.json", lambda data: rl_table(data, "random")),
+    "rl-apg": ("docs/rl_benchmark/apg.json", lambda data: rl_table(data, "random")),
+    "rl-apg-per-T_con": ("docs/rl_benchmark/apg.json", lambda data: rl_table(data, "per-T_con")),
+    "rl-apg-scratch": ("docs/rl_benchmark/apg_scratch.json", lambda data: rl_table(data, "random")),
+    "rl-apg-scratch-per-T_con": ("docs/rl_benchmark/apg_scratch.json", lambda data: rl_table(data, "per-T_con")),
+    "rl-apg-teacher": ("docs/rl_benchmark/apg_teacher.json", lambda data: rl_table(data, "random")),
+    "rl-apg-teacher-30min": ("docs/rl_benchmark/apg_teacher_30min.json", lambda data: rl_table(data, "random")),
+    "rl-apg-teacher-30min-per-T_con": (
+        "docs/rl_benchmark/apg_teacher_30min.json",
+        lambda data: rl_table(data, "per-T_con"),
+    ),
+    "rl-apg-teacher-per-T_con": ("docs/rl_benchmark/apg_teacher.json", lambda data: rl_table(data, "per-T_con")),
+    "rl-apg-teacher-time-scaled": (
+        "docs/rl_benchmark/apg_teacher_time_scaled.json",
+        lambda data: rl_table(data, "random"),
+    ),
+    "rl-apg-teacher-time-scaled-per-T_con": (
+        "docs/rl_benchmark/apg_teacher_time_scaled.json",
+        lambda data: rl_table(data, "per-T_con"),
+    ),
+    "rl-time-scale-per-T_con": ("docs/rl_benchmark/time_scale.json", lambda data: rl_table(data, "per-T_con")),
+    "rl-time-scale-long": ("docs/rl_benchmark/time_scale_long.json", lambda data: rl_table(data, "random")),
+    "rl-time-scale-long-per-T_con": (
+        "docs/rl_benchmark/time_scale_long.json",
+        lambda data: rl_table(data, "per-T_con"),
+    ),
+    "rl-time-scale-30min": ("docs/rl_benchmark/time_scale_30min.json", lambda data: rl_table(data, "random")),
+    "rl-time-scale-30min-per-T_con": (
+        "docs/rl_benchmark/time_scale_30min.json",
+        lambda data: rl_table(data, "per-T_con"),
+    ),
+    "rl-diagnosis": ("docs/rl_benchmark/diagnosis.json", lambda data: rl_table(data, "diagnosis")),
+    "rl-levers": ("docs/rl_benchmark/levers.json", lambda data: rl_table(data, "levers")),
+    "rl-rushing": ("docs/rl_benchmark/rushing.json", lambda data: rl_table(data, "rushing")),
+    "rl-rushing-v2": ("docs/rl_benchmark/rushing_v2.json", lambda data: rl_table(data, "rushing")),
+    "sbx-v1": ("docs/rl_benchmark/sbx_v1.json", lambda data: rl_table(data, "random")),
+    "sbx-v2": ("docs/rl_benchmark/sbx_v2.json", lambda data: rl_table(data, "random")),
+    "sbx-v2-long": ("docs/rl_benchmark/sbx_v2_long.json", lambda data: rl_table(data, "random")),
+    "sbx-v2-seeds": ("docs/rl_benchmark/sbx_v2_seeds.json", lambda data: rl_table(data, "random")),
+    "sbx-v2-30min": ("docs/rl_benchmark/sbx_v2_30min.json", lambda data: rl_table(data, "random")),
+}
+
+
+def rl_table(data: dict[str, Any], kind: str) -> str:
+    """The tables of docs/rl-benchmark.md (train.reporting.rl_benchmark), ending in a newline."""
+    text = _rl_table(data, kind)
+    return text if text.endswith("\n") else text + "\n"
+
+
+def _rl_table(data: dict[str, Any], kind: str) -> str:
+    from train.reporting import rl_benchmark
+
+    if kind == "diagnosis":
+        return rl_benchmark.diagnosis_table(data)
+    if kind == "levers":
+        return rl_benchmark.levers_table(data)
+    if kind == "sweep":
+        return rl_benchmark.sweep_table(data)
+    if kind == "residual":
+        return rl_benchmark.residual_table(data)
+    if kind == "rushing":
+        return rl_benchmark.rushing_table(data)
+    if kind == "goals":
+        return rl_benchmark.goals_table(data["summary"])
+    if kind == "readme":
+        return rl_benchmark.table(
+            data["summary"], data["references"], columns=("in_time", "energy_ratio", "final_heading")
+        )
+    if kind == "disturbed":
+        return rl_benchmark.disturbed_table(data["summary"], data["references"])
+    if kind == "per-T_con":
+        return rl_benchmark.per_T_con_table(data["summary"], data["references"], data.get("references_env"))
+    return rl_benchmark.table(data["summary"], data["references"])
