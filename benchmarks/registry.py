@@ -78,6 +78,7 @@ SUITE: dict[str, str] = {
     "rl-apg-scratch": "benchmarks.recipes.rl_apg_scratch",
     "rl-apg-teacher": "benchmarks.recipes.rl_apg_teacher",
     "rl-apg-teacher-30min": "benchmarks.recipes.rl_apg_teacher_30min",
+    "rl-apg-clip-decay": "benchmarks.recipes.rl_apg_clip_decay",
     "rl-time-scale-30min": "benchmarks.recipes.rl_time_scale_30min",
     "robust-rl": "benchmarks.recipes.robust_rl",
 }
