@@ -33,6 +33,10 @@ from train.learning.jitted.apg_settings import APGSettings
             {"state_grad_clip": 0, "state_grad_clip_final": 4},
             r"^state_grad_clip_final=4 is invalid with state_grad_clip=0 \(no clip to decay from\)",
         ),
+        (
+            {"state_grad_clip_decay": 0},
+            r"^state_grad_clip_decay=0(\.0)? is invalid: expected a finite number in \(0, 1\]$",
+        ),
         ({"keep_best": -1}, r"^keep_best=-1 is invalid: expected an integer in \[0, 1e\+06\]$"),
         ({"keep_best": 2.5}, r"^keep_best=2.5 is invalid"),
         ({"validation_episodes": 0}, r"^validation_episodes=0 is invalid: expected an integer in \[1, 65536\]$"),
@@ -182,6 +186,9 @@ def test_a_decaying_clip_goes_from_the_first_to_the_final_over_the_budget() -> N
     assert decaying.decay_updates == 10
     clips = [float(decaying.state_grad_clip(u)) for u in (0, 5, 10, 20)]
     assert clips == pytest.approx([16.0, 2.0, 0.25, 0.25], rel=1e-5)
+    half = JaxAPG(APGSettings(episodes=4, net_arch=(8,), state_grad_clip=16.0, state_grad_clip_final=0.25,
+                              state_grad_clip_decay=0.5), env, params, total_timesteps=4 * 42 * 10)  # fmt: skip
+    assert [float(half.state_grad_clip(u)) for u in (0, 5, 10)] == pytest.approx([16.0, 0.25, 0.25], rel=1e-5)
     fixed = JaxAPG(APGSettings(episodes=4, net_arch=(8,), state_grad_clip=0.25), env, params)
     state = fixed.init(0)
     state = state.replace(params=jax.tree.map(lambda x: x * 20.0 if x.ndim == 2 else x, state.params))

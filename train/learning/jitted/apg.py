@@ -107,11 +107,12 @@ class JaxAPG:
 
     def state_grad_clip(self, updates: Any) -> Any:
         """The state's gradient clip at update ``updates``: ``state_grad_clip``, or with ``state_grad_clip_final`` its
-        geometric decay to that over :attr:`decay_updates` (then held)."""
+        geometric decay to that over ``state_grad_clip_decay`` of :attr:`decay_updates` (then held)."""
         start, final = self.settings.state_grad_clip, self.settings.state_grad_clip_final
         if final is None:
             return start
-        fraction = jnp.minimum(1.0, jnp.asarray(updates, jnp.float32) / self.decay_updates)
+        span = max(1.0, self.settings.state_grad_clip_decay * self.decay_updates)
+        fraction = jnp.minimum(1.0, jnp.asarray(updates, jnp.float32) / span)
         return start * (final / start) ** fraction
 
     def mean_episode_steps(self) -> float:

@@ -14,7 +14,8 @@ from train.learning.config import ConfigError
 #: ``max_return_drop`` at or above this: no update is checked (nor undone).
 MAX_DROP = 1e9
 APG_DEFAULTS: dict[str, Any] = {"episodes": 64, "learning_rate": 3e-4, "max_grad_norm": 1.0, "state_grad_clip": 64.0,
-                                 "state_grad_clip_final": None, "max_return_drop": MAX_DROP, "keep_best": 0,
+                                 "state_grad_clip_final": None, "state_grad_clip_decay": 1.0,
+                                 "max_return_drop": MAX_DROP, "keep_best": 0,
                                  "validation_episodes": 256, "teacher_episodes": 0, "teacher_iterations": 400,
                                  "teacher_learning_rate": 0.02, "clone_steps": 4000, "teacher_rounds": 1}  # fmt: skip
 #: Observations of fresh episodes the fixed observation scaling is computed from.
@@ -44,6 +45,9 @@ class APGSettings:
     """With a value, the clip decays geometrically from ``state_grad_clip`` to this over the updates the budget buys
     (then stays there): a wide clip first, which lets the pose at T_con into the gradient and learns to arrive, and a
     tight one last, which weighs the energy more (docs/rl-benchmark.md, the clip probes); None (the default): fixed."""
+    state_grad_clip_decay: float = 1.0
+    """The share of the budget's updates over which ``state_grad_clip_final`` is reached (1: at the end, when the
+    rate reaches 0 too; 0.5: half-way, so that the second half's updates are at the final clip)."""
     max_return_drop: float = MAX_DROP
     """An update after which the same episodes' mean return is lower by more than this is undone (the weights and
     Adam's state as before it; the replay's env steps count); :data:`MAX_DROP` (the default): none checked. Off by
@@ -97,6 +101,8 @@ class APGSettings:
                                        text=True),
                 state_grad_clip=as_float("state_grad_clip", values["state_grad_clip"], 0.0, 1e9, text=True),
                 state_grad_clip_final=final_clip(values["state_grad_clip_final"], values["state_grad_clip"]),
+                state_grad_clip_decay=as_float("state_grad_clip_decay", values["state_grad_clip_decay"], 0.0, 1.0,
+                                               low_inclusive=False, text=True),
                 max_return_drop=as_float("max_return_drop", values["max_return_drop"], 0.0, MAX_DROP, text=True),
                 keep_best=as_int("keep_best", values["keep_best"], 0, 1_000_000, text=True),
                 validation_episodes=as_int("validation_episodes", values["validation_episodes"], 1, 65536, text=True),
