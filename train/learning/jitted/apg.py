@@ -99,6 +99,8 @@ class JaxAPG:
             mean_steps = self.mean_episode_steps()
             budget = max(0.0, total_timesteps - teacher_steps(settings, mean_steps))  # (0 without a teacher)
             self.decay_updates = max(1, round(budget / (settings.episodes * mean_steps)))
+        #: The updates over which a decaying clip reaches ``state_grad_clip_final`` (then held).
+        self.clip_decay_updates = max(1.0, settings.state_grad_clip_decay * self.decay_updates)
         if settings.linear_schedule:
             rate = optax.linear_schedule(settings.learning_rate, 0.0, self.decay_updates)
         self.optimizer = optax.chain(optax.clip_by_global_norm(settings.max_grad_norm), optax.adam(rate))
@@ -107,12 +109,11 @@ class JaxAPG:
 
     def state_grad_clip(self, updates: Any) -> Any:
         """The state's gradient clip at update ``updates``: ``state_grad_clip``, or with ``state_grad_clip_final`` its
-        geometric decay to that over ``state_grad_clip_decay`` of :attr:`decay_updates` (then held)."""
+        geometric decay to that over :attr:`clip_decay_updates` (then held)."""
         start, final = self.settings.state_grad_clip, self.settings.state_grad_clip_final
         if final is None:
             return start
-        span = max(1.0, self.settings.state_grad_clip_decay * self.decay_updates)
-        fraction = jnp.minimum(1.0, jnp.asarray(updates, jnp.float32) / span)
+        fraction = jnp.minimum(1.0, jnp.asarray(updates, jnp.float32) / self.clip_decay_updates)
         return start * (final / start) ** fraction
 
     def mean_episode_steps(self) -> float:

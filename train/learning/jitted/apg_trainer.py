@@ -112,7 +112,7 @@ class APGTrainer:
             f"{s.state_grad_clip:g}"
             if s.state_grad_clip_final is None
             else f"{s.state_grad_clip:g} decaying to {s.state_grad_clip_final:g} over "
-            f"{max(1, round(s.state_grad_clip_decay * self.apg.decay_updates))} updates"
+            f"{round(self.apg.clip_decay_updates)} updates"
         )
         return (f"APG: {s.episodes} episodes per update, Adam {rate}, the state's gradient clipped to {clip} per step "
                 f"in each episode{kept}{taught}")  # fmt: skip
