@@ -37,6 +37,12 @@ from train.learning.jitted.apg_settings import APGSettings
             {"state_grad_clip_decay": 0},
             r"^state_grad_clip_decay=0(\.0)? is invalid: expected a finite number in \(0, 1\]$",
         ),
+        ({"near_miss_clip": 0}, r"^near_miss_clip=0(\.0)? is invalid: expected a finite number in \(0, 1e\+09\]$"),
+        (
+            {"state_grad_clip": 0, "near_miss_clip": 16},
+            r"^near_miss_clip=16 is invalid with state_grad_clip=0 \(no episode is clipped\)",
+        ),
+        ({"near_miss_distance": 0}, r"^near_miss_distance=0(\.0)? is invalid: expected a finite number in \(0, 100\]$"),
         ({"keep_best": -1}, r"^keep_best=-1 is invalid: expected an integer in \[0, 1e\+06\]$"),
         ({"keep_best": 2.5}, r"^keep_best=2.5 is invalid"),
         ({"validation_episodes": 0}, r"^validation_episodes=0 is invalid: expected an integer in \[1, 65536\]$"),
@@ -199,6 +205,34 @@ def test_a_decaying_clip_goes_from_the_first_to_the_final_over_the_budget() -> N
     assert float(at_end["grad_norm"]) == float(at_final["grad_norm"])
     start, end = float(at_start["grad_norm"]), float(at_end["grad_norm"])
     assert abs(start - end) > 0.1 * end  # (the clips differ where they act: the test can fail)
+
+
+def test_a_near_miss_is_clipped_at_the_near_miss_clip_and_the_others_as_before() -> None:
+    """With ``near_miss_clip`` an episode that ends outside the goal tolerance but within ``near_miss_distance`` is
+    clipped at the near-miss clip (its gradient is the fixed near-miss clip's), the others at ``state_grad_clip``
+    (theirs is the fixed clip's), and the return is the return."""
+    from dwr_gym.jax_env import make_gymnax_env
+    from train.learning.jitted.apg import JaxAPG
+
+    env, params = make_gymnax_env("DWRPointStabilization-v2", T_con_range=[2.0, 2.2])
+
+    def apg(**kwargs: Any) -> Any:
+        return JaxAPG(APGSettings(episodes=4, net_arch=(8,), **kwargs), env, params)
+
+    fixed, wide = apg(state_grad_clip=0.25), apg(state_grad_clip=16.0)
+    state = fixed.init(0)
+    state = state.replace(params=jax.tree.map(lambda x: x * 20.0 if x.ndim == 2 else x, state.params))
+    _, at_fixed = fixed.update(state)
+    _, at_wide = wide.update(state)
+    everywhere = apg(state_grad_clip=0.25, near_miss_clip=16.0, near_miss_distance=100.0)  # every miss is near
+    nowhere = apg(state_grad_clip=0.25, near_miss_clip=16.0, near_miss_distance=0.010001)  # none is
+    _, near = everywhere.update(state)
+    _, far = nowhere.update(state)
+    assert float(at_fixed["return_mean"]) < 9.0  # (they miss: not one is at the goal, whose bonus is 10)
+    assert float(near["return_mean"]) == float(far["return_mean"]) == float(at_fixed["return_mean"])
+    assert float(near["grad_norm"]) == pytest.approx(float(at_wide["grad_norm"]), rel=1e-5)
+    assert float(far["grad_norm"]) == pytest.approx(float(at_fixed["grad_norm"]), rel=1e-5)
+    assert abs(float(at_wide["grad_norm"]) - float(at_fixed["grad_norm"])) > 0.1 * float(at_fixed["grad_norm"])
 
 
 def test_an_update_that_loses_return_on_its_episodes_is_undone() -> None:

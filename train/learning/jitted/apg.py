@@ -51,12 +51,20 @@ class APGState(flax.struct.PyTreeNode):
     validation_key: Any
 
 
-def clip_gradient(tree: Any, limit: float) -> Any:
-    """``tree`` unchanged on the way forward; on the way back its cotangent (the floating leaves together) clipped to
-    the norm ``limit`` (a number, or a jax scalar)."""
+def clipped(cotangent: Any, bound: Any) -> Any:
+    """``cotangent`` (a tree) scaled so that the norm of its floating leaves together is at most ``bound``."""
 
     def floating(leaf: Any) -> bool:
         return hasattr(leaf, "dtype") and jnp.issubdtype(leaf.dtype, jnp.floating)
+
+    norm = jnp.sqrt(sum(jnp.sum(leaf**2) for leaf in jax.tree.leaves(cotangent) if floating(leaf)) + 1e-12)
+    factor = jnp.minimum(1.0, bound / norm)
+    return jax.tree.map(lambda leaf: leaf * factor if floating(leaf) else leaf, cotangent)
+
+
+def clip_gradient(tree: Any, limit: float) -> Any:
+    """``tree`` unchanged on the way forward; on the way back its cotangent (the floating leaves together) clipped to
+    the norm ``limit`` (a number, or a jax scalar)."""
 
     @jax.custom_vjp
     def identity(x: Any, bound: Any) -> Any:
@@ -66,13 +74,32 @@ def clip_gradient(tree: Any, limit: float) -> Any:
         return x, bound
 
     def backward(bound: Any, cotangent: Any) -> tuple[Any, Any]:
-        norm = jnp.sqrt(sum(jnp.sum(leaf**2) for leaf in jax.tree.leaves(cotangent) if floating(leaf)) + 1e-12)
-        factor = jnp.minimum(1.0, bound / norm)
-        return jax.tree.map(lambda leaf: leaf * factor if floating(leaf) else leaf, cotangent), jnp.zeros_like(bound)
+        return clipped(cotangent, bound), jnp.zeros_like(bound)
 
     identity.defvjp(forward, backward)
     # (the limit an argument, not a closure: a traced one, the decaying clip's, is then allowed)
     return identity(tree, jnp.asarray(limit, jnp.float32))
+
+
+def clip_gradient_carried(tree: Any, carrier: Any) -> tuple[Any, Any]:
+    """``(tree, carrier)`` unchanged on the way forward; on the way back ``tree``'s cotangent clipped to the norm of
+    ``carrier``'s (a scalar, passed back unchanged). An episode adds ``bound * carrier`` (0: the carrier is 0) to its
+    return once it knows ``bound`` (at its end: :attr:`APGSettings.near_miss_clip`), and the bound then travels back
+    with the cotangent to every step: a clip chosen after the forward pass, without playing the episode twice."""
+
+    @jax.custom_vjp
+    def identity(x: Any, c: Any) -> tuple[Any, Any]:
+        return x, c
+
+    def forward(x: Any, c: Any) -> tuple[tuple[Any, Any], None]:
+        return (x, c), None
+
+    def backward(_: None, cotangents: tuple[Any, Any]) -> tuple[Any, Any]:
+        cotangent, bound = cotangents
+        return clipped(cotangent, jnp.abs(bound)), bound
+
+    identity.defvjp(forward, backward)
+    return identity(tree, carrier)  # type: ignore[no-any-return]
 
 
 def all_finite(tree: Any) -> Any:
@@ -156,20 +183,41 @@ class JaxAPG:
         _, start = self.env.reset_env(key_reset, self.env_params)
         limit = self.settings.state_grad_clip if limit is None else limit
 
+        near_miss = self.settings.near_miss_clip is not None
+
         def one_step(carry: tuple[Any, ...], t: Any) -> tuple[tuple[Any, ...], None]:
-            state, alive, total, steps = carry
-            if self.settings.state_grad_clip > 0:
+            state, carrier, alive, total, steps = carry
+            if near_miss:  # the clip is chosen at the end and comes back with the carrier's cotangent
+                state, carrier = clip_gradient_carried(state, carrier)
+            elif self.settings.state_grad_clip > 0:
                 state = clip_gradient(state, limit)
             action = self.act(params, state.observation, stats)
             _, after, reward, done, _ = self.env.step_env(jax.random.fold_in(key_steps, t), state, action,
                                                           self.env_params)  # fmt: skip
             total = total + jnp.where(alive, reward, 0.0)
             state = jax.tree.map(lambda new, old: jnp.where(alive, new, old), after, state)
-            return (state, alive & ~done, total, steps + alive.astype(jnp.int32)), None
+            return (state, carrier, alive & ~done, total, steps + alive.astype(jnp.int32)), None
 
-        carry = (start, jnp.asarray(True), jnp.asarray(0.0, jnp.float32), jnp.asarray(0, jnp.int32))
-        (_, _, total, steps), _ = jax.lax.scan(one_step, carry, jnp.arange(self.max_steps))
+        zero = jnp.asarray(0.0, jnp.float32)
+        # (the carrier from the episode's own start: under vmap a constant would be one for all episodes, and its
+        # cotangent the sum of their bounds)
+        carrier = (start.distance * 0.0).astype(jnp.float32)
+        carry = (start, carrier, jnp.asarray(True), zero, jnp.asarray(0, jnp.int32))
+        (final, carrier, _, total, steps), _ = jax.lax.scan(one_step, carry, jnp.arange(self.max_steps))
+        if near_miss:  # + bound * 0: the return as it is, the episode's clip into the carrier's cotangent
+            total = total + jax.lax.stop_gradient(self.episode_clip(final, limit)) * carrier
         return total, steps
+
+    def near_miss(self, final: Any) -> Any:
+        """True where an episode's last state ``final`` is a near miss: the goal tolerance < its distance <=
+        ``near_miss_distance`` (:attr:`APGSettings.near_miss_clip`)."""
+        distance = final.distance
+        return (distance > self.env_params.goal_tolerance) & (distance <= self.settings.near_miss_distance)
+
+    def episode_clip(self, final: Any, limit: Any) -> Any:
+        """The state's gradient clip of the episode whose last state is ``final``: ``near_miss_clip`` for a near miss,
+        else ``limit`` (``state_grad_clip`` or its decay)."""
+        return jnp.where(self.near_miss(final), self.settings.near_miss_clip, jnp.asarray(limit, jnp.float32))
 
     def exported_params(self, state: Any) -> Any:
         """The network a run exports: with ``keep_best`` the best measured (:meth:`validate`), else the last."""

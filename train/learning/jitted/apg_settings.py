@@ -15,6 +15,7 @@ from train.learning.config import ConfigError
 MAX_DROP = 1e9
 APG_DEFAULTS: dict[str, Any] = {"episodes": 64, "learning_rate": 3e-4, "max_grad_norm": 1.0, "state_grad_clip": 64.0,
                                  "state_grad_clip_final": None, "state_grad_clip_decay": 1.0,
+                                 "near_miss_clip": None, "near_miss_distance": 0.05,
                                  "max_return_drop": MAX_DROP, "keep_best": 0,
                                  "validation_episodes": 256, "teacher_episodes": 0, "teacher_iterations": 400,
                                  "teacher_learning_rate": 0.02, "clone_steps": 4000, "teacher_rounds": 1}  # fmt: skip
@@ -48,6 +49,13 @@ class APGSettings:
     state_grad_clip_decay: float = 1.0
     """The share of the budget's updates over which ``state_grad_clip_final`` is reached (1: at the end, when the
     rate reaches 0 too; 0.5: half-way, so that the second half's updates are at the final clip)."""
+    near_miss_clip: float | None = None
+    """With a value, the state's gradient clip of the episodes that end near the goal but not at it (the goal tolerance
+    < distance at the end <= ``near_miss_distance``): a wider clip lets more of their miss into the gradient, where the
+    arrival bonus, a step, has none; the other episodes keep ``state_grad_clip`` (or its decay). None (the default):
+    every episode at ``state_grad_clip``."""
+    near_miss_distance: float = 0.05
+    """[m] The outer edge of the near misses of ``near_miss_clip``."""
     max_return_drop: float = MAX_DROP
     """An update after which the same episodes' mean return is lower by more than this is undone (the weights and
     Adam's state as before it; the replay's env steps count); :data:`MAX_DROP` (the default): none checked. Off by
@@ -103,6 +111,9 @@ class APGSettings:
                 state_grad_clip_final=final_clip(values["state_grad_clip_final"], values["state_grad_clip"]),
                 state_grad_clip_decay=as_float("state_grad_clip_decay", values["state_grad_clip_decay"], 0.0, 1.0,
                                                low_inclusive=False, text=True),
+                near_miss_clip=near_clip(values["near_miss_clip"], values["state_grad_clip"]),
+                near_miss_distance=as_float("near_miss_distance", values["near_miss_distance"], 0.0, 100.0,
+                                            low_inclusive=False, text=True),
                 max_return_drop=as_float("max_return_drop", values["max_return_drop"], 0.0, MAX_DROP, text=True),
                 keep_best=as_int("keep_best", values["keep_best"], 0, 1_000_000, text=True),
                 validation_episodes=as_int("validation_episodes", values["validation_episodes"], 1, 65536, text=True),
@@ -135,6 +146,19 @@ def final_clip(value: Any, start: Any) -> float | None:
             "expected a state_grad_clip > 0, or no state_grad_clip_final"
         )
     return final
+
+
+def near_clip(value: Any, clip: Any) -> float | None:
+    """``near_miss_clip`` checked: None, or a number in (0, 1e9] with the episodes' own clip on (state_grad_clip > 0)."""
+    if value is None:
+        return None
+    near = as_float("near_miss_clip", value, 0.0, 1e9, low_inclusive=False, text=True)
+    if float(clip) == 0.0:
+        raise ValueError(
+            f"near_miss_clip={value!r} is invalid with state_grad_clip=0 (no episode is clipped): expected a "
+            "state_grad_clip > 0, or no near_miss_clip"
+        )
+    return near
 
 
 def check_apg_kwargs(params: dict[str, Any]) -> dict[str, Any]:

@@ -113,6 +113,11 @@ class APGTrainer:
             if s.state_grad_clip_final is None
             else f"{s.state_grad_clip:g} decaying to {s.state_grad_clip_final:g} over "
             f"{round(self.apg.clip_decay_updates)} updates"
+        ) + (
+            f" ({s.near_miss_clip:g} for the episodes that end within {s.near_miss_distance:g} m of the goal but not "
+            "at it)"
+            if s.near_miss_clip is not None
+            else ""
         )
         return (f"APG: {s.episodes} episodes per update, Adam {rate}, the state's gradient clipped to {clip} per step "
                 f"in each episode{kept}{taught}")  # fmt: skip
