@@ -2,6 +2,7 @@
 
     python -m benchmarks run apg-clone-rounds --docs     # rounds 1, 3 and 6 of 256 episodes (about 25 min, 1 core)
     python -m benchmarks run apg-clone-rounds --rounds 1 2 --episodes 16 --iterations 50   # a quick look, printed
+    python -m benchmarks run apg-clone-rounds --rounds 1 --clone-steps 16000 --json F   # the fit's length, into F
 
 For each number of ``teacher_rounds`` (train/learning/jitted/apg_teacher.py), on DWRPointStabilization-v2 with
 time-scaled actions (``--action-time-scale 10``, as the benchmark's apg-teacher-time-scaled entries) and apg.yml's
@@ -13,6 +14,7 @@ docs/rl-benchmark.md is rendered.
 
 from __future__ import annotations
 
+import itertools
 import platform
 import time
 from pathlib import Path
@@ -29,8 +31,17 @@ ENV_ID = "DWRPointStabilization-v2"
 BANDS: tuple[tuple[float, float], ...] = ((10.0, 20.0), (20.0, 40.0), (40.0, 60.0))
 
 
-def measure(rounds: int, episodes: int, iterations: int, n_eval: int, time_scale: float) -> dict[str, Any]:
-    """The lesson of ``rounds`` rounds (seed 0) and its cloned policy on ``n_eval`` fresh episodes (key 123)."""
+def measure(
+    rounds: int,
+    episodes: int,
+    iterations: int,
+    n_eval: int,
+    time_scale: float,
+    clone_steps: int = 4000,
+    net_arch: tuple[int, ...] = (64, 64),
+) -> dict[str, Any]:
+    """The lesson of ``rounds`` rounds (seed 0), fitted in ``clone_steps`` steps on a network of ``net_arch``, and its
+    cloned policy on ``n_eval`` fresh episodes (key 123)."""
     import jax
     import jax.numpy as jnp
     import numpy as np
@@ -43,7 +54,8 @@ def measure(rounds: int, episodes: int, iterations: int, n_eval: int, time_scale
 
     env, env_params = make_gymnax_env(ENV_ID)
     env = TimeScaledGymnaxEnv(env, time_scale) if time_scale else env
-    settings = APGSettings(teacher_episodes=episodes, teacher_iterations=iterations, teacher_rounds=rounds)
+    settings = APGSettings(teacher_episodes=episodes, teacher_iterations=iterations, teacher_rounds=rounds,
+                           clone_steps=clone_steps, net_arch=net_arch)  # fmt: skip
     apg = JaxAPG(settings, env, env_params)
     start = time.time()
     state, lesson = clone_from_teacher(apg, apg.init(0), progress=True)
@@ -70,7 +82,7 @@ def measure(rounds: int, episodes: int, iterations: int, n_eval: int, time_scale
     bands = {
         f"{low:g}-{high:g}": float(np.mean(success[(T_con >= low) & (T_con < high + 1e-9)])) for low, high in BANDS
     }
-    return {"rounds": rounds, "episodes": episodes, "iterations": iterations, "lesson_steps": lesson["steps"],
+    return {"rounds": rounds, "clone_steps": clone_steps, "net_arch": list(net_arch), "episodes": episodes, "iterations": iterations, "lesson_steps": lesson["steps"],
             "pairs": lesson["pairs"], "teacher_in_time": lesson["teacher_in_time"], "clone_loss": lesson["clone_loss"],
             "seconds": round(seconds), "in_time": float(np.mean(success)), "in_time_by_T_con": bands,
             "return": float(np.mean(returns)), "final_distance_median": float(np.median(distance)),
@@ -84,8 +96,21 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--iterations", type=int, default=400, help="teacher_iterations (default: 400)")
     parser.add_argument("--eval", type=int, default=512, help="fresh episodes the clone is played on (default: 512)")
     parser.add_argument("--time-scale", type=float, default=10.0, help="--action-time-scale; 0: none (default: 10)")
+    parser.add_argument("--clone-steps", type=int, nargs="+", default=[4000], help="clone_steps to measure (4000)")
+    parser.add_argument("--net-arch", nargs="+", default=["64x64"], help="networks to measure, as 64x64 (64x64)")
+    parser.add_argument("--json", type=Path, default=None, help="write the rows to this JSON file")
     parser.add_argument("--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} (and its table)")
     args = parser.parse_args(argv)
+    arches = []
+    for text in args.net_arch:
+        try:
+            arches.append(tuple(int(width) for width in text.split("x")))
+        except ValueError:
+            parser.error(f"--net-arch {text!r} is invalid: expected widths joined by x, such as 64x64")
+        if min(arches[-1]) < 1:
+            parser.error(f"--net-arch {text!r} is invalid: expected widths >= 1")
+    if min(args.clone_steps) < 1:
+        parser.error(f"--clone-steps {args.clone_steps} is invalid: expected integers >= 1")
     for name in ("episodes", "iterations", "eval"):
         if getattr(args, name) < 1:
             parser.error(f"--{name} {getattr(args, name)} is invalid: expected an integer >= 1")
@@ -94,13 +119,15 @@ def main(argv: list[str] | None = None) -> int:
     if args.time_scale < 0:
         parser.error(f"--time-scale {args.time_scale} is invalid: expected a number >= 0")
     rows = []
-    for rounds in args.rounds:
-        rows.append(measure(rounds, args.episodes, args.iterations, args.eval, args.time_scale))
+    for rounds, steps, arch in itertools.product(args.rounds, args.clone_steps, arches):
+        rows.append(measure(rounds, args.episodes, args.iterations, args.eval, args.time_scale, steps, arch))
         print({k: (round(v, 3) if isinstance(v, float) else v) for k, v in rows[-1].items()}, flush=True)
     data = {"env_id": ENV_ID, "action_time_scale": args.time_scale, "eval_episodes": args.eval, "rows": rows,
             "machine": {"python": platform.python_version(), "platform": platform.platform()}}  # fmt: skip
     if args.docs:
         write_json(JSON_PATH, data)
+    if args.json is not None:
+        write_json(args.json, data)
     return 0
 
 
