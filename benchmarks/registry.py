@@ -42,6 +42,7 @@ SUITE: dict[str, str] = {
     "energy-split": "benchmarks.learning.energy_split",
     "open-loop-bound": "benchmarks.learning.open_loop_bound",
     "apg-clone-rounds": "benchmarks.learning.apg_clone_rounds",
+    "apg-clone-fit": "benchmarks.learning.apg_clone_fit",
     "ship-rl-agents": "benchmarks.learning.ship_rl_agents",
     "per-t-con": "benchmarks.learning.per_t_con",
     "prescribed-time-goal": "benchmarks.learning.prescribed_time_goal",
@@ -79,6 +80,7 @@ SUITE: dict[str, str] = {
     "rl-apg-teacher": "benchmarks.recipes.rl_apg_teacher",
     "rl-apg-teacher-30min": "benchmarks.recipes.rl_apg_teacher_30min",
     "rl-apg-clip-decay": "benchmarks.recipes.rl_apg_clip_decay",
+    "rl-apg-near-miss": "benchmarks.recipes.rl_apg_near_miss",
     "rl-time-scale-30min": "benchmarks.recipes.rl_time_scale_30min",
     "robust-rl": "benchmarks.recipes.robust_rl",
 }

@@ -280,6 +280,10 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
         "docs/rl_benchmark/apg_clone_rounds.json",
         lambda data: energy_tables.clone_rounds_table(data),
     ),
+    "apg-clone-fit": (
+        "docs/rl_benchmark/apg_teacher_probes/clone_fit.json",
+        lambda data: energy_tables.clone_fit_table(data),
+    ),
     "sbx-speed": ("docs/rl_benchmark/sbx_speed.json", sbx_speed_table),
     **RL_TABLES,
 }

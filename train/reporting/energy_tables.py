@@ -96,4 +96,19 @@ def clone_rounds_table(data: dict[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
-__all__ = ["clone_rounds_table", "gains_table", "open_loop_table", "split_table"]
+def clone_fit_table(data: dict[str, Any]) -> str:
+    """APG's cloned policy alone, before any update, per length of the fit and network (apg_clone_rounds --json)."""
+    lines = ["| clone_steps | network | fit's loss | clone: in time | return | final distance (median) [m] "
+             "| final heading [rad] |", "|---" * 7 + "|"]  # fmt: skip
+    for row in data["rows"]:
+        lines.append(f"| {row['clone_steps']:,} | {'x'.join(map(str, row['net_arch']))} | {row['clone_loss']:.4f} "
+                     f"| {row['in_time']:.3f} | {row['return']:.2f} | {row['final_distance_median']:.3f} "
+                     f"| {row['final_heading']:.2f} |")  # fmt: skip
+    first = data["rows"][0]
+    lines += ["", f"One round of {first['episodes']} episodes, {first['iterations']} Adam steps each (seed 0); the "
+              f"clone's mean action on {data['eval_episodes']} fresh episodes of {data['env_id']}, actions time-scaled "
+              f"by {data['action_time_scale']:g} s; no APG update."]  # fmt: skip
+    return "\n".join(lines) + "\n"
+
+
+__all__ = ["clone_fit_table", "clone_rounds_table", "gains_table", "open_loop_table", "split_table"]
