@@ -12,7 +12,8 @@ pose with less energy; v2's arrival bonus (a step at 1 cm) has no gradient and i
 
 Gradients through 1,200 steps of a closed loop explode: the cotangent of the env state is clipped to a norm of
 ``state_grad_clip`` at every step on the way back (:func:`clip_gradient`), and the update's gradient to
-``max_grad_norm``. This learns from the reward alone: what it uses beside the reward is the env's own derivative,
+``max_grad_norm``; with ``near_miss_clip`` the episodes that end just outside the goal tolerance get a wider clip of
+their own (:func:`clip_gradient_carried`). This learns from the reward alone: what it uses beside the reward is the env's own derivative,
 which model-free RL does not have (the docs say so where it is compared).
 
 The policy is the actor of the jitted PPO's network (:func:`train.learning.jitted.policy.make_network`), exported
@@ -85,7 +86,9 @@ def clip_gradient_carried(tree: Any, carrier: Any) -> tuple[Any, Any]:
     """``(tree, carrier)`` unchanged on the way forward; on the way back ``tree``'s cotangent clipped to the norm of
     ``carrier``'s (a scalar, passed back unchanged). An episode adds ``bound * carrier`` (0: the carrier is 0) to its
     return once it knows ``bound`` (at its end: :attr:`APGSettings.near_miss_clip`), and the bound then travels back
-    with the cotangent to every step: a clip chosen after the forward pass, without playing the episode twice."""
+    with the cotangent to every step: a clip chosen after the forward pass, without playing the episode twice. (The
+    bound arrives as it was added when the return's own cotangent is -1 or 1: the update differentiates the sum of
+    the returns, not their mean.)"""
 
     @jax.custom_vjp
     def identity(x: Any, c: Any) -> tuple[Any, Any]:

@@ -108,10 +108,12 @@ class APGSettings:
                 max_grad_norm=as_float("max_grad_norm", values["max_grad_norm"], 0.0, 1e9, low_inclusive=False,
                                        text=True),
                 state_grad_clip=as_float("state_grad_clip", values["state_grad_clip"], 0.0, 1e9, text=True),
-                state_grad_clip_final=final_clip(values["state_grad_clip_final"], values["state_grad_clip"]),
+                state_grad_clip_final=clip_beside("state_grad_clip_final", values["state_grad_clip_final"],
+                                                  values["state_grad_clip"], "no clip to decay from"),
                 state_grad_clip_decay=as_float("state_grad_clip_decay", values["state_grad_clip_decay"], 0.0, 1.0,
                                                low_inclusive=False, text=True),
-                near_miss_clip=near_clip(values["near_miss_clip"], values["state_grad_clip"]),
+                near_miss_clip=clip_beside("near_miss_clip", values["near_miss_clip"], values["state_grad_clip"],
+                                           "no episode is clipped"),
                 near_miss_distance=as_float("near_miss_distance", values["near_miss_distance"], 0.0, 100.0,
                                             low_inclusive=False, text=True),
                 max_return_drop=as_float("max_return_drop", values["max_return_drop"], 0.0, MAX_DROP, text=True),
@@ -135,30 +137,17 @@ class APGSettings:
         return actor_network_settings(self)
 
 
-def final_clip(value: Any, start: Any) -> float | None:
-    """``state_grad_clip_final`` checked: None, or a number in (0, 1e9] with a clip to start from."""
+def clip_beside(name: str, value: Any, clip: Any, why: str) -> float | None:
+    """The option ``name`` (a clip that acts beside ``state_grad_clip``, such as ``state_grad_clip_final``) checked:
+    None, or a number in (0, 1e9] where ``state_grad_clip`` (``clip``) is on; ``why`` says what a clip of 0 leaves."""
     if value is None:
         return None
-    final = as_float("state_grad_clip_final", value, 0.0, 1e9, low_inclusive=False, text=True)
-    if float(start) == 0.0:
-        raise ValueError(
-            f"state_grad_clip_final={value!r} is invalid with state_grad_clip=0 (no clip to decay from): "
-            "expected a state_grad_clip > 0, or no state_grad_clip_final"
-        )
-    return final
-
-
-def near_clip(value: Any, clip: Any) -> float | None:
-    """``near_miss_clip`` checked: None, or a number in (0, 1e9] with the episodes' own clip on (state_grad_clip > 0)."""
-    if value is None:
-        return None
-    near = as_float("near_miss_clip", value, 0.0, 1e9, low_inclusive=False, text=True)
+    checked = as_float(name, value, 0.0, 1e9, low_inclusive=False, text=True)
     if float(clip) == 0.0:
         raise ValueError(
-            f"near_miss_clip={value!r} is invalid with state_grad_clip=0 (no episode is clipped): expected a "
-            "state_grad_clip > 0, or no near_miss_clip"
+            f"{name}={value!r} is invalid with state_grad_clip=0 ({why}): expected a state_grad_clip > 0, or no {name}"
         )
-    return near
+    return checked
 
 
 def check_apg_kwargs(params: dict[str, Any]) -> dict[str, Any]:
