@@ -82,7 +82,8 @@ def measure(
     bands = {
         f"{low:g}-{high:g}": float(np.mean(success[(T_con >= low) & (T_con < high + 1e-9)])) for low, high in BANDS
     }
-    return {"rounds": rounds, "clone_steps": clone_steps, "net_arch": list(net_arch), "episodes": episodes, "iterations": iterations, "lesson_steps": lesson["steps"],
+    return {"rounds": rounds, "clone_steps": clone_steps, "net_arch": list(net_arch), "episodes": episodes,
+            "iterations": iterations, "lesson_steps": lesson["steps"],
             "pairs": lesson["pairs"], "teacher_in_time": lesson["teacher_in_time"], "clone_loss": lesson["clone_loss"],
             "seconds": round(seconds), "in_time": float(np.mean(success)), "in_time_by_T_con": bands,
             "return": float(np.mean(returns)), "final_distance_median": float(np.median(distance)),

@@ -31,6 +31,20 @@ from train.learning.config import ConfigError, TrainConfig
 from train.learning.hyperparams import HYPERPARAMS_DIR
 
 V2 = "DWRPointStabilization-v2"
+
+
+def apg_teacher_time_scaled(total_timesteps: int, **overrides: Any) -> dict[str, Any]:
+    """An entry of APG from its open-loop teacher (train/hyperparams/apg_teacher.yml, ``overrides`` on top) with
+    time-scaled actions on v2, for ``total_timesteps`` env steps, its curve evaluated 14 times."""
+    entry: dict[str, Any] = {"algo": "apg", "backend": "jax", "env_id": V2,
+                             "hyperparams": str(HYPERPARAMS_DIR / "apg_teacher.yml")}  # fmt: skip
+    if overrides:
+        entry["hyperparam_overrides"] = overrides
+    every = total_timesteps // 14
+    return {**entry, "action_time_scale": 10.0, "total_timesteps": total_timesteps, "eval_freq": every,
+            "checkpoint_freq": every}  # fmt: skip
+
+
 #: The shipped entries: the options of ``dwr-gym train`` each one trains with (on top of train/hyperparams/).
 ENTRIES: dict[str, dict[str, Any]] = {
     "ppo": {"algo": "ppo"},
@@ -146,56 +160,19 @@ ENTRIES: dict[str, dict[str, Any]] = {
     },
     # and the same for the goal's whole 30 minutes a seed: 700 M env steps (the 400 M runs took about 15 minutes of a
     # core alone and were still climbing when their rate reached 0), its rate decaying over them
-    "apg-teacher-time-scaled-30min-v2": {
-        "algo": "apg",
-        "backend": "jax",
-        "env_id": V2,
-        "hyperparams": str(HYPERPARAMS_DIR / "apg_teacher.yml"),
-        "action_time_scale": 10.0,
-        "total_timesteps": 700_000_000,
-        "eval_freq": 50_000_000,
-        "checkpoint_freq": 50_000_000,
-    },
+    "apg-teacher-time-scaled-30min-v2": apg_teacher_time_scaled(700_000_000),
     # and with the lesson as DAgger (teacher_rounds 3 of 256 episodes: about the env steps of one round of 512)
-    "apg-dagger-time-scaled-30min-v2": {
-        "algo": "apg",
-        "backend": "jax",
-        "env_id": V2,
-        "hyperparams": str(HYPERPARAMS_DIR / "apg_teacher.yml"),
-        "hyperparam_overrides": {"teacher_episodes": 256, "teacher_rounds": 3},
-        "action_time_scale": 10.0,
-        "total_timesteps": 700_000_000,
-        "eval_freq": 50_000_000,
-        "checkpoint_freq": 50_000_000,
-    },
+    "apg-dagger-time-scaled-30min-v2": apg_teacher_time_scaled(700_000_000, teacher_episodes=256, teacher_rounds=3),
     # the state's gradient clip decaying from 16 to 4 over the run (state_grad_clip_final): the wide clip's arrival and
     # heading first, the recipe's energy last (the clip probes, docs/rl-benchmark.md); 560 M env steps, the goal's 30
     # minutes of a core (the 700 M runs took about 37)
-    "apg-clip-decay-time-scaled-30min-v2": {
-        "algo": "apg",
-        "backend": "jax",
-        "env_id": V2,
-        "hyperparams": str(HYPERPARAMS_DIR / "apg_teacher.yml"),
-        "hyperparam_overrides": {"state_grad_clip": 16.0, "state_grad_clip_final": 4.0},
-        "action_time_scale": 10.0,
-        "total_timesteps": 560_000_000,
-        "eval_freq": 40_000_000,
-        "checkpoint_freq": 40_000_000,
-    },
+    "apg-clip-decay-time-scaled-30min-v2": apg_teacher_time_scaled(
+        560_000_000, state_grad_clip=16.0, state_grad_clip_final=4.0
+    ),
     # the lesson fitted 4x longer (clone_steps 16000: the clone 23 % in time, not 9 %) and the episodes that end near the
     # goal but outside its tolerance clipped at 16 (near_miss_clip: the arrival bonus, a step, has no gradient);
     # 560 M env steps, the goal's 30 minutes of a core
-    "apg-near-miss-time-scaled-30min-v2": {
-        "algo": "apg",
-        "backend": "jax",
-        "env_id": V2,
-        "hyperparams": str(HYPERPARAMS_DIR / "apg_teacher.yml"),
-        "hyperparam_overrides": {"clone_steps": 16000, "near_miss_clip": 16.0},
-        "action_time_scale": 10.0,
-        "total_timesteps": 560_000_000,
-        "eval_freq": 40_000_000,
-        "checkpoint_freq": 40_000_000,
-    },
+    "apg-near-miss-time-scaled-30min-v2": apg_teacher_time_scaled(560_000_000, clone_steps=16000, near_miss_clip=16.0),
     "apg-residual-v2": {
         "algo": "apg",
         "backend": "jax",
