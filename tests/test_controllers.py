@@ -25,6 +25,7 @@ from baselines import (
 )
 from dwr_gym import model
 from dwr_gym.params import EnvParams
+from train.env_ids import env_keywords
 from train.evaluation.evaluate import evaluate, evaluate_sets
 from train.evaluation.rollout import rollout
 from train.evaluation.scenarios import FIG5_HEADINGS, Scenario, make_scenario
@@ -258,6 +259,7 @@ def test_rollout_metrics_of_straight_drives_by_hand() -> None:
     steps = np.array([40, 200, 180])
     np.testing.assert_allclose(result.path_length, 0.5 * 0.05 * steps)
     np.testing.assert_allclose(result.energy, 0.25 * 0.05 * steps)
+
     np.testing.assert_allclose(result.command_rate_rms, np.sqrt((0.5 / 0.05) ** 2 / steps))
     np.testing.assert_allclose(result.velocity_rate_rms, result.command_rate_rms)  # the ideal robot does as commanded
     np.testing.assert_allclose(result.final_distance[[0, 2]], [0.0, 5.01], atol=1e-9)
@@ -283,6 +285,24 @@ def test_rollout_metrics_of_straight_drives_by_hand() -> None:
     assert summary["velocity_rate_rms_mean"] == pytest.approx(summary["command_rate_rms_mean"])
     assert summary["energy_ratio_episodes"] == 0.0  # no optimum: no episode stands behind E/opt
     assert len(summary) == 25  # the keys above and the energy-ratio ones
+
+
+def test_rollout_left_arena_is_the_arena_on_v2() -> None:
+    """v2 terminates every episode at T_con: a robot standing still ends there, missed but inside the arena; one
+    driving away leaves the arena."""
+    params = EnvParams.from_kwargs(**env_keywords("DWRPointStabilization-v2", {}))
+    starts = np.array([[-1.0, 0.0, 0.0], [-0.51, 0.0, math.pi]])
+
+    class StandStill(FullSpeedAhead):
+        def predict(self, observation: Any, state: Any = None, episode_start: Any = None,
+                    deterministic: bool = True) -> Any:  # fmt: skip
+            actions = np.zeros((len(observation), 2), np.float32)
+            actions[1, 0] = 1.0
+            return actions, None
+
+    result = rollout(StandStill(), params, starts, np.zeros((2, 3)), T_con=np.array([2.0, 20.0]))
+    np.testing.assert_array_equal(result.success, [False, False])
+    np.testing.assert_array_equal(result.left_arena, [False, True])
 
 
 def test_evaluate_sets_gives_one_row_per_set_T_con_and_policy_as_evaluate_summarises_them() -> None:

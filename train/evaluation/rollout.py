@@ -205,7 +205,8 @@ def rollout(
         arrival_time = np.where(live & result.is_success & np.isnan(arrival_time), time, arrival_time)
         # as the env counts "in time": arrived by T_con (v0, v1), at the goal at T_con (v2)
         success |= ended & result.is_success & (state.step_count <= state.prescribed_steps)
-        left_arena |= ended & result.terminated & ~result.is_success
+        # the arena's bound, not 'terminated without success': v2 also terminates a miss at T_con
+        left_arena |= ended & (result.coords.distance > params.arena_radius)
         if record:
             x, y, psi = state.world_pose()
             for key, value in (("time", time), ("x", x), ("y", y), ("psi", psi), ("distance", result.coords.distance),
