@@ -43,6 +43,11 @@ from train.learning.jitted.apg_settings import APGSettings
             r"^near_miss_clip=16 is invalid with state_grad_clip=0 \(no episode is clipped\)",
         ),
         ({"near_miss_distance": 0}, r"^near_miss_distance=0(\.0)? is invalid: expected a finite number in \(0, 100\]$"),
+        ({"near_miss_weight": 0}, r"^near_miss_weight=0(\.0)? is invalid: expected a finite number in \(0, 1000\]$"),
+        (
+            {"state_grad_clip": 0, "near_miss_weight": 4},
+            r"^near_miss_weight=4 is invalid with state_grad_clip=0 \(it scales the clip\)",
+        ),
         ({"keep_best": -1}, r"^keep_best=-1 is invalid: expected an integer in \[0, 1e\+06\]$"),
         ({"keep_best": 2.5}, r"^keep_best=2.5 is invalid"),
         ({"validation_episodes": 0}, r"^validation_episodes=0 is invalid: expected an integer in \[1, 65536\]$"),
@@ -233,6 +238,33 @@ def test_a_near_miss_is_clipped_at_the_near_miss_clip_and_the_others_as_before()
     assert float(near["grad_norm"]) == pytest.approx(float(at_wide["grad_norm"]), rel=1e-5)
     assert float(far["grad_norm"]) == pytest.approx(float(at_fixed["grad_norm"]), rel=1e-5)
     assert abs(float(at_wide["grad_norm"]) - float(at_fixed["grad_norm"])) > 0.1 * float(at_fixed["grad_norm"])
+
+
+def test_a_near_miss_weighs_near_miss_weight_times_its_clipped_gradient() -> None:
+    """With ``near_miss_weight`` w an episode that ends near the goal but not at it enters the update with w times its
+    clipped gradient (at its own clip, ``near_miss_clip`` where set), the others as before, and the return is the
+    return."""
+    from dwr_gym.jax_env import make_gymnax_env
+    from train.learning.jitted.apg import JaxAPG
+
+    env, params = make_gymnax_env("DWRPointStabilization-v2", T_con_range=[2.0, 2.2])
+
+    def apg(**kwargs: Any) -> Any:
+        return JaxAPG(APGSettings(episodes=4, net_arch=(8,), state_grad_clip=0.25, **kwargs), env, params)
+
+    plain = apg()
+    state = plain.init(0)
+    state = state.replace(params=jax.tree.map(lambda x: x * 20.0 if x.ndim == 2 else x, state.params))
+    _, at_plain = plain.update(state)
+    _, near = apg(near_miss_weight=3.0, near_miss_distance=100.0).update(state)  # every miss is near
+    _, far = apg(near_miss_weight=3.0, near_miss_distance=0.010001).update(state)  # none is
+    _, wide = apg(near_miss_clip=16.0, near_miss_distance=100.0).update(state)
+    _, wide_near = apg(near_miss_clip=16.0, near_miss_weight=3.0, near_miss_distance=100.0).update(state)
+    assert float(at_plain["return_mean"]) < 9.0  # (they miss)
+    assert float(near["return_mean"]) == float(far["return_mean"]) == float(at_plain["return_mean"])
+    assert float(near["grad_norm"]) == pytest.approx(3.0 * float(at_plain["grad_norm"]), rel=1e-5)
+    assert float(far["grad_norm"]) == pytest.approx(float(at_plain["grad_norm"]), rel=1e-5)
+    assert float(wide_near["grad_norm"]) == pytest.approx(3.0 * float(wide["grad_norm"]), rel=1e-5)
 
 
 def test_an_update_that_loses_return_on_its_episodes_is_undone() -> None:

@@ -100,21 +100,29 @@ def rushing_returns(
     seed: int = 4041,
     workers: int = 1,
     progress: bool = False,
+    replan_every: int = 5,
 ) -> dict[str, Any]:
     """The discounted return of the minimum-energy plan to arrive at each fraction of T_con, under action noise of
-    each sigma, on ``n`` random episodes of ``env_id`` (the same episodes and noise draws for every fraction)."""
+    each sigma, on ``n`` random episodes of ``env_id`` (the same episodes and noise draws for every fraction), the
+    plan re-made from the measured pose every ``replan_every`` control periods.
+
+    ``latest_margin[sigma]``: the latest arrival's return minus that of the earlier arrival with the highest mean,
+    episode by episode (mean and standard error): under noise the bonus at T_con is a lottery that a table of means
+    alone cannot tell from an incentive."""
     from train.evaluation.rollout import rollout
 
     gamma = training_discount(env_id)
-    rows = []
+    rows, returns = [], {}
     for sigma in sigmas:
         scenario, params = random_episodes(env_id, n, seed, actuation_noise=sigma)
         for fraction in fractions:
-            policy = controller_policy("optimal", params, arrival_fraction=fraction, workers=workers)
+            policy = controller_policy("optimal", params, arrival_fraction=fraction, workers=workers,
+                                       replan_every=replan_every)  # fmt: skip
             result = rollout(policy, params, scenario.starts, scenario.goals, T_con=scenario.T_cons, seed=seed,
                              discount=gamma, progress=progress, description=f"sigma {sigma}, f {fraction}")  # fmt: skip
             policy.controller.close()
             arrived = np.isfinite(result.arrival_time)
+            returns[sigma, fraction] = result.episode_return
             rows.append({
                 "sigma": sigma, "fraction": fraction, "return_mean": float(np.mean(result.episode_return)),
                 "return_sem": float(np.std(result.episode_return) / np.sqrt(n)),
@@ -122,12 +130,18 @@ def rushing_returns(
                 "arrival_fraction": float(np.mean(result.arrival_time[arrived] / result.T_con[arrived]))
                 if arrived.any() else None,
             })  # fmt: skip
-    latest = {}
+    latest, margin = {}, {}
     for sigma in sigmas:
         mine = [row for row in rows if row["sigma"] == sigma]
         latest[str(sigma)] = max(mine, key=lambda row: row["return_mean"])["fraction"] == max(fractions)
-    return {"env_id": env_id, "episodes": n, "seed": seed, "discount": gamma, "rows": rows,
-            "latest_pays_most": latest}  # fmt: skip
+        earlier = [row for row in mine if row["fraction"] != max(fractions)]
+        if earlier:
+            rival = max(earlier, key=lambda row: row["return_mean"])["fraction"]
+            difference = returns[sigma, max(fractions)] - returns[sigma, rival]
+            margin[str(sigma)] = {"against": rival, "mean": float(np.mean(difference)),
+                                  "sem": float(np.std(difference) / np.sqrt(n))}  # fmt: skip
+    return {"env_id": env_id, "episodes": n, "seed": seed, "discount": gamma, "replan_every": replan_every,
+            "rows": rows, "latest_pays_most": latest, "latest_margin": margin}  # fmt: skip
 
 
 __all__ = ["CONTROLLERS", "controller_policy", "random_episodes", "return_ranking", "rushing_returns", "shipped_agents",

@@ -41,8 +41,8 @@ def rushing_table(data: dict[str, Any]) -> str:
     """Mean discounted return of the minimum-energy plan to arrive at each fraction of T_con, per noise sigma."""
     env_ids = _env_ids(data, "rushing")
     lines = ["| env | sigma | " + " | ".join(f"arrive at {f:g} T_con" for f in _fractions(data, env_ids))
-             + " | latest pays most |", ""]  # fmt: skip
-    lines[1] = "|---" * (3 + len(_fractions(data, env_ids))) + "|"
+             + " | latest pays most | latest - the best earlier, episode by episode |", ""]  # fmt: skip
+    lines[1] = "|---" * (4 + len(_fractions(data, env_ids))) + "|"
     for env in env_ids:
         rushing = data[env]["rushing"]
         for sigma in dict.fromkeys(row["sigma"] for row in rushing["rows"]):
@@ -50,13 +50,20 @@ def rushing_table(data: dict[str, Any]) -> str:
             cells = [f"{rows[f]['return_mean']:.2f} ± {rows[f]['return_sem']:.2f} ({100 * rows[f]['in_time']:.0f} %)"
                      if f in rows else "-" for f in _fractions(data, env_ids)]  # fmt: skip
             verdict = "yes" if rushing["latest_pays_most"].get(str(sigma)) else "**no**"
+            margin = rushing.get("latest_margin", {}).get(str(sigma))
+            paired = f"{margin['mean']:+.2f} ± {margin['sem']:.2f} (vs {margin['against']:g})" if margin else "-"
             lines.append(f"| {env.rsplit('-', 1)[1]} (gamma {rushing['discount']:g}) | {sigma:g} | " + " | ".join(cells)
-                         + f" | {verdict} |")  # fmt: skip
-    episodes = {data[env]["rushing"]["episodes"] for env in env_ids}
+                         + f" | {verdict} | {paired} |")  # fmt: skip
+    sets = "; ".join(
+        f"{env.rsplit('-', 1)[1]}: {data[env]['rushing']['episodes']} random episodes, re-planned every "
+        f"{data[env]['rushing'].get('replan_every', 20)} control periods"  # 20: the runs before the option
+        for env in env_ids
+    )
     lines.append("")
     lines.append(
-        f"Mean discounted return ± its standard error over {', '.join(map(str, sorted(episodes)))} random "
-        "episodes (in time in brackets), the same episodes and noise draws in every cell of a row."
+        f"Mean discounted return ± its standard error ({sets}; in time in brackets), the same episodes and noise "
+        "draws in every cell of a row; the last column pairs each episode's latest arrival with the same episode's "
+        "earlier arrival of the highest mean."
     )
     return "\n".join(lines) + "\n"
 

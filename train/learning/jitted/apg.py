@@ -13,7 +13,7 @@ pose with less energy; v2's arrival bonus (a step at 1 cm) has no gradient and i
 Gradients through 1,200 steps of a closed loop explode: the cotangent of the env state is clipped to a norm of
 ``state_grad_clip`` at every step on the way back (:func:`clip_gradient`), and the update's gradient to
 ``max_grad_norm``; with ``near_miss_clip`` the episodes that end just outside the goal tolerance get a wider clip of
-their own (:func:`clip_gradient_carried`). This learns from the reward alone: what it uses beside the reward is the
+their own (:func:`clip_gradient_carried`), and with ``near_miss_weight`` more weight in the update. This learns from the reward alone: what it uses beside the reward is the
 env's own derivative, which model-free RL does not have (the docs say so where it is compared).
 
 The policy is the actor of the jitted PPO's network (:func:`train.learning.jitted.policy.make_network`), exported
@@ -186,7 +186,7 @@ class JaxAPG:
         _, start = self.env.reset_env(key_reset, self.env_params)
         limit = self.settings.state_grad_clip if limit is None else limit
 
-        near_miss = self.settings.near_miss_clip is not None
+        near_miss = self.settings.near_miss_clip is not None or self.settings.near_miss_weight != 1.0
 
         def one_step(carry: tuple[Any, ...], t: Any) -> tuple[tuple[Any, ...], None]:
             state, carrier, alive, total, steps = carry
@@ -208,7 +208,10 @@ class JaxAPG:
         carry = (start, carrier, jnp.asarray(True), zero, jnp.asarray(0, jnp.int32))
         (final, carrier, _, total, steps), _ = jax.lax.scan(one_step, carry, jnp.arange(self.max_steps))
         if near_miss:  # + bound * 0: the return as it is, the episode's clip into the carrier's cotangent
-            total = total + jax.lax.stop_gradient(self.episode_clip(final, limit)) * carrier
+            weight = jax.lax.stop_gradient(self.episode_weight(final))
+            # the same value, its gradient times the weight (and the clip times it: weight x the clipped gradient)
+            total = total + (weight - 1.0) * (total - jax.lax.stop_gradient(total))
+            total = total + jax.lax.stop_gradient(self.episode_clip(final, limit) * weight) * carrier
         return total, steps
 
     def near_miss(self, final: Any) -> Any:
@@ -218,9 +221,17 @@ class JaxAPG:
         return (distance > self.env_params.goal_tolerance) & (distance <= self.settings.near_miss_distance)
 
     def episode_clip(self, final: Any, limit: Any) -> Any:
-        """The state's gradient clip of the episode whose last state is ``final``: ``near_miss_clip`` for a near miss,
-        else ``limit`` (``state_grad_clip`` or its decay)."""
-        return jnp.where(self.near_miss(final), self.settings.near_miss_clip, jnp.asarray(limit, jnp.float32))
+        """The state's gradient clip of the episode whose last state is ``final``: ``near_miss_clip`` (if set) for a
+        near miss, else ``limit`` (``state_grad_clip`` or its decay)."""
+        limit = jnp.asarray(limit, jnp.float32)
+        if self.settings.near_miss_clip is None:
+            return limit
+        return jnp.where(self.near_miss(final), self.settings.near_miss_clip, limit)
+
+    def episode_weight(self, final: Any) -> Any:
+        """The weight of the episode whose last state is ``final`` in the update: ``near_miss_weight`` for a near
+        miss, else 1."""
+        return jnp.where(self.near_miss(final), self.settings.near_miss_weight, 1.0).astype(jnp.float32)
 
     def exported_params(self, state: Any) -> Any:
         """The network a run exports: with ``keep_best`` the best measured (:meth:`validate`), else the last."""

@@ -15,7 +15,7 @@ from train.learning.config import ConfigError
 MAX_DROP = 1e9
 APG_DEFAULTS: dict[str, Any] = {"episodes": 64, "learning_rate": 3e-4, "max_grad_norm": 1.0, "state_grad_clip": 64.0,
                                  "state_grad_clip_final": None, "state_grad_clip_decay": 1.0,
-                                 "near_miss_clip": None, "near_miss_distance": 0.05,
+                                 "near_miss_clip": None, "near_miss_distance": 0.05, "near_miss_weight": 1.0,
                                  "max_return_drop": MAX_DROP, "keep_best": 0,
                                  "validation_episodes": 256, "teacher_episodes": 0, "teacher_iterations": 400,
                                  "teacher_learning_rate": 0.02, "clone_steps": 4000, "teacher_rounds": 1}  # fmt: skip
@@ -55,7 +55,11 @@ class APGSettings:
     arrival bonus, a step, has none; the other episodes keep ``state_grad_clip`` (or its decay). None (the default):
     every episode at ``state_grad_clip``."""
     near_miss_distance: float = 0.05
-    """[m] The outer edge of the near misses of ``near_miss_clip``."""
+    """[m] The outer edge of the near misses of ``near_miss_clip`` and ``near_miss_weight``."""
+    near_miss_weight: float = 1.0
+    """The weight of a near miss's gradient in the update (its clip scaled with it, so its gradient is this times
+    the clipped one): above 1 the few episodes that miss the bonus by less than ``near_miss_distance`` weigh more
+    than their share of the batch. 1 (the default): every episode weighs the same."""
     max_return_drop: float = MAX_DROP
     """An update after which the same episodes' mean return is lower by more than this is undone (the weights and
     Adam's state as before it; the replay's env steps count); :data:`MAX_DROP` (the default): none checked. Off by
@@ -116,6 +120,7 @@ class APGSettings:
                                            "no episode is clipped"),
                 near_miss_distance=as_float("near_miss_distance", values["near_miss_distance"], 0.0, 100.0,
                                             low_inclusive=False, text=True),
+                near_miss_weight=weight_beside(values["near_miss_weight"], values["state_grad_clip"]),
                 max_return_drop=as_float("max_return_drop", values["max_return_drop"], 0.0, MAX_DROP, text=True),
                 keep_best=as_int("keep_best", values["keep_best"], 0, 1_000_000, text=True),
                 validation_episodes=as_int("validation_episodes", values["validation_episodes"], 1, 65536, text=True),
@@ -147,6 +152,16 @@ def clip_beside(name: str, value: Any, clip: Any, why: str) -> float | None:
         raise ValueError(
             f"{name}={value!r} is invalid with state_grad_clip=0 ({why}): expected a state_grad_clip > 0, or no {name}"
         )
+    return checked
+
+
+def weight_beside(value: Any, clip: Any) -> float:
+    """``near_miss_weight`` checked: a number in (0, 1000], other than 1 only where ``state_grad_clip`` (``clip``) is
+    on (the weight scales the clip it travels back with)."""
+    checked = as_float("near_miss_weight", value, 0.0, 1000.0, low_inclusive=False, text=True)
+    if checked != 1.0 and float(clip) == 0.0:
+        raise ValueError(f"near_miss_weight={value!r} is invalid with state_grad_clip=0 (it scales the clip): "
+                         "expected a state_grad_clip > 0, or near_miss_weight 1")  # fmt: skip
     return checked
 
 

@@ -108,17 +108,17 @@ class APGTrainer:
             if s.teacher_episodes
             else ""
         )
+        near, within = "", f"within {s.near_miss_distance:g} m of the goal but not at it"
+        if s.near_miss_clip is not None:
+            near += f" ({s.near_miss_clip:g} for the episodes that end {within})"
+        if s.near_miss_weight != 1.0:
+            near += f", the episodes that end {within} weighing {s.near_miss_weight:g} times the others"
         clip = (
             f"{s.state_grad_clip:g}"
             if s.state_grad_clip_final is None
             else f"{s.state_grad_clip:g} decaying to {s.state_grad_clip_final:g} over "
             f"{round(self.apg.clip_decay_updates)} updates"
-        ) + (
-            f" ({s.near_miss_clip:g} for the episodes that end within {s.near_miss_distance:g} m of the goal but not "
-            "at it)"
-            if s.near_miss_clip is not None
-            else ""
-        )
+        ) + near
         return (f"APG: {s.episodes} episodes per update, Adam {rate}, the state's gradient clipped to {clip} per step "
                 f"in each episode{kept}{taught}")  # fmt: skip
 
