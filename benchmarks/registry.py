@@ -43,6 +43,7 @@ SUITE: dict[str, str] = {
     "open-loop-bound": "benchmarks.learning.open_loop_bound",
     "apg-clone-rounds": "benchmarks.learning.apg_clone_rounds",
     "apg-clone-fit": "benchmarks.learning.apg_clone_fit",
+    "misses": "benchmarks.learning.misses",
     "ship-rl-agents": "benchmarks.learning.ship_rl_agents",
     "per-t-con": "benchmarks.learning.per_t_con",
     "prescribed-time-goal": "benchmarks.learning.prescribed_time_goal",

@@ -3,7 +3,8 @@
     python -m benchmarks run incentives --docs                        # 200 episodes (ranking), 100 per cell (rushing)
     python -m benchmarks run incentives --n 20 --n-rush 4 --sigmas 0  # a quick look (printed, nothing written)
 
-``--docs`` writes docs/rl_benchmark/incentives.json (the measurements it leaves out with ``--skip`` kept from it),
+``--docs`` writes docs/rl_benchmark/incentives.json (the measurements it leaves out with ``--skip`` or ``--env-ids``,
+and the rushing rows of the sigmas it does not run, kept from it),
 from which the tables ``incentives-ranking`` and ``incentives-rushing`` of docs/rl-benchmark.md are rendered.
 What is measured and how: train/evaluation/incentives.py.
 """
@@ -15,6 +16,7 @@ import platform
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 from benchmarks.core.commands import parser_for
 from benchmarks.core.docs import Schema, table
@@ -57,14 +59,30 @@ def main(argv: list[str] | None = None) -> int:
                 env_id, "ranking:", [(row["policy"], round(row["return_mean"], 3)) for row in entry["ranking"]["rows"]]
             )
         if args.skip != "rushing":
-            entry["rushing"] = rushing_returns(env_id, tuple(args.fractions), tuple(args.sigmas), args.n_rush,
-                                               workers=args.workers, replan_every=args.replan_every)  # fmt: skip
+            rushing = rushing_returns(env_id, tuple(args.fractions), tuple(args.sigmas), args.n_rush,
+                                      workers=args.workers, replan_every=args.replan_every)  # fmt: skip
+            entry["rushing"] = merged_rushing(entry.get("rushing"), rushing)
             print(env_id, "rushing: latest arrival pays most:", entry["rushing"]["latest_pays_most"])
     data["machine"] = {"python": platform.python_version(), "platform": platform.platform(),
                        "seconds": round(time.time() - start)}  # fmt: skip
     if args.docs:
         write_json(JSON_PATH, data)
     return 0
+
+
+def merged_rushing(old: dict[str, Any] | None, new: dict[str, Any]) -> dict[str, Any]:
+    """``new`` with the rows (and verdicts) of ``old``'s other sigmas kept, each row with its own episodes and re-plan
+    interval (rows written before those were recorded take their run's: ``old``'s episodes, 20 control periods)."""
+    if not old:
+        return new
+    sigmas = {row["sigma"] for row in new["rows"]}
+    kept = [{"episodes": old["episodes"], "replan_every": old.get("replan_every", 20), **row}
+            for row in old["rows"] if row["sigma"] not in sigmas]  # fmt: skip
+    merged = {**new, "rows": sorted(kept + new["rows"], key=lambda row: (row["sigma"], row["fraction"]))}
+    for key in ("latest_pays_most", "latest_margin"):
+        merged[key] = {**{k: v for k, v in old.get(key, {}).items() if float(k) not in sigmas}, **new[key]}
+        merged[key] = dict(sorted(merged[key].items(), key=lambda item: float(item[0])))
+    return merged
 
 
 SCHEMA = Schema({"machine": dict})

@@ -124,7 +124,8 @@ def rushing_returns(
             arrived = np.isfinite(result.arrival_time)
             returns[sigma, fraction] = result.episode_return
             rows.append({
-                "sigma": sigma, "fraction": fraction, "return_mean": float(np.mean(result.episode_return)),
+                "sigma": sigma, "fraction": fraction, "episodes": n, "replan_every": replan_every,
+                "return_mean": float(np.mean(result.episode_return)),
                 "return_sem": float(np.std(result.episode_return) / np.sqrt(n)),
                 "in_time": float(np.mean(result.success)), "energy_mean": float(np.mean(result.energy)),
                 "arrival_fraction": float(np.mean(result.arrival_time[arrived] / result.T_con[arrived]))

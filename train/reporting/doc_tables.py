@@ -284,6 +284,7 @@ TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
         "docs/rl_benchmark/apg_teacher_probes/clone_fit.json",
         lambda data: energy_tables.clone_fit_table(data),
     ),
+    "misses": ("docs/rl_benchmark/misses.json", lambda data: energy_tables.misses_table(data)),
     "sbx-speed": ("docs/rl_benchmark/sbx_speed.json", sbx_speed_table),
     **RL_TABLES,
 }

@@ -111,4 +111,23 @@ def clone_fit_table(data: dict[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
-__all__ = ["clone_fit_table", "clone_rounds_table", "gains_table", "open_loop_table", "split_table"]
+def misses_table(data: dict[str, Any]) -> str:
+    """Per agent and T_con: in time, and where the misses end (benchmarks/learning/misses.py)."""
+    lines = ["| agent | T_con [s] | in time | misses | left the arena | misses' final distance: median, largest [cm] "
+             "| misses within 2 cm | misses' start distance (median) [m] |", "|---" * 8 + "|"]  # fmt: skip
+    for agent in data["agents"]:
+        for row in agent["rows"]:
+            if row["misses"]:
+                where = f"{100 * row['final_distance_median']:.2f}, {100 * row['final_distance_max']:.1f}"
+                near, start = f"{100 * row['within_2cm']:.0f} %", f"{row['start_distance_median']:.2f}"
+            else:
+                where, near, start = "-", "-", "-"
+            lines.append(f"| {agent['agent']} | {row['T_con']:g} | {100 * row['in_time']:.1f} % | {row['misses']} "
+                         f"| {row['left_arena']} | {where} | {near} | {start} |")  # fmt: skip
+    n = data["agents"][0]["rows"][0]["n"]
+    lines += ["", f"{n} random episodes of {data['env_id']} at each T_con (seed {data['seed']}); a miss: not within "
+              "the goal tolerance (1 cm) at T_con."]  # fmt: skip
+    return "\n".join(lines) + "\n"
+
+
+__all__ = ["clone_fit_table", "clone_rounds_table", "gains_table", "misses_table", "open_loop_table", "split_table"]

@@ -111,8 +111,8 @@ class APGTrainer:
         near, within = "", f"within {s.near_miss_distance:g} m of the goal but not at it"
         if s.near_miss_clip is not None:
             near += f" ({s.near_miss_clip:g} for the episodes that end {within})"
-        if s.near_miss_weight != 1.0:
-            near += f", the episodes that end {within} weighing {s.near_miss_weight:g} times the others"
+        weighed = (f"; the episodes that end {within} weigh {s.near_miss_weight:g} times the others in the update"
+                   if s.near_miss_weight != 1.0 else "")  # fmt: skip
         clip = (
             f"{s.state_grad_clip:g}"
             if s.state_grad_clip_final is None
@@ -120,7 +120,7 @@ class APGTrainer:
             f"{round(self.apg.clip_decay_updates)} updates"
         ) + near
         return (f"APG: {s.episodes} episodes per update, Adam {rate}, the state's gradient clipped to {clip} per step "
-                f"in each episode{kept}{taught}")  # fmt: skip
+                f"in each episode{weighed}{kept}{taught}")  # fmt: skip
 
 
 def train(
