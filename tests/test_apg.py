@@ -43,6 +43,8 @@ from train.learning.jitted.apg_settings import APGSettings
             r"^near_miss_clip=16 is invalid with state_grad_clip=0 \(no episode is clipped\)",
         ),
         ({"near_miss_distance": 0}, r"^near_miss_distance=0(\.0)? is invalid: expected a finite number in \(0, 100\]$"),
+        ({"hold_steps": -1}, r"^hold_steps=-1 is invalid: expected an integer in \[0, 100000\]$"),
+        ({"hold_weight": 0}, r"^hold_weight=0(\.0)? is invalid: expected a finite number in \(0, 1e\+06\]$"),
         ({"near_miss_weight": 0}, r"^near_miss_weight=0(\.0)? is invalid: expected a finite number in \(0, 1000\]$"),
         (
             {"state_grad_clip": 0, "near_miss_weight": 4},
@@ -265,6 +267,27 @@ def test_a_near_miss_weighs_near_miss_weight_times_its_clipped_gradient() -> Non
     assert float(near["grad_norm"]) == pytest.approx(3.0 * float(at_plain["grad_norm"]), rel=1e-5)
     assert float(far["grad_norm"]) == pytest.approx(float(at_plain["grad_norm"]), rel=1e-5)
     assert float(wide_near["grad_norm"]) == pytest.approx(3.0 * float(wide["grad_norm"]), rel=1e-5)
+
+
+def test_hold_steps_adds_the_miss_before_t_con_to_the_gradient_only() -> None:
+    """With ``hold_steps`` the update also follows the miss over the last steps before T_con: the gradient changes, the
+    return does not; a larger ``hold_weight`` changes it more."""
+    from dwr_gym.jax_env import make_gymnax_env
+    from train.learning.jitted.apg import JaxAPG
+
+    env, params = make_gymnax_env("DWRPointStabilization-v2", T_con_range=[2.0, 2.2])
+
+    def apg(**kwargs: Any) -> Any:
+        return JaxAPG(APGSettings(episodes=4, net_arch=(8,), state_grad_clip=0.25, **kwargs), env, params)
+
+    plain = apg()
+    state = plain.init(0)
+    _, at_plain = plain.update(state)
+    _, held = apg(hold_steps=10).update(state)
+    _, heavy = apg(hold_steps=10, hold_weight=1000.0).update(state)
+    assert float(held["return_mean"]) == float(heavy["return_mean"]) == float(at_plain["return_mean"])
+    grads = [float(m["grad_norm"]) for m in (at_plain, held, heavy)]
+    assert abs(grads[1] - grads[0]) > 1e-4 * grads[0] and abs(grads[2] - grads[0]) > abs(grads[1] - grads[0])
 
 
 def test_an_update_that_loses_return_on_its_episodes_is_undone() -> None:

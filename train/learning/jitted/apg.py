@@ -188,8 +188,10 @@ class JaxAPG:
 
         near_miss = self.settings.near_miss_clip is not None or self.settings.near_miss_weight != 1.0
 
+        hold = self.settings.hold_steps
+
         def one_step(carry: tuple[Any, ...], t: Any) -> tuple[tuple[Any, ...], None]:
-            state, carrier, alive, total, steps = carry
+            state, carrier, alive, total, held, steps = carry
             if near_miss:  # the clip is chosen at the end and comes back with the carrier's cotangent
                 state, carrier = clip_gradient_carried(state, carrier)
             elif self.settings.state_grad_clip > 0:
@@ -198,15 +200,20 @@ class JaxAPG:
             _, after, reward, done, _ = self.env.step_env(jax.random.fold_in(key_steps, t), state, action,
                                                           self.env_params)  # fmt: skip
             total = total + jnp.where(alive, reward, 0.0)
+            if hold:  # the miss over the last `hold` steps up to T_con (hold_steps), for the gradient
+                last = after.step_count > after.prescribed_steps - hold
+                held = held - jnp.where(alive & last, self.settings.hold_weight / hold * after.distance, 0.0)
             state = jax.tree.map(lambda new, old: jnp.where(alive, new, old), after, state)
-            return (state, carrier, alive & ~done, total, steps + alive.astype(jnp.int32)), None
+            return (state, carrier, alive & ~done, total, held, steps + alive.astype(jnp.int32)), None
 
         zero = jnp.asarray(0.0, jnp.float32)
         # (the carrier from the episode's own start: under vmap a constant would be one for all episodes, and its
         # cotangent the sum of their bounds)
         carrier = (start.distance * 0.0).astype(jnp.float32)
-        carry = (start, carrier, jnp.asarray(True), zero, jnp.asarray(0, jnp.int32))
-        (final, carrier, _, total, steps), _ = jax.lax.scan(one_step, carry, jnp.arange(self.max_steps))
+        carry = (start, carrier, jnp.asarray(True), zero, zero, jnp.asarray(0, jnp.int32))
+        (final, carrier, _, total, held, steps), _ = jax.lax.scan(one_step, carry, jnp.arange(self.max_steps))
+        if hold:  # + 0: the return as it is, the held miss's gradient in it
+            total = total + (held - jax.lax.stop_gradient(held))
         if near_miss:  # + bound * 0: the return as it is, the episode's clip into the carrier's cotangent
             weight = jax.lax.stop_gradient(self.episode_weight(final))
             # the same value, its gradient times the weight (and the clip times it: weight x the clipped gradient)

@@ -16,6 +16,7 @@ MAX_DROP = 1e9
 APG_DEFAULTS: dict[str, Any] = {"episodes": 64, "learning_rate": 3e-4, "max_grad_norm": 1.0, "state_grad_clip": 64.0,
                                  "state_grad_clip_final": None, "state_grad_clip_decay": 1.0,
                                  "near_miss_clip": None, "near_miss_distance": 0.05, "near_miss_weight": 1.0,
+                                 "hold_steps": 0, "hold_weight": 10.0,
                                  "max_return_drop": MAX_DROP, "keep_best": 0,
                                  "validation_episodes": 256, "teacher_episodes": 0, "teacher_iterations": 400,
                                  "teacher_learning_rate": 0.02, "clone_steps": 4000, "teacher_rounds": 1}  # fmt: skip
@@ -60,6 +61,14 @@ class APGSettings:
     """The weight of a near miss's gradient in the update (its clip scaled with it, so its gradient is this times
     the clipped one): above 1 the few episodes that miss the bonus by less than ``near_miss_distance`` weigh more
     than their share of the batch. 1 (the default): every episode weighs the same."""
+    hold_steps: int = 0
+    """With > 0, the update also follows the miss over the last ``hold_steps`` control periods before T_con (``-
+    hold_weight`` times the distance to the goal, averaged over them), not only at T_con: a robot that is at the goal
+    a little before T_con and stays there is within the tolerance at T_con whatever the timing of its last steps. The
+    return (and what ``keep_best`` and the evaluations measure) is v2's own; this is in the gradient only. 0 (the
+    default): off."""
+    hold_weight: float = 10.0
+    """The weight per metre of the miss over the ``hold_steps`` (10: the weight of v2's miss at T_con)."""
     max_return_drop: float = MAX_DROP
     """An update after which the same episodes' mean return is lower by more than this is undone (the weights and
     Adam's state as before it; the replay's env steps count); :data:`MAX_DROP` (the default): none checked. Off by
@@ -121,6 +130,8 @@ class APGSettings:
                 near_miss_distance=as_float("near_miss_distance", values["near_miss_distance"], 0.0, 100.0,
                                             low_inclusive=False, text=True),
                 near_miss_weight=weight_beside(values["near_miss_weight"], values["state_grad_clip"]),
+                hold_steps=as_int("hold_steps", values["hold_steps"], 0, 100_000, text=True),
+                hold_weight=as_float("hold_weight", values["hold_weight"], 0.0, 1e6, low_inclusive=False, text=True),
                 max_return_drop=as_float("max_return_drop", values["max_return_drop"], 0.0, MAX_DROP, text=True),
                 keep_best=as_int("keep_best", values["keep_best"], 0, 1_000_000, text=True),
                 validation_episodes=as_int("validation_episodes", values["validation_episodes"], 1, 65536, text=True),

@@ -113,6 +113,9 @@ class APGTrainer:
             near += f" ({s.near_miss_clip:g} for the episodes that end {within})"
         weighed = (f"; the episodes that end {within} weigh {s.near_miss_weight:g} times the others in the update"
                    if s.near_miss_weight != 1.0 else "")  # fmt: skip
+        if s.hold_steps:
+            weighed += (f"; the gradient follows the miss over the last {s.hold_steps} steps before T_con too "
+                        f"({s.hold_weight:g} per metre)")  # fmt: skip
         clip = (
             f"{s.state_grad_clip:g}"
             if s.state_grad_clip_final is None
