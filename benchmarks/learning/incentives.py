@@ -1,6 +1,6 @@
 """What v1's and v2's returns pay for, side by side (issue 40): the optimum ranks first, and no pay for rushing.
 
-    python -m benchmarks run incentives --docs                        # 200 episodes (ranking), 100 per cell (rushing): about an hour, 2 cores
+    python -m benchmarks run incentives --docs   # 200 episodes (ranking), 100 a cell (rushing): about an hour, 2 cores
     python -m benchmarks run incentives --n 20 --n-rush 4 --sigmas 0  # a quick look (printed, nothing written)
 
 ``--docs`` writes docs/rl_benchmark/incentives.json (the measurements it leaves out with ``--skip`` or ``--env-ids``,
@@ -34,7 +34,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--n", type=int, default=200, help="episodes of the ranking (default: 200)")
     parser.add_argument("--n-rush", type=int, default=100, help="episodes of each rushing cell (default: 100)")
     parser.add_argument("--replan-every", type=int, default=5,
-                        help="control periods between the plans' re-plans from the measured pose (default: 5, 0.25 s)")  # fmt: skip
+                        help="control periods between re-plans from the measured pose (default: 5)")  # fmt: skip
     parser.add_argument(
         "--sigmas", type=float, nargs="+", default=[0.0, 0.1, 0.3], help="action noise (default: 0 0.1 0.3)"
     )
@@ -42,7 +42,7 @@ def main(argv: list[str] | None = None) -> int:
                         help="arrival time / T_con of the plans (default: 0.3 0.5 0.8 1)")  # fmt: skip
     parser.add_argument("--workers", type=int, default=2, help="processes solving plans (default: 2)")
     parser.add_argument("--env-ids", nargs="+", choices=ENV_IDS, default=list(ENV_IDS), metavar="ENV_ID",
-                        help="the env ids measured (default: both; the others' measurements kept from the JSON)")  # fmt: skip
+                        help="the env ids measured (default: both; the others' kept from the JSON)")  # fmt: skip
     parser.add_argument("--skip", choices=["ranking", "rushing"], help="leave one measurement out (kept from the JSON)")
     parser.add_argument("--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} (and its tables)")
     args = parser.parse_args(argv)

@@ -31,7 +31,8 @@ DEFAULT_AGENTS = ("train/pretrained/apg_near_miss_time_scaled_30min_v2",)
 
 
 def misses(policy: Any, n: int, seed: int, T_con: float) -> dict[str, Any]:
-    """In time, and the misses' final distance, arena exits and start distance, on ``n`` random episodes at ``T_con``."""
+    """In time, and the misses' final distance, arena exits and start distance, on ``n`` random episodes at
+    ``T_con``."""
     from train.evaluation.incentives import random_episodes
     from train.evaluation.rollout import rollout
 

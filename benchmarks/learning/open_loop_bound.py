@@ -39,7 +39,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--learning-rate", type=float, default=0.02, help="Adam's step size (default: 0.02)")
     parser.add_argument("--variants", nargs="+", metavar="LAW:SCALE", default=[variant_name(*v) for v in VARIANTS],
                         help="the laws under the sequences and the residual scales, 'none' for the action alone "
-                             "(default: ptc:0.5 pt-astolfi:0.5 none:1); with --docs the JSON's others are kept")  # fmt: skip
+                             "(default: ptc:0.5 pt-astolfi:0.5 none:1); --docs keeps the JSON's others")  # fmt: skip
     parser.add_argument("--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} (and its table)")
     args = parser.parse_args(argv)
     if args.n < 1 or args.iterations < 1:
@@ -86,7 +86,7 @@ def parse_variant(text: str) -> tuple[str | None, float]:
         scale = float("nan")
     if (law != "none" and law not in CONTROLLERS) or not 0 < scale <= 2:
         raise ValueError(f"--variants {text!r} is invalid: expected LAW:SCALE with LAW 'none' or one of "
-                         f"{sorted(CONTROLLERS)} and SCALE in (0, 2] (the training's --residual-scale), e.g. ptc:1")  # fmt: skip
+                         f"{sorted(CONTROLLERS)} and SCALE in (0, 2] (as --residual-scale), e.g. ptc:1")  # fmt: skip
     return (None if law == "none" else law), scale
 
 

@@ -13,8 +13,10 @@ pose with less energy; v2's arrival bonus (a step at 1 cm) has no gradient and i
 Gradients through 1,200 steps of a closed loop explode: the cotangent of the env state is clipped to a norm of
 ``state_grad_clip`` at every step on the way back (:func:`clip_gradient`), and the update's gradient to
 ``max_grad_norm``; with ``near_miss_clip`` the episodes that end just outside the goal tolerance get a wider clip of
-their own (:func:`clip_gradient_carried`), and with ``near_miss_weight`` more weight in the update. This learns from the reward alone: what it uses beside the reward is the
-env's own derivative, which model-free RL does not have (the docs say so where it is compared).
+their own (:func:`clip_gradient_carried`), and with ``near_miss_weight`` more weight in the update; with
+``hold_steps`` the gradient follows the miss over the last steps before T_con too (the return stays v2's). This learns
+from the reward alone: what it uses beside the reward is the env's own derivative, which model-free RL does not have
+(the docs say so where it is compared).
 
 The policy is the actor of the jitted PPO's network (:func:`train.learning.jitted.policy.make_network`), exported
 as an SB3 PPO model (:class:`train.learning.jitted.export.SB3Exporter`) like the ES's; the observations are scaled by
@@ -187,7 +189,6 @@ class JaxAPG:
         limit = self.settings.state_grad_clip if limit is None else limit
 
         near_miss = self.settings.near_miss_clip is not None or self.settings.near_miss_weight != 1.0
-
         hold = self.settings.hold_steps
 
         def one_step(carry: tuple[Any, ...], t: Any) -> tuple[tuple[Any, ...], None]:
