@@ -173,6 +173,11 @@ ENTRIES: dict[str, dict[str, Any]] = {
     # goal but outside its tolerance clipped at 16 (near_miss_clip: the arrival bonus, a step, has no gradient);
     # 560 M env steps, the goal's 30 minutes of a core
     "apg-near-miss-time-scaled-30min-v2": apg_teacher_time_scaled(560_000_000, clone_steps=16000, near_miss_clip=16.0),
+    # and the miss over the last 20 control periods (1 s) before T_con in the gradient too (hold_steps: at the goal
+    # a little early and still there, the robot is within the tolerance at T_con whatever the timing of its last steps)
+    "apg-hold-time-scaled-30min-v2": apg_teacher_time_scaled(
+        560_000_000, clone_steps=16000, near_miss_clip=16.0, hold_steps=20
+    ),
     "apg-residual-v2": {
         "algo": "apg",
         "backend": "jax",
