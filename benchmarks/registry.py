@@ -82,6 +82,7 @@ SUITE: dict[str, str] = {
     "rl-apg-teacher-30min": "benchmarks.recipes.rl_apg_teacher_30min",
     "rl-apg-clip-decay": "benchmarks.recipes.rl_apg_clip_decay",
     "rl-apg-near-miss": "benchmarks.recipes.rl_apg_near_miss",
+    "rl-apg-hold": "benchmarks.recipes.rl_apg_hold",
     "rl-time-scale-30min": "benchmarks.recipes.rl_time_scale_30min",
     "robust-rl": "benchmarks.recipes.robust_rl",
 }
