@@ -4,7 +4,8 @@
 # on DWRPointStabilization-v2: apg-hold-time-scaled-30min-v2 (560 M env steps: the goal's 30 minutes of a core),
 # SEEDS (5) seeds, two runs side by side on one core each (about 35 minutes a pair on 2 cores with the evaluation), on
 # the benchmark's sets and at T_con 10, 20, 40 and 60 s. Writes docs/rl_benchmark/apg_hold.json (tables rl-apg-hold
-# and rl-apg-hold-per-T_con in docs/rl-benchmark.md) and its curves.
+# and rl-apg-hold-per-T_con in docs/rl-benchmark.md) and its curves, and ships the best seed as
+# train/pretrained/apg_hold_time_scaled_30min_v2.
 set -euo pipefail
 export OMP_NUM_THREADS=1
 OUT=${OUT:-results/rl-apg-hold}
@@ -13,4 +14,5 @@ dwr-gym benchmark --agents "apg-hold-time-scaled-30min-v2:threads=1" \
   --out "$OUT"
 cp "$OUT/benchmark.json" docs/rl_benchmark/apg_hold.json
 cp "$OUT/curves_steps.png" docs/rl_benchmark/apg_hold_curves_steps.png
+python -m benchmarks run ship-rl-agents "$OUT" --also apg-hold-time-scaled-30min-v2
 python -m benchmarks render
