@@ -45,6 +45,14 @@ from train.learning.jitted.apg_settings import APGSettings
         ({"near_miss_distance": 0}, r"^near_miss_distance=0(\.0)? is invalid: expected a finite number in \(0, 100\]$"),
         ({"hold_steps": -1}, r"^hold_steps=-1 is invalid: expected an integer in \[0, 100000\]$"),
         ({"hold_weight": 0}, r"^hold_weight=0(\.0)? is invalid: expected a finite number in \(0, 1e\+06\]$"),
+        (
+            {"hold_heading_weight": -1},
+            r"^hold_heading_weight=-1(\.0)? is invalid: expected a finite number in \[0, 1e\+06\]$",
+        ),
+        (
+            {"hold_heading_weight": 5},
+            r"^hold_heading_weight=5 is invalid with hold_steps=0 \(it acts over the last hold_steps before T_con\)",
+        ),
         ({"near_miss_weight": 0}, r"^near_miss_weight=0(\.0)? is invalid: expected a finite number in \(0, 1000\]$"),
         (
             {"state_grad_clip": 0, "near_miss_weight": 4},
@@ -287,6 +295,28 @@ def test_hold_steps_adds_the_miss_before_t_con_to_the_gradient_only() -> None:
     _, heavy = apg(hold_steps=10, hold_weight=1000.0).update(state)
     assert float(held["return_mean"]) == float(heavy["return_mean"]) == float(at_plain["return_mean"])
     grads = [float(m["grad_norm"]) for m in (at_plain, held, heavy)]
+    assert abs(grads[1] - grads[0]) > 1e-4 * grads[0] and abs(grads[2] - grads[0]) > abs(grads[1] - grads[0])
+
+
+def test_hold_heading_weight_adds_the_heading_before_t_con_to_the_gradient_only() -> None:
+    """``hold_heading_weight`` adds the heading's error over the hold window to the update: the gradient changes
+    with it (a larger weight more), the return does not."""
+    from dwr_gym.jax_env import make_gymnax_env
+    from train.learning.jitted.apg import JaxAPG
+
+    env, params = make_gymnax_env("DWRPointStabilization-v2", T_con_range=[2.0, 2.2])
+
+    def apg(**kwargs: Any) -> Any:
+        return JaxAPG(APGSettings(episodes=4, net_arch=(8,), state_grad_clip=0.25, hold_steps=10, **kwargs), env,
+                      params)  # fmt: skip
+
+    plain = apg()
+    state = plain.init(0)
+    _, at_plain = plain.update(state)
+    _, turned = apg(hold_heading_weight=1.0).update(state)
+    _, heavy = apg(hold_heading_weight=1000.0).update(state)
+    assert float(turned["return_mean"]) == float(heavy["return_mean"]) == float(at_plain["return_mean"])
+    grads = [float(m["grad_norm"]) for m in (at_plain, turned, heavy)]
     assert abs(grads[1] - grads[0]) > 1e-4 * grads[0] and abs(grads[2] - grads[0]) > abs(grads[1] - grads[0])
 
 

@@ -14,7 +14,8 @@ Gradients through 1,200 steps of a closed loop explode: the cotangent of the env
 ``state_grad_clip`` at every step on the way back (:func:`clip_gradient`), and the update's gradient to
 ``max_grad_norm``; with ``near_miss_clip`` the episodes that end just outside the goal tolerance get a wider clip of
 their own (:func:`clip_gradient_carried`), and with ``near_miss_weight`` more weight in the update; with
-``hold_steps`` the gradient follows the miss over the last steps before T_con too (the return stays v2's). This learns
+``hold_steps`` the gradient follows the miss (and with ``hold_heading_weight`` the heading's error) over the last steps
+before T_con too (the return stays v2's). This learns
 from the reward alone: what it uses beside the reward is the env's own derivative, which model-free RL does not have
 (the docs say so where it is compared).
 
@@ -203,7 +204,10 @@ class JaxAPG:
             total = total + jnp.where(alive, reward, 0.0)
             if hold:  # the miss over the last `hold` steps up to T_con (hold_steps), for the gradient
                 last = after.step_count > after.prescribed_steps - hold
-                held = held - jnp.where(alive & last, self.settings.hold_weight / hold * after.distance, 0.0)
+                miss = self.settings.hold_weight * after.distance
+                if self.settings.hold_heading_weight:  # the heading's error, linear near 0 (2 |sin(psi / 2)|)
+                    miss = miss + self.settings.hold_heading_weight * 2.0 * jnp.abs(jnp.sin(0.5 * after.psi))
+                held = held - jnp.where(alive & last, miss / hold, 0.0)
             state = jax.tree.map(lambda new, old: jnp.where(alive, new, old), after, state)
             return (state, carrier, alive & ~done, total, held, steps + alive.astype(jnp.int32)), None
 

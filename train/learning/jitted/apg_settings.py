@@ -16,7 +16,7 @@ MAX_DROP = 1e9
 APG_DEFAULTS: dict[str, Any] = {"episodes": 64, "learning_rate": 3e-4, "max_grad_norm": 1.0, "state_grad_clip": 64.0,
                                  "state_grad_clip_final": None, "state_grad_clip_decay": 1.0,
                                  "near_miss_clip": None, "near_miss_distance": 0.05, "near_miss_weight": 1.0,
-                                 "hold_steps": 0, "hold_weight": 10.0,
+                                 "hold_steps": 0, "hold_weight": 10.0, "hold_heading_weight": 0.0,
                                  "max_return_drop": MAX_DROP, "keep_best": 0,
                                  "validation_episodes": 256, "teacher_episodes": 0, "teacher_iterations": 400,
                                  "teacher_learning_rate": 0.02, "clone_steps": 4000, "teacher_rounds": 1}  # fmt: skip
@@ -69,6 +69,11 @@ class APGSettings:
     default): off."""
     hold_weight: float = 10.0
     """The weight per metre of the miss over the ``hold_steps`` (10: the weight of v2's miss at T_con)."""
+    hold_heading_weight: float = 0.0
+    """With > 0 (and ``hold_steps``), the update also follows the heading error over the same last steps, linearly:
+    this weight per radian times 2 |sin(psi / 2)| (|psi| near the goal's heading), averaged over them. v2 pays the
+    heading as 5 (cos psi - 1), whose gradient vanishes as psi does (1.9 per radian at the 0.39 rad the agents end
+    at); this one does not. Gradient only, as ``hold_weight``. 0 (the default): off."""
     max_return_drop: float = MAX_DROP
     """An update after which the same episodes' mean return is lower by more than this is undone (the weights and
     Adam's state as before it; the replay's env steps count); :data:`MAX_DROP` (the default): none checked. Off by
@@ -132,6 +137,7 @@ class APGSettings:
                 near_miss_weight=weight_beside(values["near_miss_weight"], values["state_grad_clip"]),
                 hold_steps=as_int("hold_steps", values["hold_steps"], 0, 100_000, text=True),
                 hold_weight=as_float("hold_weight", values["hold_weight"], 0.0, 1e6, low_inclusive=False, text=True),
+                hold_heading_weight=heading_beside(values["hold_heading_weight"], values["hold_steps"]),
                 max_return_drop=as_float("max_return_drop", values["max_return_drop"], 0.0, MAX_DROP, text=True),
                 keep_best=as_int("keep_best", values["keep_best"], 0, 1_000_000, text=True),
                 validation_episodes=as_int("validation_episodes", values["validation_episodes"], 1, 65536, text=True),
@@ -173,6 +179,15 @@ def weight_beside(value: Any, clip: Any) -> float:
     if checked != 1.0 and float(clip) == 0.0:
         raise ValueError(f"near_miss_weight={value!r} is invalid with state_grad_clip=0 (it scales the clip): "
                          "expected a state_grad_clip > 0, or near_miss_weight 1")  # fmt: skip
+    return checked
+
+
+def heading_beside(value: Any, hold_steps: Any) -> float:
+    """``hold_heading_weight`` checked: a number in [0, 1e6], above 0 only with ``hold_steps`` (its window)."""
+    checked = as_float("hold_heading_weight", value, 0.0, 1e6, text=True)
+    if checked > 0.0 and int(hold_steps) == 0:
+        raise ValueError(f"hold_heading_weight={value!r} is invalid with hold_steps=0 (it acts over the last "
+                         "hold_steps before T_con): expected a hold_steps > 0, or hold_heading_weight 0")  # fmt: skip
     return checked
 
 

@@ -115,7 +115,9 @@ class APGTrainer:
                    if s.near_miss_weight != 1.0 else "")  # fmt: skip
         if s.hold_steps:
             weighed += (f"; the gradient follows the miss over the last {s.hold_steps} steps before T_con too "
-                        f"({s.hold_weight:g} per metre)")  # fmt: skip
+                        f"({s.hold_weight:g} per metre"
+                        + (f", and the heading's error at {s.hold_heading_weight:g} per radian)"
+                           if s.hold_heading_weight else ")"))  # fmt: skip
         clip = (
             f"{s.state_grad_clip:g}"
             if s.state_grad_clip_final is None
