@@ -178,6 +178,11 @@ ENTRIES: dict[str, dict[str, Any]] = {
     "apg-hold-time-scaled-30min-v2": apg_teacher_time_scaled(
         560_000_000, clone_steps=16000, near_miss_clip=16.0, hold_steps=20
     ),
+    # and the heading's error over the same window, 5 per radian, linear near 0 (hold_heading_weight: v2's 5 (cos psi - 1)
+    # has a vanishing gradient there, and the updates after the clone trade the heading for the arrival)
+    "apg-hold-heading-time-scaled-30min-v2": apg_teacher_time_scaled(
+        560_000_000, clone_steps=16000, near_miss_clip=16.0, hold_steps=20, hold_heading_weight=5.0
+    ),
     "apg-residual-v2": {
         "algo": "apg",
         "backend": "jax",
