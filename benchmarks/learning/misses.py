@@ -1,6 +1,6 @@
 """Where the learned agents miss on v2: the final distance of the episodes not at the goal at T_con, per T_con.
 
-    python -m benchmarks run misses --docs     # the three shipped APG agents of 30 minutes, 300 starts a T_con
+    python -m benchmarks run misses --docs     # the four shipped APG agents of 30 minutes, 300 starts a T_con
     python -m benchmarks run misses train/pretrained/apg_v2 --n 50   # any agents (printed, nothing written)
 
 Each agent plays ``--n`` random episodes of DWRPointStabilization-v2 (seed ``--seed``) at each T_con of 10, 20, 40
@@ -27,7 +27,9 @@ ROOT = Path(__file__).resolve().parents[2]
 JSON_PATH = ROOT / "docs" / "rl_benchmark" / "misses.json"
 ENV_ID = "DWRPointStabilization-v2"
 T_CONS = (10.0, 20.0, 40.0, 60.0)
-DEFAULT_AGENTS = tuple(f"train/pretrained/apg_{name}_time_scaled_30min_v2" for name in ("teacher", "near_miss", "hold"))
+DEFAULT_AGENTS = tuple(
+    f"train/pretrained/apg_{name}_time_scaled_30min_v2" for name in ("teacher", "near_miss", "hold", "hold_heading")
+)
 
 
 def misses(policy: Any, n: int, seed: int, T_con: float) -> dict[str, Any]:
