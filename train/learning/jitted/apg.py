@@ -15,9 +15,8 @@ Gradients through 1,200 steps of a closed loop explode: the cotangent of the env
 ``max_grad_norm``; with ``near_miss_clip`` the episodes that end just outside the goal tolerance get a wider clip of
 their own (:func:`clip_gradient_carried`), and with ``near_miss_weight`` more weight in the update; with
 ``hold_steps`` the gradient follows the miss (and with ``hold_heading_weight`` the heading's error) over the last steps
-before T_con too (the return stays v2's). This learns
-from the reward alone: what it uses beside the reward is the env's own derivative, which model-free RL does not have
-(the docs say so where it is compared).
+before T_con too (the return stays v2's). This learns from the reward alone: what it uses beside the reward is the
+env's own derivative, which model-free RL does not have (the docs say so where it is compared).
 
 The policy is the actor of the jitted PPO's network (:func:`train.learning.jitted.policy.make_network`), exported
 as an SB3 PPO model (:class:`train.learning.jitted.export.SB3Exporter`) like the ES's; the observations are scaled by
