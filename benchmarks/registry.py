@@ -83,6 +83,7 @@ SUITE: dict[str, str] = {
     "rl-apg-clip-decay": "benchmarks.recipes.rl_apg_clip_decay",
     "rl-apg-near-miss": "benchmarks.recipes.rl_apg_near_miss",
     "rl-apg-hold": "benchmarks.recipes.rl_apg_hold",
+    "rl-apg-hold-heading10": "benchmarks.recipes.rl_apg_hold_heading10",
     "rl-time-scale-30min": "benchmarks.recipes.rl_time_scale_30min",
     "robust-rl": "benchmarks.recipes.robust_rl",
 }

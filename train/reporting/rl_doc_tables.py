@@ -38,6 +38,11 @@ RL_TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "rl-apg-near-miss-per-T_con": ("docs/rl_benchmark/apg_near_miss.json", lambda data: rl_table(data, "per-T_con")),
     "rl-apg-hold": ("docs/rl_benchmark/apg_hold.json", lambda data: rl_table(data, "random")),
     "rl-apg-hold-per-T_con": ("docs/rl_benchmark/apg_hold.json", lambda data: rl_table(data, "per-T_con")),
+    "rl-apg-hold-heading10": ("docs/rl_benchmark/apg_hold_heading10.json", lambda data: rl_table(data, "random")),
+    "rl-apg-hold-heading10-per-T_con": (
+        "docs/rl_benchmark/apg_hold_heading10.json",
+        lambda data: rl_table(data, "per-T_con"),
+    ),
     "rl-apg-teacher-per-T_con": ("docs/rl_benchmark/apg_teacher.json", lambda data: rl_table(data, "per-T_con")),
     "rl-apg-teacher-time-scaled": (
         "docs/rl_benchmark/apg_teacher_time_scaled.json",
