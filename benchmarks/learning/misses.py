@@ -28,7 +28,8 @@ JSON_PATH = ROOT / "docs" / "rl_benchmark" / "misses.json"
 ENV_ID = "DWRPointStabilization-v2"
 T_CONS = (10.0, 20.0, 40.0, 60.0)
 DEFAULT_AGENTS = tuple(
-    f"train/pretrained/apg_{name}_time_scaled_30min_v2" for name in ("teacher", "near_miss", "hold", "hold_heading")
+    f"train/pretrained/apg_{name}_time_scaled_30min_v2"
+    for name in ("teacher", "near_miss", "hold", "hold_heading", "hold_heading10")
 )
 
 
