@@ -3,7 +3,7 @@
 # heading's error in the same window at 10 per radian (hold_heading_weight 10, twice that of
 # apg-hold-heading-time-scaled-30min-v2) on DWRPointStabilization-v2: apg-hold-heading10-time-scaled-30min-v2 (560 M env
 # steps: the goal's 30 minutes of a core), SEEDS (5) seeds, two runs side by side on one core each (about 30 minutes a
-# pair on 2 cores with the evaluation: about 1.5 hours in all), on the benchmark's sets and at T_con 10, 20, 40 and
+# pair on 2 cores with the evaluation, about 1.5 hours in all; 40 minutes a pair on a machine 1.37x slower), on the benchmark's sets and at T_con 10, 20, 40 and
 # 60 s. Writes docs/rl_benchmark/apg_hold_heading10.json (tables rl-apg-hold-heading10 and
 # rl-apg-hold-heading10-per-T_con in docs/rl-benchmark.md) and its curves, and ships the best seed as
 # train/pretrained/apg_hold_heading10_time_scaled_30min_v2.
