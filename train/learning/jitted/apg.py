@@ -28,6 +28,7 @@ the run exports the best policy measured on its own validation episodes (:meth:`
 
 from __future__ import annotations
 
+import functools
 from typing import Any
 
 import flax.struct
@@ -122,6 +123,11 @@ class JaxAPG:
         self.obs_dim = int(env.observation_space(env_params).shape[0])
         self.network = make_network(settings.ppo_settings(), int(env.action_space(env_params).shape[0]))
         self.max_steps = int(getattr(env_params, "max_episode_steps", 0) or env_params.max_steps_in_episode)
+        #: The params of the updates' short episodes (``short_T_con_share``): T_con in [low, short_T_con_max] clamped.
+        self.short_params = env_params
+        if settings.short_T_con_share:
+            low, high = (float(bound) for bound in env_params.T_con_range)
+            self.short_params = env_params.replace(T_con_range=(low, max(low, min(high, settings.short_T_con_max))))
         rate: Any = settings.learning_rate
         self.decay_updates = 0
         if settings.linear_schedule or settings.state_grad_clip_final is not None:
@@ -152,8 +158,13 @@ class JaxAPG:
         """The mean length of an episode, in env steps, over :data:`INITIAL_OBSERVATIONS` fresh ones (those of v2 end
         at T_con; an earlier end makes the schedule's updates more)."""
         keys = jax.random.split(jax.random.PRNGKey(0), INITIAL_OBSERVATIONS)
-        _, states = jax.vmap(self.env.reset_env, in_axes=(0, None))(keys, self.env_params)
-        return float(jnp.mean(jnp.minimum(states.prescribed_steps, self.max_steps)))
+
+        def mean_steps(params: Any) -> float:
+            _, states = jax.vmap(self.env.reset_env, in_axes=(0, None))(keys, params)
+            return float(jnp.mean(jnp.minimum(states.prescribed_steps, self.max_steps)))
+
+        share = self.settings.short_T_con_share  # (the updates' episodes: a share of them short)
+        return (1.0 - share) * mean_steps(self.env_params) + (share * mean_steps(self.short_params) if share else 0.0)
 
     def init(self, seed: int) -> Any:
         """A fresh state: the network initialised from ``seed`` as the jitted PPO's (a residual's near zero), the
@@ -181,15 +192,23 @@ class JaxAPG:
         mean, _, _ = self.network.apply(params, jnp.asarray(obs, jnp.float32))
         return jnp.clip(mean, -1.0, 1.0)
 
-    def episode(self, params: Any, stats: Any, key: Any, limit: Any = None) -> tuple[Any, Any]:
+    def episode(self, params: Any, stats: Any, key: Any, limit: Any = None, mixed: bool = False) -> tuple[Any, Any]:
         """One episode's return (differentiable in ``params``, the state's gradient clipped to ``limit``, by default
-        ``state_grad_clip``) and its env steps."""
+        ``state_grad_clip``) and its env steps; ``mixed``: an update's episode, short with ``short_T_con_share``."""
         key_reset, key_steps = jax.random.split(key)
         _, start = self.env.reset_env(key_reset, self.env_params)
+        share = self.settings.short_T_con_share
+        if mixed and share:  # the same start pose, its T_con from the short range (the others' keys as without it)
+            _, short = self.env.reset_env(key_reset, self.short_params)
+            is_short = jax.random.uniform(jax.random.fold_in(key_reset, 1)) < share
+            start = jax.tree.map(lambda a, b: jnp.where(is_short, a, b), short, start)
         limit = self.settings.state_grad_clip if limit is None else limit
 
         near_miss = self.settings.near_miss_clip is not None or self.settings.near_miss_weight != 1.0
-        hold = self.settings.hold_steps
+        hold: Any = self.settings.hold_steps
+        if self.settings.hold_fraction:  # the window a share of this episode's T_con (at least one step)
+            hold = jnp.maximum(1, jnp.ceil(self.settings.hold_fraction * start.prescribed_steps)).astype(jnp.float32)
+        holding = bool(self.settings.hold_steps or self.settings.hold_fraction)
 
         def one_step(carry: tuple[Any, ...], t: Any) -> tuple[tuple[Any, ...], None]:
             state, carrier, alive, total, held, steps = carry
@@ -201,7 +220,7 @@ class JaxAPG:
             _, after, reward, done, _ = self.env.step_env(jax.random.fold_in(key_steps, t), state, action,
                                                           self.env_params)  # fmt: skip
             total = total + jnp.where(alive, reward, 0.0)
-            if hold:  # the miss over the last `hold` steps up to T_con (hold_steps), for the gradient
+            if holding:  # the miss over the last `hold` steps up to T_con (hold_steps, hold_fraction): the gradient
                 last = after.step_count > after.prescribed_steps - hold
                 miss = self.settings.hold_weight * after.distance
                 if self.settings.hold_heading_weight:  # the heading's error, linear near 0 (2 |sin(psi / 2)|)
@@ -216,7 +235,7 @@ class JaxAPG:
         carrier = (start.distance * 0.0).astype(jnp.float32)
         carry = (start, carrier, jnp.asarray(True), zero, zero, jnp.asarray(0, jnp.int32))
         (final, carrier, _, total, held, steps), _ = jax.lax.scan(one_step, carry, jnp.arange(self.max_steps))
-        if hold:  # + 0: the return as it is, the held miss's gradient in it
+        if holding:  # + 0: the return as it is, the held miss's gradient in it
             total = total + (held - jax.lax.stop_gradient(held))
         if near_miss:  # + bound * 0: the return as it is, the episode's clip into the carrier's cotangent
             weight = jax.lax.stop_gradient(self.episode_weight(final))
@@ -268,7 +287,8 @@ class JaxAPG:
         limit = self.state_grad_clip(state.updates)
 
         def loss(params: Any) -> tuple[Any, tuple[Any, Any]]:
-            returns, steps = jax.vmap(self.episode, in_axes=(None, None, 0, None))(params, state.obs_stats, keys, limit)
+            episode = functools.partial(self.episode, mixed=True)  # (the short T_con of short_T_con_share)
+            returns, steps = jax.vmap(episode, in_axes=(None, None, 0, None))(params, state.obs_stats, keys, limit)
             return -jnp.sum(returns), (returns, steps)
 
         # The sum's gradient, then divided: each episode's state cotangent enters the backward pass at the scale of

@@ -16,7 +16,8 @@ MAX_DROP = 1e9
 APG_DEFAULTS: dict[str, Any] = {"episodes": 64, "learning_rate": 3e-4, "max_grad_norm": 1.0, "state_grad_clip": 64.0,
                                  "state_grad_clip_final": None, "state_grad_clip_decay": 1.0,
                                  "near_miss_clip": None, "near_miss_distance": 0.05, "near_miss_weight": 1.0,
-                                 "hold_steps": 0, "hold_weight": 10.0, "hold_heading_weight": 0.0,
+                                 "hold_steps": 0, "hold_fraction": 0.0, "hold_weight": 10.0,
+                                 "hold_heading_weight": 0.0, "short_T_con_share": 0.0, "short_T_con_max": 20.0,
                                  "max_return_drop": MAX_DROP, "keep_best": 0,
                                  "validation_episodes": 256, "teacher_episodes": 0, "teacher_iterations": 400,
                                  "teacher_learning_rate": 0.02, "clone_steps": 4000, "teacher_rounds": 1}  # fmt: skip
@@ -67,6 +68,11 @@ class APGSettings:
     a little before T_con and stays there is within the tolerance at T_con whatever the timing of its last steps. The
     return (and what ``keep_best`` and the evaluations measure) is v2's own; this is in the gradient only. 0 (the
     default): off."""
+    hold_fraction: float = 0.0
+    """With > 0 (instead of ``hold_steps``), the window is this share of each episode's own T_con: ceil(hold_fraction *
+    T_con / dt) control periods (at 0.1: 20 at T_con 10 s, 120 at 60 s). With time-scaled actions the policy is one
+    behaviour in T_con's own time, and a window of fixed length asks it to arrive at 0.9 of T_con at 10 s but at 0.98
+    at 60 s; this one asks the same share at every T_con. 0 (the default): the window is ``hold_steps``."""
     hold_weight: float = 10.0
     """The weight per metre of the miss over the ``hold_steps`` (10: the weight of v2's miss at T_con)."""
     hold_heading_weight: float = 0.0
@@ -74,6 +80,13 @@ class APGSettings:
     this weight per radian times 2 |sin(psi / 2)| (|psi| near the goal's heading), averaged over them. v2 pays the
     heading as 5 (cos psi - 1), whose gradient vanishes as psi does (1.9 per radian at the 0.39 rad the agents end
     at); this one does not. Gradient only, as ``hold_weight``. 0 (the default): off."""
+    short_T_con_share: float = 0.0
+    """The share of each update's episodes whose T_con is drawn from [the env's lowest T_con, ``short_T_con_max``]
+    rather than the env's whole range (the start pose drawn as for the others): more practice at the short deadlines,
+    where the agents miss most. The validation episodes of ``keep_best`` and every evaluation keep the env's own
+    draw. 0 (the default): every episode as the env draws it."""
+    short_T_con_max: float = 20.0
+    """[s] The upper end of the short episodes' T_con (clamped to the env's range)."""
     max_return_drop: float = MAX_DROP
     """An update after which the same episodes' mean return is lower by more than this is undone (the weights and
     Adam's state as before it; the replay's env steps count); :data:`MAX_DROP` (the default): none checked. Off by
@@ -136,8 +149,13 @@ class APGSettings:
                                             low_inclusive=False, text=True),
                 near_miss_weight=weight_beside(values["near_miss_weight"], values["state_grad_clip"]),
                 hold_steps=as_int("hold_steps", values["hold_steps"], 0, 100_000, text=True),
+                hold_fraction=fraction_beside(values["hold_fraction"], values["hold_steps"]),
                 hold_weight=as_float("hold_weight", values["hold_weight"], 0.0, 1e6, low_inclusive=False, text=True),
-                hold_heading_weight=heading_beside(values["hold_heading_weight"], values["hold_steps"]),
+                hold_heading_weight=heading_beside(values["hold_heading_weight"], values["hold_steps"],
+                                                   values["hold_fraction"]),
+                short_T_con_share=as_float("short_T_con_share", values["short_T_con_share"], 0.0, 1.0, text=True),
+                short_T_con_max=as_float("short_T_con_max", values["short_T_con_max"], 0.0, 1e6, low_inclusive=False,
+                                         text=True),
                 max_return_drop=as_float("max_return_drop", values["max_return_drop"], 0.0, MAX_DROP, text=True),
                 keep_best=as_int("keep_best", values["keep_best"], 0, 1_000_000, text=True),
                 validation_episodes=as_int("validation_episodes", values["validation_episodes"], 1, 65536, text=True),
@@ -182,12 +200,23 @@ def weight_beside(value: Any, clip: Any) -> float:
     return checked
 
 
-def heading_beside(value: Any, hold_steps: Any) -> float:
-    """``hold_heading_weight`` checked: a number in [0, 1e6], above 0 only with ``hold_steps`` (its window)."""
+def fraction_beside(value: Any, hold_steps: Any) -> float:
+    """``hold_fraction`` checked: a number in [0, 1), above 0 only without ``hold_steps`` (one window or the other)."""
+    checked = as_float("hold_fraction", value, 0.0, 1.0, high_inclusive=False, text=True)
+    if checked > 0.0 and int(hold_steps) > 0:
+        raise ValueError(f"hold_fraction={value!r} is invalid with hold_steps={hold_steps!r} (each sets the window "
+                         "before T_con): expected hold_fraction 0, or hold_steps 0")  # fmt: skip
+    return checked
+
+
+def heading_beside(value: Any, hold_steps: Any, hold_fraction: Any = 0.0) -> float:
+    """``hold_heading_weight`` checked: a number in [0, 1e6], above 0 only with ``hold_steps`` or ``hold_fraction``
+    (its window)."""
     checked = as_float("hold_heading_weight", value, 0.0, 1e6, text=True)
-    if checked > 0.0 and int(hold_steps) == 0:
+    if checked > 0.0 and int(hold_steps) == 0 and float(hold_fraction) == 0.0:
         raise ValueError(f"hold_heading_weight={value!r} is invalid with hold_steps=0 (it acts over the last "
-                         "hold_steps before T_con): expected a hold_steps > 0, or hold_heading_weight 0")  # fmt: skip
+                         "hold_steps before T_con): expected a hold_steps > 0 or a hold_fraction > 0, or "
+                         "hold_heading_weight 0")  # fmt: skip
     return checked
 
 

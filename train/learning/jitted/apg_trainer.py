@@ -113,8 +113,9 @@ class APGTrainer:
             near += f" ({s.near_miss_clip:g} for the episodes that end {within})"
         weighed = (f"; the episodes that end {within} weigh {s.near_miss_weight:g} times the others in the update"
                    if s.near_miss_weight != 1.0 else "")  # fmt: skip
-        if s.hold_steps:
-            weighed += (f"; the gradient follows the miss over the last {s.hold_steps} steps before T_con too "
+        if s.hold_steps or s.hold_fraction:
+            window = f"{s.hold_steps} steps" if s.hold_steps else f"{s.hold_fraction:g} of T_con"
+            weighed += (f"; the gradient follows the miss over the last {window} before T_con too "
                         f"({s.hold_weight:g} per metre"
                         + (f", and the heading's error at {s.hold_heading_weight:g} per radian)"
                            if s.hold_heading_weight else ")"))  # fmt: skip
@@ -124,6 +125,9 @@ class APGTrainer:
             else f"{s.state_grad_clip:g} decaying to {s.state_grad_clip_final:g} over "
             f"{round(self.apg.clip_decay_updates)} updates"
         ) + near
+        if s.short_T_con_share:
+            low, high = self.apg.short_params.T_con_range
+            weighed += f"; {s.short_T_con_share:g} of the updates' episodes with T_con in [{low:g}, {high:g}] s"
         return (f"APG: {s.episodes} episodes per update, Adam {rate}, the state's gradient clipped to {clip} per step "
                 f"in each episode{weighed}{kept}{taught}")  # fmt: skip
 
