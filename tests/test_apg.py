@@ -53,6 +53,13 @@ from train.learning.jitted.apg_settings import APGSettings
             {"hold_heading_weight": 5},
             r"^hold_heading_weight=5 is invalid with hold_steps=0 \(it acts over the last hold_steps before T_con\)",
         ),
+        ({"hold_fraction": 1}, r"^hold_fraction=1(\.0)? is invalid: expected a finite number in \[0, 1\)$"),
+        (
+            {"hold_steps": 20, "hold_fraction": 0.1},
+            r"^hold_fraction=0.1 is invalid with hold_steps=20 \(each sets the window before T_con\)",
+        ),
+        ({"short_T_con_share": 1.5}, r"^short_T_con_share=1.5 is invalid: expected a finite number in \[0, 1\]$"),
+        ({"short_T_con_max": 0}, r"^short_T_con_max=0(\.0)? is invalid: expected a finite number in \(0, 1e\+06\]$"),
         ({"near_miss_weight": 0}, r"^near_miss_weight=0(\.0)? is invalid: expected a finite number in \(0, 1000\]$"),
         (
             {"state_grad_clip": 0, "near_miss_weight": 4},
@@ -318,6 +325,46 @@ def test_hold_heading_weight_adds_the_heading_before_t_con_to_the_gradient_only(
     assert float(turned["return_mean"]) == float(heavy["return_mean"]) == float(at_plain["return_mean"])
     grads = [float(m["grad_norm"]) for m in (at_plain, turned, heavy)]
     assert abs(grads[1] - grads[0]) > 1e-4 * grads[0] and abs(grads[2] - grads[0]) > abs(grads[1] - grads[0])
+
+
+def test_hold_fraction_is_the_window_of_a_share_of_each_t_con() -> None:
+    """``hold_fraction`` sets the hold window as a share of each episode's own T_con: at T_con 2 s (40 control periods)
+    a share of 0.25 is the window of ``hold_steps: 10`` (the same gradient), at 4 s it is 20 steps (another one); the
+    return is v2's either way."""
+    from dwr_gym.jax_env import make_gymnax_env
+    from train.learning.jitted.apg import JaxAPG
+
+    def update(T_con: float, **kwargs: Any) -> Any:
+        env, params = make_gymnax_env("DWRPointStabilization-v2", T_con_range=[T_con, T_con])
+        apg = JaxAPG(APGSettings(episodes=4, net_arch=(8,), state_grad_clip=0.25, **kwargs), env, params)
+        return apg.update(apg.init(0))[1]
+
+    steps, share = update(2.0, hold_steps=10), update(2.0, hold_fraction=0.25)
+    assert float(share["grad_norm"]) == pytest.approx(float(steps["grad_norm"]), rel=1e-6)
+    assert float(share["return_mean"]) == float(steps["return_mean"])
+    longer_steps, longer_share = update(4.0, hold_steps=10), update(4.0, hold_fraction=0.25)
+    assert float(longer_share["grad_norm"]) != pytest.approx(float(longer_steps["grad_norm"]), rel=1e-4)
+    assert float(longer_share["grad_norm"]) == pytest.approx(float(update(4.0, hold_steps=20)["grad_norm"]), rel=1e-6)
+
+
+def test_short_t_con_share_shortens_the_updates_episodes_only() -> None:
+    """With ``short_T_con_share: 1`` and ``short_T_con_max`` at the range's low end every episode of an update has
+    the lowest T_con (v2's episodes end at T_con: 40 steps each at 2 s), the schedule counts them so, and the
+    validation episodes of ``keep_best`` keep the env's own draw."""
+    from dwr_gym.jax_env import make_gymnax_env
+    from train.learning.jitted.apg import JaxAPG
+
+    env, params = make_gymnax_env("DWRPointStabilization-v2", T_con_range=[2.0, 4.0])
+
+    def apg(**kwargs: Any) -> Any:
+        return JaxAPG(APGSettings(episodes=8, net_arch=(8,), validation_episodes=8, **kwargs), env, params)
+
+    plain, short = apg(), apg(short_T_con_share=1.0, short_T_con_max=1.0)
+    assert short.short_params.T_con_range == (2.0, 2.0)  # (clamped to the env's range)
+    state = plain.init(0)
+    assert int(short.update(state)[1]["steps"]) == 8 * 40 < int(plain.update(state)[1]["steps"])
+    assert short.mean_episode_steps() == 40.0 < plain.mean_episode_steps()
+    assert int(short.validate(state)[1]["steps"]) == int(plain.validate(state)[1]["steps"]) > 8 * 40
 
 
 def test_an_update_that_loses_return_on_its_episodes_is_undone() -> None:
