@@ -167,6 +167,21 @@ def test_two_seeds_of_one_entry_train_in_their_own_runs_and_their_curves_are_the
     assert [s["seed"] for s in saved] == [0, 1]
 
 
+def test_an_interrupted_run_continues_and_its_seconds_count_the_time_before_the_interruption(tmp_path: Path) -> None:
+    """A run whose run_state.json is not finished continues from its checkpoint, and its result's ``seconds`` are the
+    training's wall time before the interruption and after it (not only the process that finished it)."""
+    budget = {"env_steps": 128, "eval_freq": 128, "eval_episodes": 2, "disturbed_episodes": 1, "optimum_episodes": 1}
+    (first,) = run_benchmark([parse_entry(TINY)], [0], tmp_path, budget)
+    state_path = tmp_path / "runs" / "tiny-seed0" / "run_state.json"
+    state = json.loads(state_path.read_text())
+    state_path.write_text(json.dumps({**state, "finished": False, "wall_time": 1000.0}))
+    (tmp_path / "results" / "tiny-seed0.json").unlink()
+    (resumed,) = run_benchmark([parse_entry(TINY)], [0], tmp_path, budget)
+    assert resumed["env_steps"] == first["env_steps"] == 128
+    assert 1000.0 < resumed["seconds"] < 1000.0 + 10 * max(first["seconds"], 60.0)
+    assert json.loads(state_path.read_text())["finished"]
+
+
 def test_a_users_entry_makes_each_seed_in_its_own_directory(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """make(seed, run_dir) gets one directory per seed; a curve it writes there is that seed's result's curve."""
     import train.learning.benchmark as benchmark

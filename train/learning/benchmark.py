@@ -328,14 +328,18 @@ def run_one(entry: Entry, seed: int, out: Path, budget: dict[str, Any], progress
         import torch
 
         from train.learning.agents import load_agent
+        from train.learning.runs import MODEL_FILE
         from train.learning.training import train
 
         config = train_config(entry, seed, run_dir, budget)
         torch.set_num_threads(config.threads or 1)
         state = run_dir / "run_state.json"
-        if state.is_file() and not json.loads(state.read_text()).get("finished"):
-            config.resume = str(run_dir)  # an interrupted run continues
-        elif not state.is_file():
+        interrupted = state.is_file() and not json.loads(state.read_text()).get("finished")
+        if interrupted and (run_dir / MODEL_FILE).is_file():
+            config.resume = str(run_dir / MODEL_FILE)  # an interrupted run continues from its last checkpoint
+            # its seconds: the training's wall time until that checkpoint, then this process's
+            start -= float(json.loads(state.read_text()).get("wall_time", 0.0))
+        elif not state.is_file() or interrupted:  # (interrupted before its first checkpoint: from the start)
             config.overwrite = True
         if not (state.is_file() and json.loads(state.read_text()).get("finished")):
             train(config, command=train_command(entry, config))  # a missing extra: a ConfigError naming it

@@ -287,7 +287,8 @@ class JaxAPG:
         limit = self.state_grad_clip(state.updates)
 
         def loss(params: Any) -> tuple[Any, tuple[Any, Any]]:
-            episode = functools.partial(self.episode, mixed=True)  # (the short T_con of short_T_con_share)
+            # (the short T_con of short_T_con_share; without it the episode as validate plays it)
+            episode = functools.partial(self.episode, mixed=True) if self.settings.short_T_con_share else self.episode
             returns, steps = jax.vmap(episode, in_axes=(None, None, 0, None))(params, state.obs_stats, keys, limit)
             return -jnp.sum(returns), (returns, steps)
 
