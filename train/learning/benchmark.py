@@ -188,6 +188,11 @@ ENTRIES: dict[str, dict[str, Any]] = {
     "apg-hold-heading10-time-scaled-30min-v2": apg_teacher_time_scaled(
         560_000_000, clone_steps=16000, near_miss_clip=16.0, hold_steps=20, hold_heading_weight=10.0
     ),
+    # and the window a tenth of each episode's T_con (hold_fraction: 20 steps at 10 s, 120 at 60 s), the same share at
+    # every deadline as the time-scaled actions are one behaviour of every T_con
+    "apg-hold-fraction-heading10-time-scaled-30min-v2": apg_teacher_time_scaled(
+        560_000_000, clone_steps=16000, near_miss_clip=16.0, hold_fraction=0.1, hold_heading_weight=10.0
+    ),
     "apg-residual-v2": {
         "algo": "apg",
         "backend": "jax",
