@@ -84,6 +84,7 @@ SUITE: dict[str, str] = {
     "rl-apg-near-miss": "benchmarks.recipes.rl_apg_near_miss",
     "rl-apg-hold": "benchmarks.recipes.rl_apg_hold",
     "rl-apg-hold-heading10": "benchmarks.recipes.rl_apg_hold_heading10",
+    "rl-apg-hold-fraction": "benchmarks.recipes.rl_apg_hold_fraction",
     "rl-time-scale-30min": "benchmarks.recipes.rl_time_scale_30min",
     "robust-rl": "benchmarks.recipes.robust_rl",
 }
