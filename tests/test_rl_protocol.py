@@ -178,7 +178,7 @@ def test_an_interrupted_run_continues_and_its_seconds_count_the_time_before_the_
     (tmp_path / "results" / "tiny-seed0.json").unlink()
     (resumed,) = run_benchmark([parse_entry(TINY)], [0], tmp_path, budget)
     assert resumed["env_steps"] == first["env_steps"] == 128
-    assert 1000.0 < resumed["seconds"] < 1000.0 + 10 * max(first["seconds"], 60.0)
+    assert 1000.0 <= resumed["seconds"] < 1000.0 + 10 * max(first["seconds"], 60.0)  # (the rest may take < 0.05 s)
     assert json.loads(state_path.read_text())["finished"]
 
 
