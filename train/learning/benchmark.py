@@ -339,14 +339,14 @@ def run_one(entry: Entry, seed: int, out: Path, budget: dict[str, Any], progress
         config = train_config(entry, seed, run_dir, budget)
         torch.set_num_threads(config.threads or 1)
         state = run_dir / "run_state.json"
-        interrupted = state.is_file() and not json.loads(state.read_text()).get("finished")
-        if interrupted and (run_dir / MODEL_FILE).is_file():
+        saved = json.loads(state.read_text()) if state.is_file() else None
+        if saved is not None and not saved.get("finished") and (run_dir / MODEL_FILE).is_file():
             config.resume = str(run_dir / MODEL_FILE)  # an interrupted run continues from its last checkpoint
             # its seconds: the training's wall time until that checkpoint, then this process's
-            start -= float(json.loads(state.read_text()).get("wall_time", 0.0))
-        elif not state.is_file() or interrupted:  # (interrupted before its first checkpoint: from the start)
+            start -= float(saved.get("wall_time", 0.0))
+        elif saved is None or not saved.get("finished"):  # (interrupted before its first checkpoint: from the start)
             config.overwrite = True
-        if not (state.is_file() and json.loads(state.read_text()).get("finished")):
+        if not (saved is not None and saved.get("finished")):
             train(config, command=train_command(entry, config))  # a missing extra: a ConfigError naming it
         _, policy = load_agent(run_dir)
         repeat, config_dict = config.action_repeat, config.to_dict()
