@@ -54,6 +54,8 @@ from train.learning.jitted.apg_settings import APGSettings
             r"^hold_heading_weight=5 is invalid with hold_steps=0 \(it acts over the last hold_steps before T_con\)",
         ),
         ({"hold_fraction": 1}, r"^hold_fraction=1(\.0)? is invalid: expected a finite number in \[0, 1\)$"),
+        ({"hold_bonus": 10}, r"^hold_bonus=10 is invalid with hold_steps=0 \(it acts over the last hold_steps"),
+        ({"hold_bonus_width": 0}, r"^hold_bonus_width=0(\.0)? is invalid: expected a finite number in \(0, 10\]$"),
         (
             {"hold_steps": 20, "hold_fraction": 0.1},
             r"^hold_fraction=0.1 is invalid with hold_steps=20 \(each sets the window before T_con\)",

@@ -149,3 +149,29 @@ def test_short_t_con_share_shortens_the_updates_episodes_only() -> None:
     assert int(short.update(state)[1]["steps"]) == 8 * 40 < int(plain.update(state)[1]["steps"])
     assert short.mean_episode_steps() == 40.0 < plain.mean_episode_steps()
     assert int(short.validate(state)[1]["steps"]) == int(plain.validate(state)[1]["steps"]) > 8 * 40
+
+
+def test_hold_bonus_adds_a_slope_near_the_goal_tolerance_to_the_gradient_only() -> None:
+    """``hold_bonus`` adds a sigmoid of the distance, centred at the goal tolerance, over the hold window: the return
+    does not change; where every robot is far from the goal in the window (a fresh policy barely moves in 2 s from
+    starts 0.3 m away or more) a narrow sigmoid leaves the gradient as it is, and a wide one (its slope reaching them)
+    changes it, a larger weight more."""
+    from dwr_gym.jax_env import make_gymnax_env
+    from train.learning.jitted.apg import JaxAPG
+
+    env, params = make_gymnax_env("DWRPointStabilization-v2", T_con_range=[2.0, 2.2])
+
+    def apg(**kwargs: Any) -> Any:
+        return JaxAPG(APGSettings(episodes=4, net_arch=(8,), state_grad_clip=0.25, hold_steps=10, **kwargs), env,
+                      params)  # fmt: skip
+
+    plain = apg()
+    state = plain.init(0)
+    _, at_plain = plain.update(state)
+    _, narrow = apg(hold_bonus=10.0, hold_bonus_width=0.001).update(state)
+    _, wide = apg(hold_bonus=10.0, hold_bonus_width=1.0).update(state)
+    _, heavy = apg(hold_bonus=1000.0, hold_bonus_width=1.0).update(state)
+    assert float(narrow["return_mean"]) == float(wide["return_mean"]) == float(at_plain["return_mean"])
+    grads = [float(m["grad_norm"]) for m in (at_plain, narrow, wide, heavy)]
+    assert grads[1] == pytest.approx(grads[0], rel=1e-6)
+    assert abs(grads[2] - grads[0]) > 1e-4 * grads[0] and abs(grads[3] - grads[0]) > abs(grads[2] - grads[0])

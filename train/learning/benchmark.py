@@ -193,6 +193,12 @@ ENTRIES: dict[str, dict[str, Any]] = {
     "apg-hold-fraction-heading10-time-scaled-30min-v2": apg_teacher_time_scaled(
         560_000_000, clone_steps=16000, near_miss_clip=16.0, hold_fraction=0.1, hold_heading_weight=10.0
     ),
+    # and a smooth stand-in for the arrival bonus over the same window (hold_bonus: 10 x sigmoid((1 cm - d) / 5 mm)):
+    # the misses end mostly 1-2 cm from the goal, where v2's bonus, a step, has no gradient and the miss's 10 per metre
+    # makes the last centimetre worth 0.1
+    "apg-hold-bonus-heading10-time-scaled-30min-v2": apg_teacher_time_scaled(
+        560_000_000, clone_steps=16000, near_miss_clip=16.0, hold_steps=20, hold_heading_weight=10.0, hold_bonus=10.0
+    ),
     "apg-residual-v2": {
         "algo": "apg",
         "backend": "jax",

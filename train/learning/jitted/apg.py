@@ -15,7 +15,7 @@ Gradients through 1,200 steps of a closed loop explode: the cotangent of the env
 ``max_grad_norm``; with ``near_miss_clip`` the episodes that end just outside the goal tolerance get a wider clip of
 their own (:func:`clip_gradient_carried`), and with ``near_miss_weight`` more weight in the update; with
 ``hold_steps`` (or ``hold_fraction`` of T_con) the gradient follows the miss (and with ``hold_heading_weight`` the
-heading's error) over the last steps before T_con too (the return stays v2's); with ``short_T_con_share`` a share of
+heading's error, with ``hold_bonus`` a smooth stand-in for the arrival bonus) over the last steps before T_con too (the return stays v2's); with ``short_T_con_share`` a share of
 each update's episodes has a short T_con. This learns from the reward alone: what it uses beside the reward is the
 env's own derivative, which model-free RL does not have (the docs say so where it is compared).
 
@@ -226,6 +226,9 @@ class JaxAPG:
                 miss = self.settings.hold_weight * after.distance
                 if self.settings.hold_heading_weight:  # the heading's error, linear near 0 (2 |sin(psi / 2)|)
                     miss = miss + self.settings.hold_heading_weight * 2.0 * jnp.abs(jnp.sin(0.5 * after.psi))
+                if self.settings.hold_bonus:  # the arrival bonus, smoothed: a slope at the tolerance
+                    edge = (self.env_params.goal_tolerance - after.distance) / self.settings.hold_bonus_width
+                    miss = miss - self.settings.hold_bonus * jax.nn.sigmoid(edge)
                 held = held - jnp.where(alive & last, miss / hold, 0.0)
             state = jax.tree.map(lambda new, old: jnp.where(alive, new, old), after, state)
             return (state, carrier, alive & ~done, total, held, steps + alive.astype(jnp.int32)), None

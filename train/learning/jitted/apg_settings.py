@@ -17,7 +17,8 @@ APG_DEFAULTS: dict[str, Any] = {"episodes": 64, "learning_rate": 3e-4, "max_grad
                                  "state_grad_clip_final": None, "state_grad_clip_decay": 1.0,
                                  "near_miss_clip": None, "near_miss_distance": 0.05, "near_miss_weight": 1.0,
                                  "hold_steps": 0, "hold_fraction": 0.0, "hold_weight": 10.0,
-                                 "hold_heading_weight": 0.0, "short_T_con_share": 0.0, "short_T_con_max": 20.0,
+                                 "hold_heading_weight": 0.0, "hold_bonus": 0.0,
+                                 "hold_bonus_width": 0.005, "short_T_con_share": 0.0, "short_T_con_max": 20.0,
                                  "max_return_drop": MAX_DROP, "keep_best": 0,
                                  "validation_episodes": 256, "teacher_episodes": 0, "teacher_iterations": 400,
                                  "teacher_learning_rate": 0.02, "clone_steps": 4000, "teacher_rounds": 1}  # fmt: skip
@@ -80,6 +81,16 @@ class APGSettings:
     this weight per radian times 2 |sin(psi / 2)| (|psi| near the goal's heading), averaged over them. v2 pays the
     heading as 5 (cos psi - 1), whose gradient vanishes as psi does (1.9 per radian at the 0.39 rad the agents end
     at); this one does not. Gradient only, as ``hold_weight``. 0 (the default): off."""
+    hold_bonus: float = 0.0
+    """With > 0 (and a hold window), the update also follows a smooth stand-in for v2's arrival bonus over the same
+    last steps: this weight times sigmoid((goal_tolerance - distance) / ``hold_bonus_width``), averaged over them.
+    v2 pays its bonus (10) as a step at the tolerance, which has no gradient, while the misses mostly end 1-2 cm from
+    the goal (docs/rl-benchmark.md, what the misses are): ``hold_weight``'s 10 per metre makes the last centimetre worth
+    0.1; this one's slope at the tolerance is hold_bonus / (4 hold_bonus_width) (500 per metre at 10 and 5 mm), and
+    fades beyond a few widths. Gradient only, as ``hold_weight``. 0 (the default): off."""
+    hold_bonus_width: float = 0.005
+    """[m] The width of ``hold_bonus``'s sigmoid: its slope is within a tenth of its peak up to about 3.6 widths from the
+    tolerance."""
     short_T_con_share: float = 0.0
     """The share of each update's episodes whose T_con is drawn from [the env's lowest T_con, ``short_T_con_max``]
     rather than the env's whole range (the start pose drawn as for the others): more practice at the short deadlines,
@@ -153,6 +164,10 @@ class APGSettings:
                 hold_weight=as_float("hold_weight", values["hold_weight"], 0.0, 1e6, low_inclusive=False, text=True),
                 hold_heading_weight=heading_beside(values["hold_heading_weight"], values["hold_steps"],
                                                    values["hold_fraction"]),
+                hold_bonus=window_beside("hold_bonus", values["hold_bonus"], values["hold_steps"],
+                                         values["hold_fraction"]),
+                hold_bonus_width=as_float("hold_bonus_width", values["hold_bonus_width"], 0.0, 10.0,
+                                          low_inclusive=False, text=True),
                 short_T_con_share=as_float("short_T_con_share", values["short_T_con_share"], 0.0, 1.0, text=True),
                 short_T_con_max=as_float("short_T_con_max", values["short_T_con_max"], 0.0, 1e6, low_inclusive=False,
                                          text=True),
@@ -212,11 +227,17 @@ def fraction_beside(value: Any, hold_steps: Any) -> float:
 def heading_beside(value: Any, hold_steps: Any, hold_fraction: Any = 0.0) -> float:
     """``hold_heading_weight`` checked: a number in [0, 1e6], above 0 only with ``hold_steps`` or ``hold_fraction``
     (its window)."""
-    checked = as_float("hold_heading_weight", value, 0.0, 1e6, text=True)
+    return window_beside("hold_heading_weight", value, hold_steps, hold_fraction)
+
+
+def window_beside(name: str, value: Any, hold_steps: Any, hold_fraction: Any) -> float:
+    """The term ``name`` of the hold window (``hold_heading_weight``, ``hold_bonus``) checked: a number in [0, 1e6],
+    above 0 only with ``hold_steps`` or ``hold_fraction`` (its window)."""
+    checked = as_float(name, value, 0.0, 1e6, text=True)
     if checked > 0.0 and int(hold_steps) == 0 and float(hold_fraction) == 0.0:
-        raise ValueError(f"hold_heading_weight={value!r} is invalid with hold_steps=0 (it acts over the last "
+        raise ValueError(f"{name}={value!r} is invalid with hold_steps=0 (it acts over the last "
                          "hold_steps before T_con): expected a hold_steps > 0 or a hold_fraction > 0, or "
-                         "hold_heading_weight 0")  # fmt: skip
+                         f"{name} 0")  # fmt: skip
     return checked
 
 

@@ -117,8 +117,10 @@ class APGTrainer:
             window = f"{s.hold_steps} steps" if s.hold_steps else f"{s.hold_fraction:g} of T_con"
             weighed += (f"; the gradient follows the miss over the last {window} before T_con too "
                         f"({s.hold_weight:g} per metre"
-                        + (f", and the heading's error at {s.hold_heading_weight:g} per radian)"
-                           if s.hold_heading_weight else ")"))  # fmt: skip
+                        + (f", and the heading's error at {s.hold_heading_weight:g} per radian"
+                           if s.hold_heading_weight else "")
+                        + (f", and the arrival bonus smoothed to {s.hold_bonus:g} x a sigmoid "
+                           f"{s.hold_bonus_width:g} m wide" if s.hold_bonus else "") + ")")  # fmt: skip
         clip = (
             f"{s.state_grad_clip:g}"
             if s.state_grad_clip_final is None
