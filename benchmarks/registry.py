@@ -85,6 +85,7 @@ SUITE: dict[str, str] = {
     "rl-apg-hold": "benchmarks.recipes.rl_apg_hold",
     "rl-apg-hold-heading10": "benchmarks.recipes.rl_apg_hold_heading10",
     "rl-apg-hold-fraction": "benchmarks.recipes.rl_apg_hold_fraction",
+    "rl-apg-hold-bonus": "benchmarks.recipes.rl_apg_hold_bonus",
     "rl-time-scale-30min": "benchmarks.recipes.rl_time_scale_30min",
     "robust-rl": "benchmarks.recipes.robust_rl",
 }

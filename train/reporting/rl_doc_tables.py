@@ -48,6 +48,11 @@ RL_TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
         "docs/rl_benchmark/apg_hold_fraction.json",
         lambda data: rl_table(data, "per-T_con"),
     ),
+    "rl-apg-hold-bonus": ("docs/rl_benchmark/apg_hold_bonus.json", lambda data: rl_table(data, "random")),
+    "rl-apg-hold-bonus-per-T_con": (
+        "docs/rl_benchmark/apg_hold_bonus.json",
+        lambda data: rl_table(data, "per-T_con"),
+    ),
     "rl-apg-teacher-per-T_con": ("docs/rl_benchmark/apg_teacher.json", lambda data: rl_table(data, "per-T_con")),
     "rl-apg-teacher-time-scaled": (
         "docs/rl_benchmark/apg_teacher_time_scaled.json",
