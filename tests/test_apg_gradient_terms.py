@@ -13,6 +13,15 @@ from train.learning.jitted.apg_settings import APGSettings
 jax = pytest.importorskip("jax")
 
 
+def short_apg(**kwargs: Any) -> Any:
+    """An APG of 4 episodes an update on v2 at T_con 2-2.2 s (a network of 8 units, the state's clip 0.25)."""
+    from dwr_gym.jax_env import make_gymnax_env
+    from train.learning.jitted.apg import JaxAPG
+
+    env, params = make_gymnax_env("DWRPointStabilization-v2", T_con_range=[2.0, 2.2])
+    return JaxAPG(APGSettings(episodes=4, net_arch=(8,), state_grad_clip=0.25, **kwargs), env, params)
+
+
 def test_a_near_miss_is_clipped_at_the_near_miss_clip_and_the_others_as_before() -> None:
     """With ``near_miss_clip`` an episode that ends outside the goal tolerance but within ``near_miss_distance`` is
     clipped at the near-miss clip (its gradient is the fixed near-miss clip's), the others at ``state_grad_clip``
@@ -45,14 +54,7 @@ def test_a_near_miss_weighs_near_miss_weight_times_its_clipped_gradient() -> Non
     """With ``near_miss_weight`` w an episode that ends near the goal but not at it enters the update with w times its
     clipped gradient (at its own clip, ``near_miss_clip`` where set), the others as before, and the return is the
     return."""
-    from dwr_gym.jax_env import make_gymnax_env
-    from train.learning.jitted.apg import JaxAPG
-
-    env, params = make_gymnax_env("DWRPointStabilization-v2", T_con_range=[2.0, 2.2])
-
-    def apg(**kwargs: Any) -> Any:
-        return JaxAPG(APGSettings(episodes=4, net_arch=(8,), state_grad_clip=0.25, **kwargs), env, params)
-
+    apg = short_apg
     plain = apg()
     state = plain.init(0)
     state = state.replace(params=jax.tree.map(lambda x: x * 20.0 if x.ndim == 2 else x, state.params))
@@ -71,14 +73,7 @@ def test_a_near_miss_weighs_near_miss_weight_times_its_clipped_gradient() -> Non
 def test_hold_steps_adds_the_miss_before_t_con_to_the_gradient_only() -> None:
     """With ``hold_steps`` the update also follows the miss over the last steps before T_con: the gradient changes, the
     return does not; a larger ``hold_weight`` changes it more."""
-    from dwr_gym.jax_env import make_gymnax_env
-    from train.learning.jitted.apg import JaxAPG
-
-    env, params = make_gymnax_env("DWRPointStabilization-v2", T_con_range=[2.0, 2.2])
-
-    def apg(**kwargs: Any) -> Any:
-        return JaxAPG(APGSettings(episodes=4, net_arch=(8,), state_grad_clip=0.25, **kwargs), env, params)
-
+    apg = short_apg
     plain = apg()
     state = plain.init(0)
     _, at_plain = plain.update(state)
@@ -92,14 +87,9 @@ def test_hold_steps_adds_the_miss_before_t_con_to_the_gradient_only() -> None:
 def test_hold_heading_weight_adds_the_heading_before_t_con_to_the_gradient_only() -> None:
     """``hold_heading_weight`` adds the heading's error over the hold window to the update: the gradient changes
     with it (a larger weight more), the return does not."""
-    from dwr_gym.jax_env import make_gymnax_env
-    from train.learning.jitted.apg import JaxAPG
-
-    env, params = make_gymnax_env("DWRPointStabilization-v2", T_con_range=[2.0, 2.2])
 
     def apg(**kwargs: Any) -> Any:
-        return JaxAPG(APGSettings(episodes=4, net_arch=(8,), state_grad_clip=0.25, hold_steps=10, **kwargs), env,
-                      params)  # fmt: skip
+        return short_apg(hold_steps=10, **kwargs)
 
     plain = apg()
     state = plain.init(0)
@@ -156,14 +146,9 @@ def test_hold_bonus_adds_a_slope_near_the_goal_tolerance_to_the_gradient_only() 
     does not change; where every robot is far from the goal in the window (a fresh policy barely moves in 2 s from
     starts 0.3 m away or more) a narrow sigmoid leaves the gradient as it is, and a wide one (its slope reaching them)
     changes it, a larger weight more."""
-    from dwr_gym.jax_env import make_gymnax_env
-    from train.learning.jitted.apg import JaxAPG
-
-    env, params = make_gymnax_env("DWRPointStabilization-v2", T_con_range=[2.0, 2.2])
 
     def apg(**kwargs: Any) -> Any:
-        return JaxAPG(APGSettings(episodes=4, net_arch=(8,), state_grad_clip=0.25, hold_steps=10, **kwargs), env,
-                      params)  # fmt: skip
+        return short_apg(hold_steps=10, **kwargs)
 
     plain = apg()
     state = plain.init(0)
