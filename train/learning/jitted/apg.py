@@ -16,8 +16,9 @@ Gradients through 1,200 steps of a closed loop explode: the cotangent of the env
 their own (:func:`clip_gradient_carried`), and with ``near_miss_weight`` more weight in the update; with
 ``hold_steps`` (or ``hold_fraction`` of T_con) the gradient follows the miss (and with ``hold_heading_weight`` the
 heading's error, with ``hold_bonus`` a smooth stand-in for the arrival bonus) over the last steps before T_con too
-(the return stays v2's); with ``short_T_con_share`` a share of each update's episodes has a short T_con. This learns from the reward alone: what it uses beside the reward is the
-env's own derivative, which model-free RL does not have (the docs say so where it is compared).
+(the return stays v2's); with ``short_T_con_share`` a share of each update's episodes has a short T_con. This learns
+from the reward alone: what it uses beside the reward is the env's own derivative, which model-free RL does not have
+(the docs say so where it is compared).
 
 The policy is the actor of the jitted PPO's network (:func:`train.learning.jitted.policy.make_network`), exported
 as an SB3 PPO model (:class:`train.learning.jitted.export.SB3Exporter`) like the ES's; the observations are scaled by
