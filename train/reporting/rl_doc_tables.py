@@ -8,6 +8,13 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+
+def random_and_per_T_con(name: str, path: str) -> dict[str, tuple[str, Callable[[Any], str]]]:
+    """Tables ``name`` (the nominal set) and ``name-per-T_con`` of one benchmark JSON ``path``."""
+    return {name: (path, lambda data: rl_table(data, "random")),
+            f"{name}-per-T_con": (path, lambda data: rl_table(data, "per-T_con"))}  # fmt: skip
+
+
 RL_TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "rl-benchmark": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "random")),
     "rl-residual": ("docs/rl_benchmark/residual.json", lambda data: rl_table(data, "residual")),
@@ -19,60 +26,23 @@ RL_TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "rl-goals": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "goals")),
     "rl-benchmark-readme": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "readme")),
     "rl-benchmark-disturbed": ("docs/rl_benchmark/benchmark.json", lambda data: rl_table(data, "disturbed")),
-    "rl-v2": ("docs/rl_benchmark/v2.json", lambda data: rl_table(data, "random")),
-    "rl-v2-per-T_con": ("docs/rl_benchmark/v2.json", lambda data: rl_table(data, "per-T_con")),
+    **random_and_per_T_con("rl-v2", "docs/rl_benchmark/v2.json"),
     "rl-time-scale": ("docs/rl_benchmark/time_scale.json", lambda data: rl_table(data, "random")),
-    "rl-apg": ("docs/rl_benchmark/apg.json", lambda data: rl_table(data, "random")),
-    "rl-apg-per-T_con": ("docs/rl_benchmark/apg.json", lambda data: rl_table(data, "per-T_con")),
-    "rl-apg-scratch": ("docs/rl_benchmark/apg_scratch.json", lambda data: rl_table(data, "random")),
-    "rl-apg-scratch-per-T_con": ("docs/rl_benchmark/apg_scratch.json", lambda data: rl_table(data, "per-T_con")),
+    **random_and_per_T_con("rl-apg", "docs/rl_benchmark/apg.json"),
+    **random_and_per_T_con("rl-apg-scratch", "docs/rl_benchmark/apg_scratch.json"),
     "rl-apg-teacher": ("docs/rl_benchmark/apg_teacher.json", lambda data: rl_table(data, "random")),
-    "rl-apg-teacher-30min": ("docs/rl_benchmark/apg_teacher_30min.json", lambda data: rl_table(data, "random")),
-    "rl-apg-teacher-30min-per-T_con": (
-        "docs/rl_benchmark/apg_teacher_30min.json",
-        lambda data: rl_table(data, "per-T_con"),
-    ),
-    "rl-apg-clip-decay": ("docs/rl_benchmark/apg_clip_decay.json", lambda data: rl_table(data, "random")),
-    "rl-apg-clip-decay-per-T_con": ("docs/rl_benchmark/apg_clip_decay.json", lambda data: rl_table(data, "per-T_con")),
-    "rl-apg-near-miss": ("docs/rl_benchmark/apg_near_miss.json", lambda data: rl_table(data, "random")),
-    "rl-apg-near-miss-per-T_con": ("docs/rl_benchmark/apg_near_miss.json", lambda data: rl_table(data, "per-T_con")),
-    "rl-apg-hold": ("docs/rl_benchmark/apg_hold.json", lambda data: rl_table(data, "random")),
-    "rl-apg-hold-per-T_con": ("docs/rl_benchmark/apg_hold.json", lambda data: rl_table(data, "per-T_con")),
-    "rl-apg-hold-heading10": ("docs/rl_benchmark/apg_hold_heading10.json", lambda data: rl_table(data, "random")),
-    "rl-apg-hold-heading10-per-T_con": (
-        "docs/rl_benchmark/apg_hold_heading10.json",
-        lambda data: rl_table(data, "per-T_con"),
-    ),
-    "rl-apg-hold-fraction": ("docs/rl_benchmark/apg_hold_fraction.json", lambda data: rl_table(data, "random")),
-    "rl-apg-hold-fraction-per-T_con": (
-        "docs/rl_benchmark/apg_hold_fraction.json",
-        lambda data: rl_table(data, "per-T_con"),
-    ),
-    "rl-apg-hold-bonus": ("docs/rl_benchmark/apg_hold_bonus.json", lambda data: rl_table(data, "random")),
-    "rl-apg-hold-bonus-per-T_con": (
-        "docs/rl_benchmark/apg_hold_bonus.json",
-        lambda data: rl_table(data, "per-T_con"),
-    ),
+    **random_and_per_T_con("rl-apg-teacher-30min", "docs/rl_benchmark/apg_teacher_30min.json"),
+    **random_and_per_T_con("rl-apg-clip-decay", "docs/rl_benchmark/apg_clip_decay.json"),
+    **random_and_per_T_con("rl-apg-near-miss", "docs/rl_benchmark/apg_near_miss.json"),
+    **random_and_per_T_con("rl-apg-hold", "docs/rl_benchmark/apg_hold.json"),
+    **random_and_per_T_con("rl-apg-hold-heading10", "docs/rl_benchmark/apg_hold_heading10.json"),
+    **random_and_per_T_con("rl-apg-hold-fraction", "docs/rl_benchmark/apg_hold_fraction.json"),
+    **random_and_per_T_con("rl-apg-hold-bonus", "docs/rl_benchmark/apg_hold_bonus.json"),
     "rl-apg-teacher-per-T_con": ("docs/rl_benchmark/apg_teacher.json", lambda data: rl_table(data, "per-T_con")),
-    "rl-apg-teacher-time-scaled": (
-        "docs/rl_benchmark/apg_teacher_time_scaled.json",
-        lambda data: rl_table(data, "random"),
-    ),
-    "rl-apg-teacher-time-scaled-per-T_con": (
-        "docs/rl_benchmark/apg_teacher_time_scaled.json",
-        lambda data: rl_table(data, "per-T_con"),
-    ),
+    **random_and_per_T_con("rl-apg-teacher-time-scaled", "docs/rl_benchmark/apg_teacher_time_scaled.json"),
     "rl-time-scale-per-T_con": ("docs/rl_benchmark/time_scale.json", lambda data: rl_table(data, "per-T_con")),
-    "rl-time-scale-long": ("docs/rl_benchmark/time_scale_long.json", lambda data: rl_table(data, "random")),
-    "rl-time-scale-long-per-T_con": (
-        "docs/rl_benchmark/time_scale_long.json",
-        lambda data: rl_table(data, "per-T_con"),
-    ),
-    "rl-time-scale-30min": ("docs/rl_benchmark/time_scale_30min.json", lambda data: rl_table(data, "random")),
-    "rl-time-scale-30min-per-T_con": (
-        "docs/rl_benchmark/time_scale_30min.json",
-        lambda data: rl_table(data, "per-T_con"),
-    ),
+    **random_and_per_T_con("rl-time-scale-long", "docs/rl_benchmark/time_scale_long.json"),
+    **random_and_per_T_con("rl-time-scale-30min", "docs/rl_benchmark/time_scale_30min.json"),
     "rl-diagnosis": ("docs/rl_benchmark/diagnosis.json", lambda data: rl_table(data, "diagnosis")),
     "rl-levers": ("docs/rl_benchmark/levers.json", lambda data: rl_table(data, "levers")),
     "rl-rushing": ("docs/rl_benchmark/rushing.json", lambda data: rl_table(data, "rushing")),
