@@ -5,7 +5,7 @@
 The lesson of train/learning/jitted/apg_teacher.py (one round of 256 episodes, seed 0, time-scaled actions), fitted with
 ``clone_steps`` least-squares steps on a network of ``net_arch``, its clone played on 512 fresh episodes, as
 :mod:`benchmarks.learning.apg_clone_rounds` measures it. ``--docs`` writes
-docs/rl_benchmark/apg_teacher_probes/clone_fit.json, from which the table ``apg-clone-fit`` of docs/rl-benchmark.md is
+docs/rl_benchmark/apg_teacher_probes/clone_fit.json, from which the table ``apg-clone-fit`` of docs/rl-apg-levers.md is
 rendered (the section "Near misses").
 """
 

@@ -9,7 +9,7 @@ time-scaled actions (``--action-time-scale 10``, as the benchmark's apg-teacher-
 network: the teacher's lesson from seed 0, then the cloned policy's mean action played on ``--eval`` fresh episodes
 (the same for every row): in time (at the goal at T_con), the return, the final distance and heading, per band of
 T_con. ``--docs`` writes docs/rl_benchmark/apg_clone_rounds.json, from which the table ``apg-clone-rounds`` of
-docs/rl-benchmark.md is rendered.
+docs/rl-apg-levers.md is rendered.
 """
 
 from __future__ import annotations

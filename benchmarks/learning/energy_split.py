@@ -4,7 +4,7 @@
     python -m benchmarks run energy-split --n 20         # a quick look (printed, nothing written)
 
 ``--docs`` writes docs/rl_benchmark/energy_split.json, from which the tables ``energy-split`` and ``law-gains`` of
-docs/rl-benchmark.md are rendered. What is measured and how: train/evaluation/energy_split.py.
+docs/rl-apg.md are rendered. What is measured and how: train/evaluation/energy_split.py.
 """
 
 from __future__ import annotations

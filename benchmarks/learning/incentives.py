@@ -5,7 +5,7 @@
 
 ``--docs`` writes docs/rl_benchmark/incentives.json (the measurements it leaves out with ``--skip`` or ``--env-ids``,
 and the rushing rows of the sigmas it does not run, kept from it),
-from which the tables ``incentives-ranking`` and ``incentives-rushing`` of docs/rl-benchmark.md are rendered.
+from which the tables ``incentives-ranking`` and ``incentives-rushing`` of docs/rl-v2.md are rendered.
 What is measured and how: train/evaluation/incentives.py.
 """
 

@@ -7,7 +7,7 @@ Each agent plays ``--n`` random episodes of DWRPointStabilization-v2 (seed ``--s
 and 60 s (train/evaluation/rollout.py). For the episodes not within the goal tolerance at T_con it reports how far
 from the goal they end (median, the largest, and the share within 2 cm), whether they left the arena, and how far
 they started. ``--docs`` writes docs/rl_benchmark/misses.json, from which the table ``misses`` of
-docs/rl-benchmark.md is rendered (the section "Near misses").
+docs/rl-apg-levers.md is rendered (the section "Near misses").
 """
 
 from __future__ import annotations

@@ -9,7 +9,7 @@ best residual *sequence* for that episode does. This finds such sequences (train
 episode's v2 return through the JAX env and the law, the gradient APG follows, without its per-step clip or its
 policy) for the residual on PTC and on pt-astolfi at the training's scale 0.5, and for the action itself without a
 law (how close the optimiser comes to the optimum). ``--docs`` writes docs/rl_benchmark/open_loop_bound.json, from
-which the table ``open-loop-bound`` of docs/rl-benchmark.md is rendered.
+which the table ``open-loop-bound`` of docs/rl-apg.md is rendered.
 """
 
 from __future__ import annotations

@@ -5,8 +5,8 @@
 
 The suite's name for the three ``dwr-gym benchmark`` commands behind docs/rl-libraries.md's tables ``sbx-v1``,
 ``sbx-v2`` (one seed each, 300 s of training per run), ``sbx-v2-long`` (1200 s each, three jobs side by side) and
-``sbx-v2-seeds`` (five seeds of 300 s each, one job at a time) and ``sbx-v2-30min`` (SAC, TQC and CrossQ, two seeds of
-1800 s each, two runs side by side).
+``sbx-v2-seeds`` (five seeds of 300 s each, one job at a time), ``sbx-v2-30min`` (SAC, TQC and CrossQ, two seeds of
+1800 s each, two runs side by side) and ``sbx-v2-30min-tqc`` (TQC, five seeds of 1800 s each, two runs side by side).
 Each writes ``results/sbx-<run>/`` (a run already finished there is only aggregated again); ``--docs`` copies its
 benchmark.json to ``docs/rl_benchmark/sbx_<run>.json``, from which the tables are rendered.
 """
@@ -39,6 +39,7 @@ RUNS: dict[str, list[str]] = {
     "v2-long": ["--agents", "sac-sbx-v2", "tqc-sbx-v2", "crossq-sbx-v2", *LONG],
     "v2-seeds": ["--agents", "sac-sbx-v2", "tqc-sbx-v2", "crossq-sbx-v2", *SEEDS],
     "v2-30min": ["--agents", "sac-sbx-v2", "tqc-sbx-v2", "crossq-sbx-v2", *HALF_HOUR],
+    "v2-30min-tqc": ["--agents", "tqc-sbx-v2", "--seeds", "5", *HALF_HOUR[2:]],
 }
 
 
@@ -69,4 +70,4 @@ def main(argv: list[str] | None = None) -> int:
 
 #: The tables of docs/rl-libraries.md, in the schema of every `dwr-gym benchmark` JSON (as rl-agents' tables).
 BENCHMARK = Schema({"budget": dict, "machine": str, "summary": dict, "references": dict, "best_seed": dict})
-BLOCKS = tuple(table(f"sbx-{run}", BENCHMARK) for run in RUNS)
+BLOCKS = (*(table(f"sbx-{run}", BENCHMARK) for run in RUNS), table("sbx-v2-30min-tqc-per-T_con", BENCHMARK))

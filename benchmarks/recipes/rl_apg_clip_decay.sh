@@ -5,7 +5,7 @@
 # goal's 30 minutes of a core), SEEDS (5) seeds, two runs side by side on one core each (about 30-35 minutes a pair on 2
 # cores with the evaluation), on the benchmark's sets and at T_con 10, 20, 40 and 60 s. Writes
 # docs/rl_benchmark/apg_clip_decay.json (tables rl-apg-clip-decay and rl-apg-clip-decay-per-T_con in
-# docs/rl-benchmark.md) and its curves.
+# docs/rl-apg-levers.md) and its curves.
 set -euo pipefail
 export OMP_NUM_THREADS=1
 OUT=${OUT:-results/rl-apg-clip-decay}

@@ -5,7 +5,7 @@
 # apg-hold-bonus-heading10-time-scaled-30min-v2 (560 M env steps), SEEDS (5) seeds, JOBS (2) runs side by side on one
 # core each (about 40 minutes a pair on 2 cores with the evaluation, about 2 hours in all), on the benchmark's sets and
 # at T_con 10, 20, 40 and 60 s. Writes docs/rl_benchmark/apg_hold_bonus.json (tables rl-apg-hold-bonus and
-# rl-apg-hold-bonus-per-T_con in docs/rl-benchmark.md) and its curves. It ships no agent (docs/rl-benchmark.md, "A smooth
+# rl-apg-hold-bonus-per-T_con in docs/rl-apg-levers.md) and its curves. It ships no agent (docs/rl-apg-levers.md, "A smooth
 # arrival bonus"); `python -m benchmarks run ship-rl-agents "$OUT" --also ENTRY` would ship the best seed.
 set -euo pipefail
 export OMP_NUM_THREADS=1

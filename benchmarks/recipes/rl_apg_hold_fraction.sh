@@ -4,8 +4,8 @@
 # DWRPointStabilization-v2: apg-hold-fraction-heading10-time-scaled-30min-v2 (560 M env steps), SEEDS (5) seeds, two
 # runs side by side on one core each (about 40 minutes a pair on 2 cores with the evaluation, about 2 hours in all),
 # on the benchmark's sets and at T_con 10, 20, 40 and 60 s. Writes docs/rl_benchmark/apg_hold_fraction.json (tables
-# rl-apg-hold-fraction and rl-apg-hold-fraction-per-T_con in docs/rl-benchmark.md) and its curves. It ships no agent:
-# its seeds spend more energy than the heading-10 entry's for no more arrivals (docs/rl-benchmark.md, "Levers for the
+# rl-apg-hold-fraction and rl-apg-hold-fraction-per-T_con in docs/rl-apg-levers.md) and its curves. It ships no agent:
+# its seeds spend more energy than the heading-10 entry's for no more arrivals (docs/rl-apg-levers.md, "Levers for the
 # short deadline"); `python -m benchmarks run ship-rl-agents "$OUT" --also ENTRY` would ship the best seed.
 set -euo pipefail
 export OMP_NUM_THREADS=1

@@ -3,7 +3,7 @@
 # training a seed (wall clock, one core each), two seeds side by side (about 40 minutes on 2 quiet cores with the
 # evaluation). The entry es-time-scaled-v2 (train/hyperparams/es.yml, --action-time-scale 10) with a time limit of
 # 1800 s and a budget of env steps it does not reach. Writes docs/rl_benchmark/time_scale_30min.json (tables
-# rl-time-scale-30min and rl-time-scale-30min-per-T_con in docs/rl-benchmark.md).
+# rl-time-scale-30min and rl-time-scale-30min-per-T_con in docs/rl-v2.md).
 set -euo pipefail
 export OMP_NUM_THREADS=1
 OUT=${OUT:-results/rl-time-scale-30min}

@@ -1,4 +1,4 @@
-"""The tables of docs/rl-benchmark.md's "Where the energy goes on v2", from docs/rl_benchmark/energy_split.json
+"""The tables of docs/rl-apg.md's "Where the energy goes on v2", from docs/rl_benchmark/energy_split.json
 (``python -m benchmarks run energy-split``, train/evaluation/energy_split.py)."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The tables of docs/rl-benchmark.md's incentives section, from docs/rl_benchmark/incentives.json
+"""The tables of docs/rl-v2.md's incentives section, from docs/rl_benchmark/incentives.json
 (``benchmarks/incentives.py``, train/evaluation/incentives.py)."""
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
-"""The tables of the RL benchmark's pages (docs/rl-benchmark.md, docs/rl-libraries.md and the README's summary), each
-from the JSON that ``dwr-gym benchmark`` or a benchmark script wrote: :data:`RL_TABLES`, which
-:data:`train.reporting.doc_tables.TABLES` includes.
+"""The tables of the RL benchmark's pages (docs/rl-benchmark.md, rl-v2.md, rl-apg.md, rl-apg-levers.md and
+rl-libraries.md, and the README's summary), each from the JSON that ``dwr-gym benchmark`` or a benchmark script
+wrote: :data:`RL_TABLES`, which :data:`train.reporting.doc_tables.TABLES` includes.
 """
 
 from __future__ import annotations
@@ -52,11 +52,12 @@ RL_TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "sbx-v2-long": ("docs/rl_benchmark/sbx_v2_long.json", lambda data: rl_table(data, "random")),
     "sbx-v2-seeds": ("docs/rl_benchmark/sbx_v2_seeds.json", lambda data: rl_table(data, "random")),
     "sbx-v2-30min": ("docs/rl_benchmark/sbx_v2_30min.json", lambda data: rl_table(data, "random")),
+    **random_and_per_T_con("sbx-v2-30min-tqc", "docs/rl_benchmark/sbx_v2_30min_tqc.json"),
 }
 
 
 def rl_table(data: dict[str, Any], kind: str) -> str:
-    """The tables of docs/rl-benchmark.md (train.reporting.rl_benchmark), ending in a newline."""
+    """The tables of the RL benchmark's pages (train.reporting.rl_benchmark), ending in a newline."""
     text = _rl_table(data, kind)
     return text if text.endswith("\n") else text + "\n"
 

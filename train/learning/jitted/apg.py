@@ -305,7 +305,7 @@ class JaxAPG:
         # Guard: an episode whose derivative is undefined somewhere (0/0 at the goal, the law's gain at T_con) makes the
         # batch's gradient NaN; that update is skipped (a zero gradient; Adam's moments carry on) rather than poisoning
         # the weights. (Leaving such episodes out of the mean instead, a per-episode gradient, was measured to break the
-        # residual on PTC, with its clip then 64 times tighter than this update's: docs/rl-benchmark.md.)
+        # residual on PTC, with its clip then 64 times tighter than this update's: docs/rl-apg.md.)
         finite = all_finite(grads)
         grads = jax.tree.map(lambda g: jnp.where(finite, g, 0.0), grads)
         updates, opt_state = self.optimizer.update(grads, state.opt_state, state.params)

@@ -3,7 +3,7 @@ command sequences of fresh episodes, each found on its own by gradient ascent on
 
 A policy is one map for all episodes; a sequence is free on each. The search over sequences
 (:func:`train.evaluation.open_loop.best_sequences`: Adam on each episode's actions, through the JAX env, as APG
-differentiates it) comes within 15 % of the optimum's energy on v2 (docs/rl-benchmark.md, the open-loop bound),
+differentiates it) comes within 15 % of the optimum's energy on v2 (docs/rl-apg.md, the open-loop bound),
 where APG from scratch stays near twice it. So the teacher plays ``teacher_episodes`` fresh episodes, finds each
 one's best sequence in ``teacher_iterations`` Adam steps, and fits the policy's mean action to the sequences'
 actions on the observations they were taken on (``clone_steps`` Adam steps of least squares on minibatches); APG's
