@@ -30,6 +30,7 @@ SUITE: dict[str, str] = {
     "jax-training": "benchmarks.training.jax_training",
     "jax-residual": "benchmarks.training.jax_residual",
     "es-speed": "benchmarks.training.es_speed",
+    "apg-speed": "benchmarks.training.apg_speed",
     "sbx-speed": "benchmarks.training.sbx_speed",
     # learning: what the learned agents reach, and why
     "es-learn": "benchmarks.learning.es_learn",

@@ -117,3 +117,10 @@ def test_compare_time_reads_the_bars_time_left_from_a_redirected_log() -> None:
     run = {"time_left": [[10, 10.0, 120.0, 100.0], [20, 20.0, 90.0, 90.0], [50, 60.0, 60.0, 50.0]]}
     assert said_left(run) == "1.5 (1.5) / 1.0 (0.8) / -"
     assert said_left({}) == "-"
+
+
+def test_apg_speed_refuses_a_count_below_one_naming_it(capsys: pytest.CaptureFixture[str]) -> None:
+    for argv, named in ((["--repeats", "0"], "--repeats 0"), (["--episodes", "64", "0"], "--episodes [64, 0]")):
+        with pytest.raises(SystemExit) as exit_:
+            registry.load("apg-speed").main(argv)
+        assert exit_.value.code == 2 and named in capsys.readouterr().err

@@ -4,6 +4,8 @@
 from __future__ import annotations
 
 import contextlib
+import os
+import platform
 import signal
 import statistics
 import subprocess
@@ -86,3 +88,20 @@ def median_ratio(rounds: list[dict[str, float]], name: str, reference: str) -> f
 def medians(rounds: list[dict[str, float]]) -> dict[str, float]:
     """The median of each key over the rounds."""
     return {key: statistics.median(r[key] for r in rounds) for key in rounds[0]}
+
+
+def jax_timed(run: Callable[[], Any]) -> tuple[float, float, Any]:
+    """(wall s, process CPU s, result) of ``run()``, its (jax) result waited for."""
+    import jax
+
+    wall, cpu = time.perf_counter(), time.process_time()
+    result = jax.block_until_ready(run())
+    return time.perf_counter() - wall, time.process_time() - cpu, result
+
+
+def jax_machine() -> str:
+    """The machine and what jax runs on: its backend, device kind and device count."""
+    import jax
+
+    return (f"{platform.machine()}, {os.cpu_count()} cores, jax {jax.__version__} ({jax.default_backend()}: "
+            f"{jax.devices()[0].device_kind}, {len(jax.devices())} devices)")  # fmt: skip

@@ -19,15 +19,14 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
 import statistics
-import time
 from pathlib import Path
 from typing import Any
 
 from benchmarks.core.commands import parser_for
 from benchmarks.core.docs import NUMBER, Schema, fenced
 from benchmarks.core.record import write_json
+from benchmarks.core.timing import jax_machine, jax_timed
 
 ROOT = Path(__file__).resolve().parents[2]
 JSON_PATH = ROOT / "docs" / "jax" / "es_speed.json"
@@ -48,22 +47,6 @@ def ask_for_devices() -> None:
     if len(jax.devices()) < DEVICES:
         raise SystemExit(f"es-speed needs {DEVICES} XLA CPU devices, found {len(jax.devices())} (jax was imported "
                          "first): run it alone, python -m benchmarks run es-speed")  # fmt: skip
-
-
-def machine() -> str:
-    import jax
-
-    return (f"{platform.machine()}, {os.cpu_count()} cores, jax {jax.__version__} ({jax.default_backend()}, "
-            f"{len(jax.devices())} devices)")  # fmt: skip
-
-
-def timed(run: Any) -> tuple[float, float, Any]:
-    """(wall s, process CPU s, result) of ``run()``, its result waited for."""
-    import jax
-
-    wall, cpu = time.perf_counter(), time.process_time()
-    result = jax.block_until_ready(run())
-    return time.perf_counter() - wall, time.process_time() - cpu, result
 
 
 def measure(repeats: int, updates: int, population: int | None = None, ppo_envs: int | None = None) -> dict[str, Any]:
@@ -96,14 +79,14 @@ def measure(repeats: int, updates: int, population: int | None = None, ppo_envs:
     runs["jax_ppo"] = lambda: ppo.run(runner, updates, 1e9)
     steps = {"jax_ppo": updates * ppo_settings.steps_per_update}
     for name, run in runs.items():
-        compile_s[name] = round(timed(run)[0], 1)
+        compile_s[name] = round(jax_timed(run)[0], 1)
         if name != "jax_ppo":
-            steps[name] = int(timed(run)[2][1]["steps"])
+            steps[name] = int(jax_timed(run)[2][1]["steps"])
     rounds = []
     for _ in range(repeats):
         row = {}
         for name, run in runs.items():
-            wall, cpu, _ = timed(run)
+            wall, cpu, _ = jax_timed(run)
             row[name] = {"steps_per_s": steps[name] / wall, "cpu_per_wall": cpu / wall}
         rounds.append(row)
     median = {name: statistics.median(r[name]["steps_per_s"] for r in rounds) for name in runs}
@@ -112,7 +95,7 @@ def measure(repeats: int, updates: int, population: int | None = None, ppo_envs:
     if two not in runs:  # an accelerator: its one device
         ratios = {"es_one_device_over_ppo": statistics.median(r["es_1_device"]["steps_per_s"] / r["jax_ppo"]["steps_per_s"]
                                                               for r in rounds)}  # fmt: skip
-        return {"machine": machine(), "backend": jax.default_backend(), "device": str(jax.devices()[0]),
+        return {"machine": jax_machine(), "backend": jax.default_backend(), "device": str(jax.devices()[0]),
                 "es_settings": settings.as_dict(), "ppo_steps_per_round": steps["jax_ppo"],
                 "ppo_num_envs": ppo_config.num_envs,
                 "es_steps_per_generation": steps["es_1_device"], "compile_seconds": compile_s, "rounds": rounds,
@@ -122,7 +105,7 @@ def measure(repeats: int, updates: int, population: int | None = None, ppo_envs:
                                                           for r in rounds),
               "two_cores_over_one": statistics.median(r[two]["steps_per_s"] / r["es_1_device"]["steps_per_s"]
                                                       for r in rounds)}  # fmt: skip
-    return {"machine": machine(), "load_average_1min_at_end": round(os.getloadavg()[0], 2),
+    return {"machine": jax_machine(), "load_average_1min_at_end": round(os.getloadavg()[0], 2),
             "es_settings": settings.as_dict(), "ppo_steps_per_round": steps["jax_ppo"],
             "es_steps_per_generation": steps[two], "compile_seconds": compile_s, "rounds": rounds,
             "median_steps_per_s": median, "median_cpu_per_wall": cores, "ratios": ratios,

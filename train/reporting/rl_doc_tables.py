@@ -38,6 +38,7 @@ RL_TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     **random_and_per_T_con("rl-apg-hold-heading10", "docs/rl_benchmark/apg_hold_heading10.json"),
     **random_and_per_T_con("rl-apg-hold-fraction", "docs/rl_benchmark/apg_hold_fraction.json"),
     **random_and_per_T_con("rl-apg-hold-bonus", "docs/rl_benchmark/apg_hold_bonus.json"),
+    **random_and_per_T_con("rl-apg-hold-bonus3", "docs/rl_benchmark/apg_hold_bonus3.json"),
     "rl-apg-teacher-per-T_con": ("docs/rl_benchmark/apg_teacher.json", lambda data: rl_table(data, "per-T_con")),
     **random_and_per_T_con("rl-apg-teacher-time-scaled", "docs/rl_benchmark/apg_teacher_time_scaled.json"),
     "rl-time-scale-per-T_con": ("docs/rl_benchmark/time_scale.json", lambda data: rl_table(data, "per-T_con")),
