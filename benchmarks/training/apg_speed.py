@@ -111,7 +111,6 @@ def main(argv: list[str] | None = None) -> int:
                      "JAX_PLATFORMS=cpu")  # fmt: skip
     if args.docs:
         write_json(JSON_PATH, data)
-        print(f"wrote {JSON_PATH.relative_to(ROOT)}")
     return 0
 
 
