@@ -13,11 +13,15 @@ benchmark.json to ``docs/rl_benchmark/sbx_<run>.json``, from which the tables ar
 
 from __future__ import annotations
 
+import csv
+import math
 import shutil
 from pathlib import Path
+from typing import Any
 
 from benchmarks.core.commands import dwr_gym, parser_for
-from benchmarks.core.docs import Schema, table
+from benchmarks.core.docs import Schema, fenced, table
+from benchmarks.core.record import write_json
 
 ROOT = Path(__file__).resolve().parents[2]
 V2 = "DWRPointStabilization-v2"
@@ -43,12 +47,67 @@ RUNS: dict[str, list[str]] = {
 }
 
 
+#: run -> the JSON of its seeds' curves in brief beside keeping still (:func:`curves`), written with ``--docs``.
+CURVES = {"v2-30min-tqc": "docs/rl_benchmark/sbx_v2_30min_tqc_curves.json"}
+
+
 def out_dir(run: str) -> Path:
     return ROOT / "results" / f"sbx-{run}"
 
 
 def docs_json(run: str) -> str:
     return f"docs/rl_benchmark/sbx_{run.replace('-', '_')}.json"
+
+
+def still_return(run_dir: Path) -> float:
+    """The mean return of a robot that does not move (zero commands) on a run's own evaluation set, the set of its
+    evaluations.csv: what a policy that learned nothing but to keep still would score."""
+    import numpy as np
+    import yaml
+
+    from train.evaluation.rollout import rollout
+    from train.evaluation.scenarios import make_scenario
+    from train.learning.config import TrainConfig
+
+    saved = yaml.safe_load((run_dir / "config.yaml").read_text())["config"]
+    config = TrainConfig(**{k: v for k, v in saved.items() if k in TrainConfig.__dataclass_fields__})
+    scenario = make_scenario("random", n=config.eval_episodes, seed=config.eval_seed, env_kwargs=config.env_keywords())
+
+    class Still:
+        def predict(self, obs: Any, **_: Any) -> tuple[Any, None]:
+            return np.zeros((len(obs), 2)), None
+
+    still = rollout(Still(), config.env_params(), scenario.starts, scenario.goals,
+                    T_con=scenario.T_cons, env_kwargs=scenario.env_kwargs)  # fmt: skip
+    return float(np.mean(still.episode_return))
+
+
+def curves(run: str) -> dict[str, Any]:
+    """Each seed's learning curve of a run in brief (its evaluations.csv: the best in-time rate and where, the last
+    evaluation) beside the return of keeping still on the same evaluation set."""
+    seeds: dict[str, Any] = {}
+    for run_dir in sorted((out_dir(run) / "runs").glob("*-seed*")):
+        with (run_dir / "evaluations.csv").open() as handle:
+            rows = [{k: float(v) if v else math.nan for k, v in row.items()} for row in csv.DictReader(handle)]
+        peak = max(rows, key=lambda row: row["success_rate"])
+        last = rows[-1]
+        seeds[run_dir.name] = {
+            "evaluations": len(rows), "peak_in_time": peak["success_rate"], "peak_env_steps": int(peak["timesteps"]),
+            "last_env_steps": int(last["timesteps"]), "last_in_time": last["success_rate"],
+            "last_return": last["return_mean"], "last_final_distance": last["final_distance_mean"],
+            "last_energy": last["energy_mean"], "still_return": still_return(run_dir),
+        }  # fmt: skip
+    return {"run": run, "seeds": seeds}
+
+
+def render_curves(data: dict[str, Any]) -> list[str]:
+    lines = [f"{'run':<22}{'peak in time':>13}{'at env steps':>14}{'last in time':>13}{'last return':>12}"
+             f"{'keeping still':>14}{'final distance':>15}{'energy':>8}"]  # fmt: skip
+    for name, seed in data["seeds"].items():
+        lines.append(f"{name:<22}{seed['peak_in_time']:>13.1%}{seed['peak_env_steps']:>14,}{seed['last_in_time']:>13.1%}"
+                     f"{seed['last_return']:>12.2f}{seed['still_return']:>14.2f}{seed['last_final_distance']:>13.2f} m"
+                     f"{seed['last_energy']:>8.2f}")  # fmt: skip
+    return lines
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -65,9 +124,15 @@ def main(argv: list[str] | None = None) -> int:
         if args.docs:
             shutil.copyfile(out_dir(run) / "benchmark.json", ROOT / docs_json(run))
             print(f"wrote {docs_json(run)}")
+        if args.docs and run in CURVES:
+            data = curves(run)
+            print("\n".join(render_curves(data)))
+            write_json(ROOT / CURVES[run], data)
     return 0
 
 
 #: The tables of docs/rl-libraries.md, in the schema of every `dwr-gym benchmark` JSON (as rl-agents' tables).
 BENCHMARK = Schema({"budget": dict, "machine": str, "summary": dict, "references": dict, "best_seed": dict})
-BLOCKS = (*(table(f"sbx-{run}", BENCHMARK) for run in RUNS), table("sbx-v2-30min-tqc-per-T_con", BENCHMARK))
+BLOCKS = (*(table(f"sbx-{run}", BENCHMARK) for run in RUNS), table("sbx-v2-30min-tqc-per-T_con", BENCHMARK),
+          fenced("sbx-v2-30min-tqc-curves", CURVES["v2-30min-tqc"], render_curves,
+                 Schema({"run": str, "seeds": dict})))  # fmt: skip
