@@ -59,33 +59,37 @@ def docs_json(run: str) -> str:
     return f"docs/rl_benchmark/sbx_{run.replace('-', '_')}.json"
 
 
-def still_return(run_dir: Path) -> float:
+def still_return(run_dir: Path, known: dict[str, float]) -> float:
     """The mean return of a robot that does not move (zero commands) on a run's own evaluation set, the set of its
-    evaluations.csv: what a policy that learned nothing but to keep still would score."""
+    evaluations.csv: what a policy that learned nothing but to keep still would score. ``known``: the returns already
+    measured, by evaluation set (the seeds of a run share theirs)."""
     import numpy as np
-    import yaml
 
     from train.evaluation.rollout import rollout
     from train.evaluation.scenarios import make_scenario
-    from train.learning.config import TrainConfig
+    from train.learning.runs import load_config
 
-    saved = yaml.safe_load((run_dir / "config.yaml").read_text())["config"]
-    config = TrainConfig(**{k: v for k, v in saved.items() if k in TrainConfig.__dataclass_fields__})
-    scenario = make_scenario("random", n=config.eval_episodes, seed=config.eval_seed, env_kwargs=config.env_keywords())
+    config = load_config(run_dir)
+    key = repr((config.env_id, config.eval_seed, config.eval_episodes, config.env_keywords()))
+    if key not in known:
+        scenario = make_scenario("random", n=config.eval_episodes, seed=config.eval_seed,
+                                 env_kwargs=config.env_keywords())  # fmt: skip
 
-    class Still:
-        def predict(self, obs: Any, **_: Any) -> tuple[Any, None]:
-            return np.zeros((len(obs), 2)), None
+        class Still:
+            def predict(self, obs: Any, **_: Any) -> tuple[Any, None]:
+                return np.zeros((len(obs), 2)), None
 
-    still = rollout(Still(), config.env_params(), scenario.starts, scenario.goals,
-                    T_con=scenario.T_cons, env_kwargs=scenario.env_kwargs)  # fmt: skip
-    return float(np.mean(still.episode_return))
+        still = rollout(Still(), config.env_params(), scenario.starts, scenario.goals,
+                        T_con=scenario.T_cons, env_kwargs=scenario.env_kwargs)  # fmt: skip
+        known[key] = float(np.mean(still.episode_return))
+    return known[key]
 
 
 def curves(run: str) -> dict[str, Any]:
     """Each seed's learning curve of a run in brief (its evaluations.csv: the best in-time rate and where, the last
     evaluation) beside the return of keeping still on the same evaluation set."""
     seeds: dict[str, Any] = {}
+    known: dict[str, float] = {}
     for run_dir in sorted((out_dir(run) / "runs").glob("*-seed*")):
         with (run_dir / "evaluations.csv").open() as handle:
             rows = [{k: float(v) if v else math.nan for k, v in row.items()} for row in csv.DictReader(handle)]
@@ -95,7 +99,7 @@ def curves(run: str) -> dict[str, Any]:
             "evaluations": len(rows), "peak_in_time": peak["success_rate"], "peak_env_steps": int(peak["timesteps"]),
             "last_env_steps": int(last["timesteps"]), "last_in_time": last["success_rate"],
             "last_return": last["return_mean"], "last_final_distance": last["final_distance_mean"],
-            "last_energy": last["energy_mean"], "still_return": still_return(run_dir),
+            "last_energy": last["energy_mean"], "still_return": still_return(run_dir, known),
         }  # fmt: skip
     return {"run": run, "seeds": seeds}
 
