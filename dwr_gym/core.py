@@ -41,7 +41,10 @@ if TYPE_CHECKING:
 REWARD_TERMS: tuple[str, ...] = ("progress", "time", "effort", "energy", "arrival", "heading", "late", "arena")
 #: Keys of the info dict besides "reward_terms".
 INFO_KEYS: tuple[str, ...] = ("distance", "orientation_error", "heading_error", "time", "T_con", "is_success", "energy",
-                              "linear_velocity", "angular_velocity", "pose")  # fmt: skip
+                              "linear_velocity", "angular_velocity", "pose", "cost", "distance_violation",
+                              "heading_violation")  # fmt: skip
+#: The constraint's keys of the info dict (Safety-Gymnasium's ``cost``, and the smooth violations beside it).
+COST_KEYS: tuple[str, ...] = ("cost", "distance_violation", "heading_violation")
 
 
 def action_space() -> spaces.Box:
@@ -248,6 +251,27 @@ def _paid_at_the_end(
     )
 
 
+def deadline_cost(
+    ended: Any, is_success: Any, step_count: Any, prescribed_steps: Any, distance: Any, heading: Any,
+    goal_tolerance: Any, heading_tolerance: Any, xp: Any = np,
+) -> tuple[Any, Any, Any]:
+    """The deadline as a constraint (a constrained MDP's cost, Safety-Gymnasium's ``info["cost"]``): (cost, distance
+    violation [m], heading violation [rad]) of robots whose episodes ``ended`` at this step, 0 elsewhere.
+
+    ``cost`` is 1 where an episode ends (T_con on v2, arrival or the horizon on v0/v1, leaving the arena) and the
+    robot is not in time by the env's own test (``is_success`` at a step within T_con), else 0: an episode's summed
+    cost is its deadline violation. The violations are the smooth measures a gradient learner follows: how far
+    beyond the goal tolerance the robot ends (max(0, d - goal_tolerance)) and how far beyond the heading tolerance
+    (max(0, |psi| - heading_tolerance); ``heading_tolerance`` 0 where the env sets none (v0, v1, v2): |psi|, the final
+    heading error itself). Python floats and ``model.SCALAR_MATH`` for one robot, arrays and their namespace else.
+    """
+    in_time = is_success & (step_count <= prescribed_steps)
+    cost = xp.where(ended & xp.logical_not(in_time), 1.0, 0.0)
+    distance_violation = xp.where(ended, xp.maximum(distance - goal_tolerance, 0.0), 0.0)
+    heading_violation = xp.where(ended, xp.maximum(xp.abs(heading) - heading_tolerance, 0.0), 0.0)
+    return cost, distance_violation, heading_violation
+
+
 def infos(
     state: TaskState, coords: ErrorCoordinates, params: EnvParams, result: StepResult | None = None
 ) -> dict[str, Any]:
@@ -260,6 +284,19 @@ def infos(
     # copies of the state's own arrays, which later steps and resets overwrite (floats need none)
     heading, T_con, energy = (coords.psi, state.T_con, state.energy) if scalar else (
         coords.psi.copy(), state.T_con.copy(), state.energy.copy())  # fmt: skip
+    if result is None:  # a reset: no episode has ended
+        cost = distance_violation = heading_violation = zeros
+    elif scalar:
+        ended = bool(result.terminated or result.truncated)
+        cost, distance_violation, heading_violation = (
+            (float(v) for v in deadline_cost(ended, bool(is_success), state.step_count, state.prescribed_steps,
+                                             coords.distance, heading, params.goal_tolerance,
+                                             params.heading_tolerance or 0.0, model.SCALAR_MATH))
+            if ended else (0.0, 0.0, 0.0))  # fmt: skip
+    else:
+        cost, distance_violation, heading_violation = deadline_cost(
+            result.terminated | result.truncated, is_success, state.step_count, state.prescribed_steps,
+            coords.distance, heading, params.goal_tolerance, params.heading_tolerance or 0.0)
     return {
         "distance": coords.distance,
         "orientation_error": coords.orientation_error,
@@ -271,11 +308,15 @@ def infos(
         "linear_velocity": zeros if result is None else result.linear_velocity,
         "angular_velocity": zeros if result is None else result.angular_velocity,
         "pose": np.array((x, y, psi)) if scalar else np.array((x, y, psi)).T,  # (N, 3): 3x np.stack's speed
+        "cost": cost,
+        "distance_violation": distance_violation,
+        "heading_violation": heading_violation,
         "reward_terms": {name: zeros for name in REWARD_TERMS} if result is None else result.reward_terms,
     }
 
 
 __all__ = [
+    "COST_KEYS",
     "INFO_KEYS",
     "OBSERVATION_NAMES",
     "REWARD_TERMS",
@@ -284,6 +325,7 @@ __all__ = [
     "TaskState",
     "action_space",
     "commands_from_action",
+    "deadline_cost",
     "episode_length",
     "error_coordinates",
     "infos",

@@ -219,6 +219,16 @@ class DWRPointStabilizationEnv(HorizonSpec, OneRobotRendering, gym.Env[NDArray[n
     1,800 in v1, the horizon of the largest T_con), where ``TimeLimit``-aware wrappers such as
     ``TimeAwareObservation`` look for it.
 
+    ## Cost
+    The deadline as a constraint, by Safety-Gymnasium's convention (a constrained MDP: maximise the return
+    subject to the expected summed cost within a budget): ``info["cost"]`` is 1 at the step that ends an
+    episode where the robot is not in time by the env's own test (v2: ``is_success`` at T_con; v0, v1:
+    arrived by T_con), else 0, so an episode's summed cost is its deadline violation (0 or 1). Beside it,
+    the smooth violations a gradient learner follows, nonzero only at that last step:
+    ``info["distance_violation"]`` = max(0, d - ``goal_tolerance``) [m] and ``info["heading_violation"]``
+    = max(0, |psi - psi_d| - ``heading_tolerance``) [rad] (with no heading tolerance, as in every
+    registered id: the final heading error |psi - psi_d| itself). Neither enters the reward.
+
     ## Arguments
     Every field of :class:`dwr_gym.params.EnvParams` is a keyword (``T_con``, ``dt``, ``u_max``,
     ``omega_max``, ``goal_tolerance``, ``heading_tolerance``, ``horizon_factor``, ``arena_radius``,
@@ -242,6 +252,8 @@ class DWRPointStabilizationEnv(HorizonSpec, OneRobotRendering, gym.Env[NDArray[n
     ['arena', 'arrival', 'effort', 'energy', 'heading', 'late', 'progress', 'time']
 
     ## Version History
+    * Every id, returns and dynamics unchanged: ``info["cost"]``, ``info["distance_violation"]`` and
+      ``info["heading_violation"]`` (see Cost).
     * v2: the defaults of ``dwr_gym.V2_DEFAULTS``: v1's robot, T_con range and starts, held to T_con
       (``hold_to_T_con``: energy paid until T_con, arrival, heading and the miss paid there; the progress
       term's potential the distance), so that its return pays nothing for arriving early (see Rewards). ``info["is_success"]``

@@ -133,6 +133,7 @@ def run_both(env_id: str, dtype: str, seed: int) -> dict[str, int]:
         np.testing.assert_array_equal(np.asarray(info["truncated"]), truncated)
         np.testing.assert_array_equal(np.asarray(done), ended)
         np.testing.assert_array_equal(np.asarray(info["is_success"]), final["is_success"])
+        np.testing.assert_array_equal(np.asarray(info["cost"]), final["cost"], err_msg="cost")
         # the orientation error's azimuth has a condition number of 1/d: rounding differences grow near the goal,
         # where v2 holds robots; there the values that depend on it are compared to 1000 times the tolerance
         away = np.asarray(final["distance"]) > 1e-3
@@ -141,7 +142,8 @@ def run_both(env_id: str, dtype: str, seed: int) -> dict[str, int]:
             for term, values in final["reward_terms"].items():
                 if not term.startswith("_"):
                     close(f"reward term {term}", info["reward_terms"][term], values, atol * scale, near)
-        for key_name in ("distance", "orientation_error", "heading_error", "energy", "T_con", "time", "pose"):
+        for key_name in ("distance", "orientation_error", "heading_error", "energy", "T_con", "time", "pose",
+                         "distance_violation", "heading_violation"):
             close(
                 f"info {key_name}",
                 info[key_name],

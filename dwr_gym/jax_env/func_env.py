@@ -114,11 +114,17 @@ def state_info(state: DWRState, params: FunctionalParams) -> dict[str, Any]:
     """The numpy env's info keys of ``state`` (its last step's), and "terminated" and "truncated"."""
     dx, dy = model.rotate(state.x, state.y, state.goal_cos, state.goal_sin)
     pose = jnp.stack([state.goal_x + dx, state.goal_y + dy, model.wrap_angle(state.psi + state.goal_psi)], axis=-1)
+    # (the functional params write "no heading tolerance" as inf; the cost's convention for it is 0)
+    heading_tolerance = jnp.where(jnp.isinf(params.heading_tolerance), 0.0, params.heading_tolerance)
+    cost, distance_violation, heading_violation = core.deadline_cost(
+        state.terminated | state.truncated, state.is_success, state.step_count, state.prescribed_steps, state.distance,
+        state.heading_error, params.goal_tolerance, heading_tolerance, jnp)
     return {"distance": state.distance, "orientation_error": state.orientation_error, "heading_error": state.heading_error,
             "time": state.step_count * params.dt, "T_con": state.T_con, "is_success": state.is_success,
             "energy": state.energy, "linear_velocity": state.linear_velocity, "angular_velocity": state.angular_velocity,
             "pose": pose, "terminated": state.terminated, "truncated": state.truncated,
-            "reward_terms": state.reward_terms}  # fmt: skip
+            "cost": cost.astype(state.distance.dtype), "distance_violation": distance_violation,
+            "heading_violation": heading_violation, "reward_terms": state.reward_terms}  # fmt: skip
 
 
 class DWRFuncEnv(FuncEnv):
