@@ -213,6 +213,20 @@ ENTRIES: dict[str, dict[str, Any]] = {
         "eval_freq": 10_000_000,
         "checkpoint_freq": 10_000_000,
     },
+    # the deadline and the heading as constraints (train.learning.jitted.lagrangian): multipliers per T_con bin in
+    # place of the hand-set weights, over the same window of 20 control periods before T_con
+    "apg-lagrangian-v2": apg_teacher_time_scaled(200_000_000, clone_steps=16000, hold_steps=20, lagrangian=1),
+    "apg-lagrangian-residual-ptc-v2": {
+        "algo": "apg",
+        "backend": "jax",
+        "env_id": V2,
+        "residual": True,
+        "expert": "ptc",
+        "hyperparam_overrides": {"lagrangian": 1, "hold_steps": 20},
+        "total_timesteps": 30_000_000,
+        "eval_freq": 5_000_000,
+        "checkpoint_freq": 5_000_000,
+    },
     "sac-sbx-v2": {"algo": "sac", "backend": "sbx", "env_id": V2},
     "tqc-sbx-v2": {"algo": "tqc", "backend": "sbx", "env_id": V2},
     "crossq-sbx-v2": {"algo": "crossq", "backend": "sbx", "env_id": V2},

@@ -38,6 +38,7 @@ import jax
 import jax.numpy as jnp
 import optax
 
+from train.learning.jitted import lagrangian
 from train.learning.jitted.apg_settings import INITIAL_OBSERVATIONS, MAX_DROP, APGSettings
 from train.learning.jitted.policy import make_network
 from train.learning.jitted.ppo import ObservationStatistics
@@ -55,6 +56,7 @@ class APGState(flax.struct.PyTreeNode):
     best_params: Any
     best_return: Any
     validation_key: Any
+    multipliers: Any
 
 
 def clipped(cotangent: Any, bound: Any) -> Any:
@@ -184,7 +186,8 @@ class JaxAPG:
             stats = stats.update(jnp.asarray(obs, jnp.float32))
         state = APGState(params=params, opt_state=self.optimizer.init(params), obs_stats=stats, rng=rng,
                          updates=jnp.asarray(0, jnp.int32), best_params=params,
-                         best_return=jnp.asarray(-jnp.inf, jnp.float32), validation_key=key_val)  # fmt: skip
+                         best_return=jnp.asarray(-jnp.inf, jnp.float32), validation_key=key_val,
+                         multipliers=lagrangian.initial_multipliers(self.settings.constraint, jnp))  # fmt: skip
         return jax.tree.map(lambda x: jnp.asarray(x, x.dtype), state)  # no weak types: one compilation
 
     def act(self, params: Any, obs: Any, stats: Any) -> Any:
@@ -197,6 +200,15 @@ class JaxAPG:
     def episode(self, params: Any, stats: Any, key: Any, limit: Any = None, mixed: bool = False) -> tuple[Any, Any]:
         """One episode's return (differentiable in ``params``, the state's gradient clipped to ``limit``, by default
         ``state_grad_clip``) and its env steps; ``mixed``: an update's episode, short with ``short_T_con_share``."""
+        total, steps, _ = self.play(params, stats, key, limit, mixed)
+        return total, steps
+
+    def play(
+        self, params: Any, stats: Any, key: Any, limit: Any = None, mixed: bool = False, multipliers: Any = None
+    ) -> tuple[Any, Any, Any]:
+        """:meth:`episode`'s return and env steps, and the episode's last state. With ``multipliers`` (the
+        constraint's, (2, bins)), the gradient also follows the constraints' smooth violations over the window before
+        T_con, each weighed by its multiplier at this episode's T_con (:mod:`train.learning.jitted.lagrangian`)."""
         key_reset, key_steps = jax.random.split(key)
         _, start = self.env.reset_env(key_reset, self.env_params)
         share = self.settings.short_T_con_share
@@ -211,6 +223,13 @@ class JaxAPG:
         if self.settings.hold_fraction:  # the window a share of this episode's T_con (at least one step)
             hold = jnp.maximum(1, jnp.ceil(self.settings.hold_fraction * start.prescribed_steps)).astype(jnp.float32)
         holding = bool(self.settings.hold_steps or self.settings.hold_fraction)
+        weights = None
+        if multipliers is not None:  # this episode's multipliers, constants of its gradient
+            constraint = self.settings.constraint
+            bin_index = lagrangian.T_con_bin(start.T_con, self.env_params.T_con_range, constraint.multiplier_bins, jnp)
+            weights = jax.lax.stop_gradient(multipliers[:, bin_index])
+            if not holding:  # the constraints at T_con alone: a window of one step
+                hold, holding = 1, True
 
         def one_step(carry: tuple[Any, ...], t: Any) -> tuple[tuple[Any, ...], None]:
             state, carrier, alive, total, held, steps = carry
@@ -224,10 +243,13 @@ class JaxAPG:
             total = total + jnp.where(alive, reward, 0.0)
             if holding:  # the miss over the last `hold` steps up to T_con (hold_steps, hold_fraction): the gradient
                 last = after.step_count > after.prescribed_steps - hold
-                miss = self.settings.hold_weight * after.distance
-                if self.settings.hold_heading_weight:  # the heading's error, linear near 0 (2 |sin(psi / 2)|)
+                if weights is not None:  # the multipliers weigh the smooth violations (distance, heading error)
+                    miss = weights[0] * after.distance + weights[1] * 2.0 * jnp.abs(jnp.sin(0.5 * after.psi))
+                else:
+                    miss = self.settings.hold_weight * after.distance
+                if weights is None and self.settings.hold_heading_weight:  # the heading's error, linear near 0 (2 |sin(psi / 2)|)
                     miss = miss + self.settings.hold_heading_weight * 2.0 * jnp.abs(jnp.sin(0.5 * after.psi))
-                if self.settings.hold_bonus:  # the arrival bonus, smoothed: a slope at the tolerance
+                if weights is None and self.settings.hold_bonus:  # the arrival bonus, smoothed: a slope at the tolerance
                     edge = (self.env_params.goal_tolerance - after.distance) / self.settings.hold_bonus_width
                     miss = miss - self.settings.hold_bonus * jax.nn.sigmoid(edge)
                 held = held - jnp.where(alive & last, miss / hold, 0.0)
@@ -247,7 +269,7 @@ class JaxAPG:
             # the same value, its gradient times the weight (and the clip times it: weight x the clipped gradient)
             total = total + (weight - 1.0) * (total - jax.lax.stop_gradient(total))
             total = total + jax.lax.stop_gradient(self.episode_clip(final, limit) * weight) * carrier
-        return total, steps
+        return total, steps, final
 
     def near_miss(self, final: Any) -> Any:
         """True where an episode's last state ``final`` is a near miss: the goal tolerance < its distance <=
@@ -291,16 +313,25 @@ class JaxAPG:
 
         limit = self.state_grad_clip(state.updates)
 
-        def loss(params: Any) -> tuple[Any, tuple[Any, Any]]:
+        constrained = self.settings.constraint.lagrangian
+
+        def loss(params: Any) -> tuple[Any, tuple[Any, Any, Any]]:
             # (the short T_con of short_T_con_share; without it the episode as validate plays it)
-            episode = functools.partial(self.episode, mixed=True) if self.settings.short_T_con_share else self.episode
-            returns, steps = jax.vmap(episode, in_axes=(None, None, 0, None))(params, state.obs_stats, keys, limit)
-            return -jnp.sum(returns), (returns, steps)
+            mixed = bool(self.settings.short_T_con_share)
+            if constrained:
+                play = functools.partial(self.play, mixed=mixed, multipliers=state.multipliers.value)
+                returns, steps, final = jax.vmap(play, in_axes=(None, None, 0, None))(params, state.obs_stats, keys,
+                                                                                     limit)  # fmt: skip
+            else:
+                episode = functools.partial(self.episode, mixed=True) if mixed else self.episode
+                returns, steps = jax.vmap(episode, in_axes=(None, None, 0, None))(params, state.obs_stats, keys, limit)
+                final = None
+            return -jnp.sum(returns), (returns, steps, final)
 
         # The sum's gradient, then divided: each episode's state cotangent enters the backward pass at the scale of
         # its own return, so state_grad_clip clips each episode's as that episode's gradient alone would be clipped
         # (the mean's would be 1/episodes of it, and the clip's effect would change with the batch's size)
-        grads, (returns, steps) = jax.grad(loss, has_aux=True)(state.params)
+        grads, (returns, steps, final) = jax.grad(loss, has_aux=True)(state.params)
         grads = jax.tree.map(lambda g: g / self.settings.episodes, grads)
         # Guard: an episode whose derivative is undefined somewhere (0/0 at the goal, the law's gain at T_con) makes the
         # batch's gradient NaN; that update is skipped (a zero gradient; Adam's moments carry on) rather than poisoning
@@ -317,7 +348,37 @@ class JaxAPG:
             steps = steps + replayed
             params, opt_state = jax.tree.map(lambda new, old: jnp.where(accepted, new, old), (params, opt_state),
                                              (state.params, state.opt_state))  # fmt: skip
-        state = state.replace(params=params, opt_state=opt_state, rng=rng, updates=state.updates + 1)
+        multipliers, constraint_metrics = state.multipliers, {}
+        if constrained:  # the multipliers from this update's fresh episodes' violations, per T_con bin
+            multipliers, constraint_metrics = self.constraint_step(state.multipliers, final)
+        state = state.replace(params=params, opt_state=opt_state, rng=rng, updates=state.updates + 1,
+                              multipliers=multipliers)  # fmt: skip
         metrics = {"steps": jnp.sum(steps), "return_mean": jnp.mean(returns), "grad_norm": optax.tree.norm(grads),
-                   "accepted": accepted, "skipped": ~finite}  # fmt: skip
+                   "accepted": accepted, "skipped": ~finite, **constraint_metrics}  # fmt: skip
         return state, metrics
+
+    def constraint_step(self, multipliers: Any, final: Any) -> tuple[Any, dict[str, Any]]:
+        """The multipliers after the violations of the episodes whose last states are ``final``, and per T_con bin
+        (arrays (bins,)) the violation rate, the mean final heading error, the mean energy, the episodes and the
+        multipliers used."""
+        constraint = self.settings.constraint
+        bins = constraint.multiplier_bins
+        cost, _, _ = self.final_cost(final)
+        bin_index = lagrangian.T_con_bin(final.T_con, self.env_params.T_con_range, bins, jnp)
+        measured, counts = lagrangian.violations(cost, final.heading_error, bin_index, constraint, jnp)
+        energy, _ = lagrangian.binned_means(final.energy[None, :].astype(jnp.float32), bin_index, bins, jnp)
+        updated = lagrangian.pid_update(multipliers, measured, counts, constraint, jnp)
+        return updated, {"violation_rate": measured[0], "heading": measured[1], "energy": energy[0],
+                         "episodes": counts, "deadline_multiplier": multipliers.value[0],
+                         "heading_multiplier": multipliers.value[1]}  # fmt: skip
+
+    def final_cost(self, final: Any) -> tuple[Any, Any, Any]:
+        """The env's cost and smooth violations (:func:`dwr_gym.core.deadline_cost`) of episodes' last states: an
+        episode that ended (at T_con, or leaving the arena) not in time costs 1."""
+        from dwr_gym.core import deadline_cost
+
+        p = self.env_params
+        heading_tolerance = jnp.where(jnp.isinf(p.heading_tolerance), 0.0, p.heading_tolerance)
+        return deadline_cost(jnp.ones_like(final.is_success), final.is_success, final.step_count,  # type: ignore[no-any-return]
+                             final.prescribed_steps, final.distance, final.heading_error, p.goal_tolerance,
+                             heading_tolerance, jnp)  # fmt: skip

@@ -4,11 +4,12 @@ of train/hyperparams/apg.yml; checked here, before jax is imported, so bad value
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from dwr_gym.validation import as_float, as_int
 from train.learning.config import ConfigError
+from train.learning.jitted.lagrangian import LAGRANGE_DEFAULTS, LagrangeSettings
 
 #: YAML keys of APG, with their defaults; ``policy_kwargs`` (the network) is read as the ES reads it.
 #: ``max_return_drop`` at or above this: no update is checked (nor undone).
@@ -21,7 +22,8 @@ APG_DEFAULTS: dict[str, Any] = {"episodes": 64, "learning_rate": 3e-4, "max_grad
                                  "hold_bonus_width": 0.005, "short_T_con_share": 0.0, "short_T_con_max": 20.0,
                                  "max_return_drop": MAX_DROP, "keep_best": 0,
                                  "validation_episodes": 256, "teacher_episodes": 0, "teacher_iterations": 400,
-                                 "teacher_learning_rate": 0.02, "clone_steps": 4000, "teacher_rounds": 1}  # fmt: skip
+                                 "teacher_learning_rate": 0.02, "clone_steps": 4000, "teacher_rounds": 1,
+                                 **LAGRANGE_DEFAULTS}  # fmt: skip
 #: Observations of fresh episodes the fixed observation scaling is computed from.
 INITIAL_OBSERVATIONS = 1024
 
@@ -124,6 +126,11 @@ class APGSettings:
     teacher_rounds: int = 1
     """Rounds of the lesson: 1 clones the teacher's sequences once; each further round (DAgger) plays the cloned policy
     on ``teacher_episodes`` fresh episodes, teaches the best sequence from a drawn state of each, and refits on all."""
+    constraint: LagrangeSettings = field(default_factory=LagrangeSettings)
+    """The deadline and the heading as constraints with Lagrange multipliers per T_con bin (``lagrangian: 1`` and
+    :class:`train.learning.jitted.lagrangian.LagrangeSettings`' keys): the multipliers, not ``hold_weight`` and
+    ``hold_heading_weight``, then weigh the distance and the heading error over the hold window (the last step
+    before T_con without one)."""
     net_arch: tuple[int, ...] = (64, 64)
     activation: str = "tanh"
     ortho_init: bool = True
@@ -180,6 +187,7 @@ class APGSettings:
                                                low_inclusive=False, text=True),
                 clone_steps=as_int("clone_steps", values["clone_steps"], 1, 10_000_000, text=True),
                 teacher_rounds=as_int("teacher_rounds", values["teacher_rounds"], 1, 1000, text=True),
+                constraint=constraint_beside(values),
                 **network_fields(policy, "APG"),
             )  # fmt: skip
         except ValueError as error:
@@ -241,10 +249,22 @@ def window_beside(name: str, value: Any, hold_steps: Any, hold_fraction: Any) ->
     return checked
 
 
+def constraint_beside(values: dict[str, Any]) -> LagrangeSettings:
+    """The constraint's settings checked; with ``lagrangian`` on, the hand-set weights it replaces must be off."""
+    constraint = LagrangeSettings.from_values(values)
+    if constraint.lagrangian:
+        for name in ("hold_heading_weight", "hold_bonus"):
+            if float(values[name]) != 0.0:
+                raise ValueError(f"{name}={values[name]!r} is invalid with lagrangian=1 (the multipliers weigh the "
+                                 f"constraints): expected {name} 0")  # fmt: skip
+    return constraint
+
+
 def check_apg_kwargs(params: dict[str, Any]) -> dict[str, Any]:
     """``params`` with its APG values coerced (for config.yaml), or a ConfigError; called by resolve_hyperparams."""
     settings = APGSettings.from_algo_kwargs(params)
-    checked = {k: getattr(settings, k) for k in APG_DEFAULTS}
+    checked = {k: getattr(settings.constraint if k in LAGRANGE_DEFAULTS else settings, k) for k in APG_DEFAULTS}
+    checked["lagrangian"] = int(checked["lagrangian"])
     if settings.linear_schedule:
         checked["learning_rate"] = f"lin_{settings.learning_rate:g}"
     return {**params, **checked}

@@ -17,6 +17,11 @@ from typing import Any
 from train.learning.config import ConfigError, TrainConfig
 from train.learning.jitted.apg_settings import APGSettings
 
+#: The constraint's log in the run directory: per T_con bin, its violation rate, multipliers and energy.
+CONSTRAINT_FILE = "constraint.csv"
+#: Updates averaged into one row of the constraint's log.
+CONSTRAINT_LOG_EVERY = 25
+
 
 def apg_policy_kwargs(settings: APGSettings) -> dict[str, Any]:
     """The SB3 PPO ``policy_kwargs`` of the APG's network (the architecture the exporter builds)."""
@@ -37,6 +42,8 @@ class APGTrainer:
         fill_budget(config)
         self.settings = APGSettings.from_algo_kwargs(config.algo_kwargs)
         self.progress = bool(config.progress)
+        self.config = config  # (its run_dir is set when the run starts: the constraint's log goes there)
+        self.constraint_log: ConstraintLog | None = None
         config.num_envs = 1  # (the exporter's native env; the APG's robots are its episodes per update)
         env, env_params = make_jax_env(config)
         use_compilation_cache()
@@ -75,6 +82,11 @@ class APGTrainer:
                 steps += int(metrics["steps"])
             state, metrics = self.apg.update(state)
             steps += int(metrics["steps"])
+            if self.settings.constraint.lagrangian:
+                if self.constraint_log is None:
+                    self.constraint_log = ConstraintLog(Path(str(self.config.run_dir)) / CONSTRAINT_FILE,
+                                                        self.apg.env_params.T_con_range, steps)  # fmt: skip
+                self.constraint_log.add(metrics, steps)
             if steps >= target or stop():
                 return state, steps
 
@@ -113,7 +125,7 @@ class APGTrainer:
             near += f" ({s.near_miss_clip:g} for the episodes that end {within})"
         weighed = (f"; the episodes that end {within} weigh {s.near_miss_weight:g} times the others in the update"
                    if s.near_miss_weight != 1.0 else "")  # fmt: skip
-        if s.hold_steps or s.hold_fraction:
+        if (s.hold_steps or s.hold_fraction) and not s.constraint.lagrangian:
             window = f"{s.hold_steps} steps" if s.hold_steps else f"{s.hold_fraction:g} of T_con"
             weighed += (f"; the gradient follows the miss over the last {window} before T_con too "
                         f"({s.hold_weight:g} per metre"
@@ -130,8 +142,65 @@ class APGTrainer:
         if s.short_T_con_share:
             low, high = self.apg.short_params.T_con_range
             weighed += f"; {s.short_T_con_share:g} of the updates' episodes with T_con in [{low:g}, {high:g}] s"
+        c = s.constraint
+        if c.lagrangian:
+            window = f"the last {s.hold_steps} steps" if s.hold_steps else (
+                f"the last {s.hold_fraction:g} of T_con" if s.hold_fraction else "T_con")
+            weighed += (f"; the deadline a constraint (at most {c.cost_budget:g} of episodes late) and the heading one "
+                        f"(a mean of at most {c.heading_budget:g} rad), their multipliers in {c.multiplier_bins} T_con "
+                        f"bins from {c.multiplier_init:g}, PID gains {c.pid_kp:g}/{c.pid_ki:g}/{c.pid_kd:g}, weighing "
+                        f"the distance and the heading error over {window}; per bin "
+                        f"in {CONSTRAINT_FILE}")  # fmt: skip
         return (f"APG: {s.episodes} episodes per update, Adam {rate}, the state's gradient clipped to {clip} per step "
                 f"in each episode{weighed}{kept}{taught}")  # fmt: skip
+
+
+class ConstraintLog:
+    """The constraint's log (:data:`CONSTRAINT_FILE`): a row per :data:`CONSTRAINT_LOG_EVERY` updates and T_con bin,
+    the violation rate, the mean final heading error and energy over those updates' episodes, and the multipliers at
+    the last of them. A resumed run's rows past its checkpoint are dropped first, so the log stays monotonic."""
+
+    FIELDS = ("timesteps", "T_con_low", "T_con_high", "episodes", "violation_rate", "heading", "energy",
+              "deadline_multiplier", "heading_multiplier")  # fmt: skip
+
+    def __init__(self, path: Path, T_con_range: Any, steps: int) -> None:
+        import csv
+
+        from train.learning.runs import truncate_log
+
+        self.path = path
+        self.low, self.high = (float(bound) for bound in T_con_range)
+        truncate_log(path, steps)
+        if not path.exists():
+            with path.open("w", newline="") as handle:
+                csv.writer(handle).writerow(self.FIELDS)
+        self.pending: list[dict[str, Any]] = []
+
+    def add(self, metrics: dict[str, Any], steps: int) -> None:
+        """One update's metrics; every :data:`CONSTRAINT_LOG_EVERY` updates their summary is appended."""
+        import numpy as np
+
+        self.pending.append({key: np.asarray(metrics[key]) for key in self.FIELDS[3:]})
+        if len(self.pending) < CONSTRAINT_LOG_EVERY:
+            return
+        import csv
+
+        counts = np.sum([m["episodes"] for m in self.pending], axis=0)
+        weight = np.maximum(counts, 1.0)
+
+        def mean(key: str) -> Any:
+            return np.sum([m[key] * m["episodes"] for m in self.pending], axis=0) / weight
+
+        rate, heading, energy = mean("violation_rate"), mean("heading"), mean("energy")
+        last = self.pending[-1]
+        edges = np.linspace(self.low, self.high, len(counts) + 1)
+        with self.path.open("a", newline="") as handle:
+            writer = csv.writer(handle)
+            for b in range(len(counts)):
+                writer.writerow([steps, f"{edges[b]:g}", f"{edges[b + 1]:g}", int(counts[b]), f"{rate[b]:.4f}",
+                                 f"{heading[b]:.4f}", f"{energy[b]:.4f}", f"{last['deadline_multiplier'][b]:.4f}",
+                                 f"{last['heading_multiplier'][b]:.4f}"])  # fmt: skip
+        self.pending = []
 
 
 def train(
