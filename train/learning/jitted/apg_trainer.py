@@ -88,6 +88,8 @@ class APGTrainer:
                                                         self.apg.env_params.T_con_range, steps)  # fmt: skip
                 self.constraint_log.add(metrics, steps)
             if steps >= target or stop():
+                if self.constraint_log is not None:  # (a chunk ends at an evaluation or checkpoint: logged there)
+                    self.constraint_log.flush(steps)
                 return state, steps
 
     def export(self, state: Any, steps: int) -> Any:
@@ -156,7 +158,8 @@ class APGTrainer:
 
 
 class ConstraintLog:
-    """The constraint's log (:data:`CONSTRAINT_FILE`): a row per :data:`CONSTRAINT_LOG_EVERY` updates and T_con bin,
+    """The constraint's log (:data:`CONSTRAINT_FILE`): a row per :data:`CONSTRAINT_LOG_EVERY` updates (and at the end
+    of each chunk of updates: an evaluation, a checkpoint, the run's end) and T_con bin,
     the violation rate, the mean final heading error and energy over those updates' episodes, and the multipliers at
     the last of them. A resumed run's rows past its checkpoint are dropped first, so the log stays monotonic."""
 
@@ -181,9 +184,16 @@ class ConstraintLog:
         import numpy as np
 
         self.pending.append({key: np.asarray(metrics[key]) for key in self.FIELDS[3:]})
-        if len(self.pending) < CONSTRAINT_LOG_EVERY:
+        if len(self.pending) >= CONSTRAINT_LOG_EVERY:
+            self.flush(steps)
+
+    def flush(self, steps: int) -> None:
+        """Append the summary of the updates not yet logged (none: nothing)."""
+        if not self.pending:
             return
         import csv
+
+        import numpy as np
 
         counts = np.sum([m["episodes"] for m in self.pending], axis=0)
         weight = np.maximum(counts, 1.0)
