@@ -187,22 +187,27 @@ def disturbed_table(summary: dict[str, Any], references: dict[str, Any] | None =
 
 
 def per_T_con_table(
-    summary: dict[str, Any], references: dict[str, Any] | None = None, references_env: str | None = None
-) -> str:
-    """In time and E/opt (IQM over seeds) of each entry at each prescribed time of PER_T_CON; the references were
-    evaluated on ``references_env`` (v1 when not recorded)."""
+    summary: dict[str, Any], references: dict[str, Any] | None = None, references_env: str | None = None,
+    heading: bool = False,
+) -> str:  # fmt: skip
+    """In time and E/opt (IQM over seeds) of each entry at each prescribed time of PER_T_CON, and with ``heading`` the
+    final heading error [rad]; the references were evaluated on ``references_env`` (v1 when not recorded). (On v2 the
+    deadline's violation rate, the share of episodes with ``info["cost"]`` 1, is 1 - in time.)"""
     names = [per_T_con_set(T_con) for T_con in PER_T_CON]
-    head = " | ".join(f"{name.replace('T_con=', 'T_con ')} s: in time, E/opt" for name in names)
+    measures = "in time, E/opt, heading" if heading else "in time, E/opt"
+    head = " | ".join(f"{name.replace('T_con=', 'T_con ')} s: {measures}" for name in names)
     lines = [f"| agent | env | {head} |", "|---" * (len(names) + 2) + "|"]
     for entry_name, entry in summary.items():
         if not any(name in entry["sets"] for name in names):
             continue
         cells = [f"{_cell(entry['sets'][n]['in_time'], 2)}, {_cell(entry['sets'][n]['energy_ratio'], 2)}"
+                 + (f", {_cell(entry['sets'][n]['final_heading'], 2)}" if heading else "")
                  if n in entry["sets"] else "-" for n in names]  # fmt: skip
         env = str(entry.get("env_id", "DWRPointStabilization-v1")).rsplit("-", 1)[-1]
         lines.append(f"| {entry_name} | {env} | " + " | ".join(cells) + " |")
     for ref_name, sets in (references or {}).items():
         cells = [f"{sets[n]['in_time']:.2f}, {'-' if sets[n]['energy_ratio'] is None else format(sets[n]['energy_ratio'], '.2f')}"
+                 + (f", {sets[n]['final_heading']:.2f}" if heading else "")
                  if n in sets else "-" for n in names]  # fmt: skip
         env = (references_env or "DWRPointStabilization-v1").rsplit("-", 1)[-1]
         lines.append(f"| {ref_name} (controller) | {env} | " + " | ".join(cells) + " |")

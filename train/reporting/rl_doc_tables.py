@@ -54,7 +54,24 @@ RL_TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "sbx-v2-seeds": ("docs/rl_benchmark/sbx_v2_seeds.json", lambda data: rl_table(data, "random")),
     "sbx-v2-30min": ("docs/rl_benchmark/sbx_v2_30min.json", lambda data: rl_table(data, "random")),
     **random_and_per_T_con("sbx-v2-30min-tqc", "docs/rl_benchmark/sbx_v2_30min_tqc.json"),
+    "rl-constrained": ("docs/rl_benchmark/constrained.json", lambda data: rl_table(data, "random")),
+    "rl-constrained-per-T_con": ("docs/rl_benchmark/constrained.json",
+                                 lambda data: rl_table(data, "per-T_con-heading")),
+    "rl-constrained-log": ("docs/rl_benchmark/constrained_log.json", lambda data: constraint_log_table(data)),
 }
+
+
+def constraint_log_table(data: dict[str, Any]) -> str:
+    """Each constrained run's last logged violation rate, mean final heading and multipliers per T_con bin (the JSON
+    of ``python -m benchmarks run constraint-log``)."""
+    lines = ["| run | env steps | T_con [s] | violation rate | final heading [rad] | deadline multiplier | "
+             "heading multiplier |", "|---|---:|---|---:|---:|---:|---:|"]  # fmt: skip
+    for run in data["runs"]:
+        for row in run["bins"]:
+            lines.append(f"| {run['run']} | {run['timesteps']:,} | {row['T_con_low']:g}-{row['T_con_high']:g} | "
+                         f"{row['violation_rate']:.3f} | {row['heading']:.3f} | {row['deadline_multiplier']:.1f} | "
+                         f"{row['heading_multiplier']:.1f} |")  # fmt: skip
+    return "\n".join(lines) + "\n"
 
 
 def rl_table(data: dict[str, Any], kind: str) -> str:
@@ -84,6 +101,7 @@ def _rl_table(data: dict[str, Any], kind: str) -> str:
         )
     if kind == "disturbed":
         return rl_benchmark.disturbed_table(data["summary"], data["references"])
-    if kind == "per-T_con":
-        return rl_benchmark.per_T_con_table(data["summary"], data["references"], data.get("references_env"))
+    if kind in ("per-T_con", "per-T_con-heading"):
+        return rl_benchmark.per_T_con_table(data["summary"], data["references"], data.get("references_env"),
+                                            heading=kind == "per-T_con-heading")  # fmt: skip
     return rl_benchmark.table(data["summary"], data["references"])
