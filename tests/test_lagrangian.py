@@ -27,6 +27,7 @@ from train.learning.jitted.lagrangian import LagrangeSettings, Multipliers
         ({"pid_kp": -1}, r"^pid_kp=-1(\.0)? is invalid"),
         ({"multiplier_bins": 0}, r"^multiplier_bins=0 is invalid: expected an integer in \[1, 100\]$"),
         ({"multiplier_init": -5}, r"^multiplier_init=-5(\.0)? is invalid"),
+        ({"multiplier_max": 0}, r"^multiplier_max=0(\.0)? is invalid"),
         ({"pid_average": 1}, r"^pid_average=1(\.0)? is invalid"),
         ({"lagrangian": 2}, r"^lagrangian=2 is invalid"),
         (
@@ -64,6 +65,16 @@ def test_a_multiplier_rises_while_violated_and_falls_to_zero_never_below_when_me
     assert np.all(met.value == 0.0) and np.all(met.integral >= 0.0)  # held at 0, not below
     again = run(met, [0.51, 0.51], 0.08, s, 1)  # and it rises again at once (no debt below 0 to pay back)
     np.testing.assert_allclose(again.value[0], [0.5, 0.5], atol=1e-5)
+
+
+def test_a_multiplier_winds_up_no_further_than_its_ceiling_and_comes_down_from_it() -> None:
+    """Anti-windup: violated for a long time, the multiplier stops at multiplier_max, and its integral with it, so that
+    once the constraint is kept it falls at once rather than after paying back the wound-up sum."""
+    s = settings(multiplier_init=1.0, multiplier_max=5.0, pid_kp=0.0, pid_ki=1.0)
+    wound = run(lagrangian.initial_multipliers(s, np), [1.0, 1.0], 3.0, s, 1000)
+    assert np.all(wound.value == 5.0) and np.all(wound.integral == 5.0)
+    eased = run(wound, [0.0, 0.0], 0.0, s, 100)
+    np.testing.assert_allclose(eased.value[0], [4.0, 4.0], atol=1e-4)
 
 
 def test_the_proportional_term_acts_on_the_averaged_violation() -> None:

@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # The deadline and the heading as constraints on DWRPointStabilization-v2: apg-lagrangian-v2 (APG from its open-loop
-# teacher, time-scaled, multipliers per T_con bin in PID form; 200 M env steps a seed) and apg-lagrangian-residual-ptc-v2
+# teacher, time-scaled, multipliers per T_con bin in PID form; 560 M env steps a seed) and apg-lagrangian-residual-ptc-v2
 # (the residual on PTC under the same constraints, 30 M env steps a seed), SEEDS seeds each, two runs side by side on
 # one core each, on the benchmark's sets and at T_con 10, 20, 40 and 60 s. Writes docs/rl_benchmark/constrained.json
 # (tables rl-constrained and rl-constrained-per-T_con in docs/rl-constrained.md), the multipliers' log
-# (constrained_log.json, table rl-constrained-log) and its figure. On 2 quiet cores about 25 minutes a pair of APG
+# (constrained_log.json, table rl-constrained-log) and its figure. On 2 quiet cores about 35 minutes a pair of APG
 # seeds and 4 a pair of residual seeds.
 set -euo pipefail
 export OMP_NUM_THREADS=1

@@ -28,8 +28,8 @@ from dwr_gym.validation import as_float, as_int
 
 #: YAML keys of the constraint (beside a learner's own), with their defaults.
 LAGRANGE_DEFAULTS: dict[str, Any] = {"lagrangian": 0, "cost_budget": 0.01, "heading_budget": 0.08,
-                                     "multiplier_bins": 5, "multiplier_init": 10.0, "pid_kp": 10.0, "pid_ki": 1.0,
-                                     "pid_kd": 0.0, "pid_average": 0.9}  # fmt: skip
+                                     "multiplier_bins": 5, "multiplier_init": 10.0, "multiplier_max": 100.0,
+                                     "pid_kp": 10.0, "pid_ki": 0.2, "pid_kd": 0.0, "pid_average": 0.9}  # fmt: skip
 #: The constraints, in the order of the multipliers' first axis.
 CONSTRAINTS: tuple[str, ...] = ("deadline", "heading")
 
@@ -48,9 +48,14 @@ class LagrangeSettings:
     """The T_con bins, each with its own multipliers: equal widths over the env's T_con range (1: one for all)."""
     multiplier_init: float = 10.0
     """Each multiplier's value at the start (per metre of the distance, per radian of the heading error)."""
+    multiplier_max: float = 100.0
+    """The largest a multiplier gets, its integral held where the law gives this (anti-windup): a budget of 1 % is
+    met below it by a margin of 0.01 an update, so an integral wound up while the policy could not keep it would take
+    tens of thousands of updates to come down (measured: 1 an update at a violation rate of 0.7 wound a multiplier to
+    580 in 300 updates)."""
     pid_kp: float = 10.0
     """The proportional gain on the (averaged) violation minus the budget."""
-    pid_ki: float = 1.0
+    pid_ki: float = 0.2
     """The integral gain: the multiplier's rise per update per unit of violation above the budget."""
     pid_kd: float = 0.0
     """The derivative gain on the averaged violation's rise (0: a PI controller)."""
@@ -68,6 +73,8 @@ class LagrangeSettings:
                                     text=True),
             multiplier_bins=as_int("multiplier_bins", values["multiplier_bins"], 1, 100, text=True),
             multiplier_init=as_float("multiplier_init", values["multiplier_init"], 0.0, 1e6, text=True),
+            multiplier_max=as_float("multiplier_max", values["multiplier_max"], 0.0, 1e6, low_inclusive=False,
+                                    text=True),
             pid_kp=as_float("pid_kp", values["pid_kp"], 0.0, 1e6, text=True),
             pid_ki=as_float("pid_ki", values["pid_ki"], 0.0, 1e6, text=True),
             pid_kd=as_float("pid_kd", values["pid_kd"], 0.0, 1e6, text=True),
@@ -94,6 +101,7 @@ def initial_multipliers(settings: LagrangeSettings, xp: Any) -> Multipliers:
     """Every multiplier at ``multiplier_init`` (its integral set so that the PID law gives it), averages at 0."""
     shape = (len(CONSTRAINTS), settings.multiplier_bins)
     value = xp.full(shape, settings.multiplier_init, dtype=xp.float32)
+    value = xp.minimum(value, settings.multiplier_max)
     integral = value / settings.pid_ki if settings.pid_ki > 0 else xp.zeros(shape, dtype=xp.float32)
     return Multipliers(value, integral, xp.zeros(shape, dtype=xp.float32))
 
@@ -127,12 +135,14 @@ def pid_update(state: Multipliers, measured: Any, counts: Any, settings: Lagrang
     error = measured - settings.budgets(xp)
     seen = (counts > 0)[None, :] & xp.isfinite(error)
     error = xp.where(seen, error, 0.0)
-    integral = xp.where(seen, xp.maximum(state.integral + error, 0.0), state.integral)
+    # anti-windup: the integral alone never asks for more than multiplier_max
+    ceiling = settings.multiplier_max / settings.pid_ki if settings.pid_ki > 0 else 0.0
+    integral = xp.where(seen, xp.clip(state.integral + error, 0.0, ceiling), state.integral)
     average = xp.where(seen, settings.pid_average * state.average + (1.0 - settings.pid_average) * error,
                        state.average)  # fmt: skip
     rise = xp.maximum(average - state.average, 0.0)
     value = settings.pid_kp * average + settings.pid_ki * integral + settings.pid_kd * rise
-    value = xp.clip(xp.nan_to_num(value, nan=0.0, posinf=1e6), 0.0, 1e6)
+    value = xp.clip(xp.nan_to_num(value, nan=0.0, posinf=settings.multiplier_max), 0.0, settings.multiplier_max)
     return Multipliers(value.astype(xp.float32), integral.astype(xp.float32), average.astype(xp.float32))
 
 
