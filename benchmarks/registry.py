@@ -56,6 +56,7 @@ SUITE: dict[str, str] = {
     "robust-filter-rates": "benchmarks.robustness.robust_filter_rates",
     # quality: the controllers and agents against the paper and the optimum
     "compare": "benchmarks.quality.compare",
+    "leaderboard": "benchmarks.quality.leaderboard",
     "reproduce": "benchmarks.quality.reproduce",
     "optimal": "benchmarks.quality.optimal",
     "ship-optima": "benchmarks.quality.ship_optima",

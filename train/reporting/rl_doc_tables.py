@@ -57,8 +57,22 @@ RL_TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "rl-constrained": ("docs/rl_benchmark/constrained.json", lambda data: rl_table(data, "random")),
     "rl-constrained-per-T_con": ("docs/rl_benchmark/constrained.json",
                                  lambda data: rl_table(data, "per-T_con-heading")),
+    "leaderboard": ("docs/leaderboard.json", lambda data: leaderboard_table(data)),
+    "leaderboard-per-T_con": ("docs/leaderboard.json", lambda data: leaderboard_per_T_con(data)),
     "rl-constrained-log": ("docs/rl_benchmark/constrained_log.json", lambda data: constraint_log_table(data)),
 }
+
+
+def leaderboard_table(data: dict[str, Any]) -> str:
+    from train.reporting.leaderboard import leaderboard_table as table
+
+    return table(data)
+
+
+def leaderboard_per_T_con(data: dict[str, Any]) -> str:
+    from train.reporting.leaderboard import per_T_con_table
+
+    return per_T_con_table(data)
 
 
 def constraint_log_table(data: dict[str, Any]) -> str:
