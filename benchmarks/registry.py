@@ -27,7 +27,7 @@ SUITE: dict[str, str] = {
     "es-speed": "benchmarks.training.es_speed",
     "apg-speed": "benchmarks.training.apg_speed",
     "sbx-speed": "benchmarks.training.sbx_speed",
-    # learning: what the learned agents reach, and why
+    # learning: what the learned agents reach, and the archived record of what was tried (archive)
     "archive": "benchmarks.learning.archive",
     "ship-rl-agents": "benchmarks.learning.ship_rl_agents",
     "per-t-con": "benchmarks.learning.per_t_con",
