@@ -60,7 +60,12 @@ SUITE: dict[str, str] = {
     "rl-v2": "benchmarks.recipes.rl_v2",
     "rl-time-scale": "benchmarks.recipes.rl_time_scale",
     "rl-apg": "benchmarks.recipes.rl_apg",
+    "rl-apg-scratch": "benchmarks.recipes.rl_apg_scratch",
     "rl-apg-teacher": "benchmarks.recipes.rl_apg_teacher",
+    "rl-apg-teacher-30min": "benchmarks.recipes.rl_apg_teacher_30min",
+    "rl-apg-near-miss": "benchmarks.recipes.rl_apg_near_miss",
+    "rl-apg-hold": "benchmarks.recipes.rl_apg_hold",
+    "rl-apg-hold-heading10": "benchmarks.recipes.rl_apg_hold_heading10",
     "rl-apg-hold-bonus": "benchmarks.recipes.rl_apg_hold_bonus",
     "robust-rl": "benchmarks.recipes.robust_rl",
 }

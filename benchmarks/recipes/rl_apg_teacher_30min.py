@@ -1,0 +1,16 @@
+"""APG from an open-loop teacher (one round or DAgger), time-scaled, on DWRPointStabilization-v2 at 30 minutes a seed.
+
+    python -m benchmarks run rl-apg-teacher-30min
+
+Runs ``rl_apg_teacher_30min.sh`` (beside this module) in the repository; read it for the steps and their times.
+"""
+
+from __future__ import annotations
+
+from benchmarks.core.commands import recipe_main
+from benchmarks.core.docs import Schema, table
+
+main = recipe_main(__file__)
+
+V2 = Schema({"budget": dict, "machine": str, "summary": dict, "references": dict, "best_seed": dict})
+BLOCKS = tuple(table(name, V2) for name in ("rl-apg-teacher-30min", "rl-apg-teacher-30min-per-T_con"))
