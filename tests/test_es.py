@@ -179,7 +179,7 @@ def test_cli_trains_resumes_bit_for_bit_and_evaluates(tmp_path: Path) -> None:
     assert "split" in done.stdout and "ptc" in done.stdout
 
 
-@pytest.mark.parametrize("module", ["benchmarks.training.es_speed", "benchmarks.learning.es_learn"])
+@pytest.mark.parametrize("module", ["benchmarks.training.es_speed", "benchmarks.learning.archive"])
 def test_each_docs_block_is_what_the_benchmark_renders_from_its_json(module: str) -> None:
     import importlib
 

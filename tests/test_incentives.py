@@ -49,25 +49,3 @@ def test_without_noise_v2_pays_the_latest_arrival_most_and_v1_pays_an_earlier_on
 def test_with_action_noise_v2_still_pays_the_latest_arrival_most() -> None:
     v2 = rushing_returns(dwr_gym.ENV_ID_V2, fractions=(0.3, 1.0), sigmas=(0.1,), n=4, workers=2)
     assert v2["latest_pays_most"] == {"0.1": True}
-
-
-def test_a_run_of_some_sigmas_keeps_the_other_rows_with_their_own_episodes() -> None:
-    """``--sigmas 0.1 --docs`` replaces that sigma's rows and verdicts; the others stay, each row naming its run."""
-    from benchmarks.learning.incentives import merged_rushing
-
-    def run(sigmas: tuple[float, ...], n: int, replan: int | None) -> dict:
-        rows = [{"sigma": s, "fraction": f, "return_mean": float(n)} for s in sigmas for f in (0.5, 1.0)]
-        if replan is not None:
-            rows = [{**row, "episodes": n, "replan_every": replan} for row in rows]
-        result = {"episodes": n, "rows": rows, "latest_pays_most": {str(s): n > 10 for s in sigmas},
-                  "latest_margin": {str(s): {"mean": float(n)} for s in sigmas}}  # fmt: skip
-        return result if replan is None else {**result, "replan_every": replan}
-
-    old = run((0.0, 0.1, 0.3), 6, None)  # written before the rows named their run
-    merged = merged_rushing(old, run((0.1,), 100, 5))
-    assert [(r["sigma"], r["episodes"], r["replan_every"]) for r in merged["rows"]] == [
-        (0.0, 6, 20), (0.0, 6, 20), (0.1, 100, 5), (0.1, 100, 5), (0.3, 6, 20), (0.3, 6, 20)
-    ]  # fmt: skip
-    assert merged["latest_pays_most"] == {"0.0": False, "0.1": True, "0.3": False}
-    assert list(merged["latest_margin"]) == ["0.0", "0.1", "0.3"] and merged["latest_margin"]["0.1"]["mean"] == 100
-    assert merged_rushing(None, run((0.1,), 100, 5)) == run((0.1,), 100, 5)

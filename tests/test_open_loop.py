@@ -47,14 +47,3 @@ def test_the_table_has_the_law_and_the_best_and_marks_a_missing_e_opt(on_ptc: di
     best_line = next(line for line in text.splitlines() if "best found per episode" in line)
     assert "residual on ptc (scale 0.5)" in law_line and "| 2.50 |" in law_line
     assert "| - | - |" in best_line and "30 Adam steps" in text
-
-
-def test_variants_are_parsed_and_bad_ones_named() -> None:
-    """``--variants LAW:SCALE`` of the command: a law of baselines or 'none', and the training's scale range."""
-    from benchmarks.learning.open_loop_bound import parse_variant, variant_name
-
-    assert parse_variant("ptc:1") == ("ptc", 1.0) and parse_variant("none:1") == (None, 1.0)
-    assert variant_name(*parse_variant("pt-astolfi:0.5")) == "pt-astolfi:0.5"
-    for text in ("foo:1", "ptc", "ptc:x", "ptc:0", "ptc:3"):
-        with pytest.raises(ValueError, match=f"--variants '{text}' is invalid"):
-            parse_variant(text)

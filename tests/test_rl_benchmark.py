@@ -206,23 +206,6 @@ def test_a_runs_recorded_recipe_trains_the_same_configuration(
     assert again.algo_kwargs == config.algo_kwargs
 
 
-def test_the_energy_split_multiplies_back_and_prices_early_arrival(capsys: pytest.CaptureFixture[str]) -> None:
-    """The rl-rushing entry of the suite: E/opt = timing x motion per policy; arriving earlier never needs less than the
-    optimum by T_con (timing >= 1); the optimum's own arrival costs it (almost) nothing, PTC's more."""
-    pytest.importorskip("casadi")
-    from benchmarks.learning import rl_rushing as module
-
-    assert module.main(["--controllers", "ptc", "optimal", "--n", "4"]) == 0
-    rows = {line.split(" ", 1)[0]: json.loads(line.split(" ", 1)[1])
-            for line in capsys.readouterr().out.splitlines() if line.startswith(("ptc {", "optimal {"))}  # fmt: skip
-    for row in rows.values():
-        assert row["episodes"] == 4 and 0 < row["arrival_share"] <= 1
-        assert row["energy_ratio"] == pytest.approx(row["timing"] * row["motion"], rel=1e-9)
-        assert row["timing"] >= 1 - 1e-3
-    assert rows["optimal"]["timing"] < 1.1 and rows["optimal"]["energy_ratio"] < 1.05
-    assert rows["ptc"]["energy_ratio"] > rows["optimal"]["energy_ratio"]
-
-
 def test_the_reference_laws_run_on_the_agents_env_id_and_v2_agents_ship_under_their_version() -> None:
     """A table of v2 agents puts the laws beside them on v2 (in time there: at the goal at T_con), a mixed table
     on v1; shipped v2 entries keep their version in their directory name."""

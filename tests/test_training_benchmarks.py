@@ -1,6 +1,6 @@
-"""The training entries of the suite (benchmarks/training/: training-speed, training-old-vs-new, retrain-pretrained,
-training-threads and readme-training): the blocks of docs/training.md and the README are what they render from their
-JSON, and the retraining replays each shipped agent's recorded recipe."""
+"""The training entries of the suite (benchmarks/training/: training-speed, retrain-pretrained, training-threads and
+readme-training; the archived old-vs-new): the blocks of docs/training.md and the README are what they render from
+their JSON, and the retraining replays each shipped agent's recorded recipe."""
 
 from __future__ import annotations
 

@@ -1,10 +1,9 @@
 #!/usr/bin/env bash
-# The RL benchmark of issue 32 (docs/rl-benchmark.md) and the agents it ships: PPO from v1's reward, residual PPO on
+# The RL benchmark of v1's reward (docs/rl-benchmark.md) and the agents it ships: PPO from v1's reward, residual PPO on
 # PTC and on pt-astolfi, SAC and TQC, five seeds each, evaluated on the fixed sets and aggregated with IQM and 95 %
 # stratified-bootstrap intervals; then the best seed of ppo, residual-ppo and residual-ppo-astolfi is copied into
-# train/pretrained/{ppo_v1,residual_ppo_v1,residual_ppo_astolfi_v1} (with its learning curve), and the residuals'
-# corrections are measured. The budgets are those that fitted on 2 shared cores in an hour (about 1 hour with
-# --jobs 4 there); give more with --env-steps and the entries' total_timesteps. Each run's config.yaml records the
+# train/pretrained/{ppo_v1,residual_ppo_v1,residual_ppo_astolfi_v1} (with its learning curve).
+# The budgets are those that fitted on 2 shared cores in an hour (about 1 hour with --jobs 4 there); give more with --env-steps and the entries' total_timesteps. Each run's config.yaml records the
 # `dwr-gym train` command that trains it alone (`python -m benchmarks run retrain-pretrained` runs it again).
 set -euo pipefail
 export OMP_NUM_THREADS=1
@@ -23,13 +22,8 @@ dwr-gym benchmark --agents 'tqc-tuned:algo=tqc,hyperparams=train/hyperparams/tqc
   --eval-freq 200000 --disturbed-episodes 100 --out results/rl-benchmark --docs
 dwr-gym benchmark --agents 'sac-utd8:algo=sac,hyperparams=train/hyperparams/sac_tuned.yml,hyperparam_overrides={gradient_steps: 8}' \
   --seeds 5 --jobs 2 --eval-freq 250000 --disturbed-episodes 100 --out results/rl-benchmark --docs
-# evolution strategies (issue 41): OpenAI-ES on v1's reward with an arena of 50 m (docs/evolution.md), one core each
+# evolution strategies: OpenAI-ES on v1's reward with an arena of 50 m (docs/evolution.md), one core each
 dwr-gym benchmark --agents 'es-arena50:threads=1,total_timesteps=80000000' --seeds 5 --eval-freq 5000000 \
   --disturbed-episodes 100 --out results/rl-benchmark --docs
 python -m benchmarks run ship-rl-agents results/rl-benchmark --also sac-tuned tqc-tuned es-arena50
-python -m benchmarks run rl-residual train/pretrained/residual_ppo_v1 train/pretrained/residual_ppo_astolfi_v1 --n 50 --docs
-python -m benchmarks run rl-diagnosis --n 200 --docs
-python -m benchmarks run rl-rushing train/pretrained/ppo_jax_v1 results/rl-benchmark/runs/ppo-jax-12m-seed2 \
-  results/rl-benchmark/runs/ppo-jax-anneal-seed3 train/pretrained/residual_ppo_v1 \
-  train/pretrained/residual_ppo_astolfi_v1 train/pretrained/robust --controllers ptc pt-astolfi optimal --n 50 --docs
 python -m benchmarks render

@@ -5,7 +5,7 @@
 # apg-hold-heading-time-scaled-30min-v2 with the heading's error over the same window too (hold_heading_weight 5),
 # SEEDS (5) seeds of each, two runs side by side on one core each (about 30 minutes a pair on 2 cores with the
 # evaluation: about 2.5 hours in all), on the benchmark's sets and at T_con 10, 20, 40 and 60 s. Writes
-# docs/rl_benchmark/apg_hold.json (tables rl-apg-hold and rl-apg-hold-per-T_con in docs/rl-apg-levers.md) and its
+# docs/rl_benchmark/apg_hold.json (tables rl-apg-hold and rl-apg-hold-per-T_con; rows of docs/what-was-tried.md) and its
 # curves, and ships the best seed of each as train/pretrained/apg_hold_time_scaled_30min_v2 and
 # apg_hold_heading_time_scaled_30min_v2.
 set -euo pipefail

@@ -5,9 +5,8 @@
 # apg-hold-bonus-heading10-time-scaled-30min-v2 (B 10) and apg-hold-bonus3-heading10-time-scaled-30min-v2 (B 3),
 # 560 M env steps a seed, SEEDS (5) seeds, JOBS (2) runs side by side on one core each (about 40 minutes a pair on 2
 # cores with the evaluation, about 2 hours a weight), on the benchmark's sets and at T_con 10, 20, 40 and 60 s.
-# Writes docs/rl_benchmark/apg_hold_bonus.json and apg_hold_bonus3.json (tables rl-apg-hold-bonus(3) and
-# rl-apg-hold-bonus(3)-per-T_con in docs/rl-apg-levers.md) and their curves. It ships no agent
-# (docs/rl-apg-levers.md, "A smooth arrival bonus"); `python -m benchmarks run ship-rl-agents "$OUT" --also ENTRY`
+# Writes docs/rl_benchmark/apg_hold_bonus.json and apg_hold_bonus3.json (rows of docs/what-was-tried.md)
+# and their curves. It ships no agent; `python -m benchmarks run ship-rl-agents "$OUT" --also ENTRY`
 # would ship the best seed. A run already finished in results/rl-apg-hold-bonus(3) is only aggregated again.
 set -euo pipefail
 export OMP_NUM_THREADS=1

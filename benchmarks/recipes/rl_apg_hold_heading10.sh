@@ -5,7 +5,7 @@
 # steps: the goal's 30 minutes of a core), SEEDS (5) seeds, two runs side by side on one core each (about 30 minutes a
 # pair on 2 cores with the evaluation, about 1.5 hours in all; 40 minutes a pair on a machine 1.37x slower), on the benchmark's sets and at T_con 10, 20, 40 and
 # 60 s. Writes docs/rl_benchmark/apg_hold_heading10.json (tables rl-apg-hold-heading10 and
-# rl-apg-hold-heading10-per-T_con in docs/rl-apg-levers.md) and its curves, and ships the best seed as
+# rl-apg-hold-heading10-per-T_con; rows of docs/what-was-tried.md) and its curves, and ships the best seed as
 # train/pretrained/apg_hold_heading10_time_scaled_30min_v2.
 set -euo pipefail
 export OMP_NUM_THREADS=1

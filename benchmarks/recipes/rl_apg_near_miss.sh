@@ -4,7 +4,7 @@
 # apg-near-miss-time-scaled-30min-v2 (train/hyperparams/apg_teacher.yml with those two, --action-time-scale 10, 560 M env
 # steps: the goal's 30 minutes of a core), SEEDS (5) seeds, two runs side by side on one core each (about 35 minutes a
 # pair on 2 cores with the evaluation), on the benchmark's sets and at T_con 10, 20, 40 and 60 s. Writes
-# docs/rl_benchmark/apg_near_miss.json (tables rl-apg-near-miss and rl-apg-near-miss-per-T_con in docs/rl-apg-levers.md)
+# docs/rl_benchmark/apg_near_miss.json (tables rl-apg-near-miss and rl-apg-near-miss-per-T_con; rows of docs/what-was-tried.md)
 # and its curves.
 set -euo pipefail
 export OMP_NUM_THREADS=1

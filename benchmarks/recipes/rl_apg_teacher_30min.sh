@@ -5,7 +5,7 @@
 # (the same with its lesson as DAgger: teacher_rounds 3 of 256 episodes), SEEDS (2) seeds each, two runs side by side
 # on one core each (about 45 minutes a pair on 2 cores with the evaluation), on the benchmark's sets and at T_con 10,
 # 20, 40 and 60 s. Writes docs/rl_benchmark/apg_teacher_30min.json (tables rl-apg-teacher-30min and
-# rl-apg-teacher-30min-per-T_con in docs/rl-apg-levers.md) and ships the best seed of the one-round entry as
+# rl-apg-teacher-30min-per-T_con; rows of docs/what-was-tried.md) and ships the best seed of the one-round entry as
 # train/pretrained/apg_teacher_time_scaled_30min_v2 (the two are level; it is the better at T_con 10 s).
 set -euo pipefail
 export OMP_NUM_THREADS=1

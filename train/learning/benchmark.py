@@ -164,7 +164,7 @@ ENTRIES: dict[str, dict[str, Any]] = {
     # and with the lesson as DAgger (teacher_rounds 3 of 256 episodes: about the env steps of one round of 512)
     "apg-dagger-time-scaled-30min-v2": apg_teacher_time_scaled(700_000_000, teacher_episodes=256, teacher_rounds=3),
     # the state's gradient clip decaying from 16 to 4 over the run (state_grad_clip_final): the wide clip's arrival and
-    # heading first, the recipe's energy last (the clip probes, docs/rl-apg-levers.md); 560 M env steps, the goal's 30
+    # heading first, the recipe's energy last (the clip probes, docs/what-was-tried.md); 560 M env steps, the goal's 30
     # minutes of a core (the 700 M runs took about 37)
     "apg-clip-decay-time-scaled-30min-v2": apg_teacher_time_scaled(
         560_000_000, state_grad_clip=16.0, state_grad_clip_final=4.0

@@ -195,7 +195,7 @@ def robust_goal_table(data: dict[str, Any]) -> str:
 
 
 def filter_rates_table(data: dict[str, Any]) -> str:
-    """robust-pt's in-time rate and energy with each rate of its filter (``python -m benchmarks run robust-filter-rates``)."""
+    """robust-pt's in-time rate and energy with each rate of its filter (archived: ``python -m benchmarks run archive``)."""
     kinds = list(dict.fromkeys(r["kind"] for r in data["rows"]))
     rates = list(dict.fromkeys(tuple(r["disturbance_rate"]) for r in data["rows"]))
     by = {(r["kind"], tuple(r["disturbance_rate"])): r for r in data["rows"]}

@@ -1,5 +1,5 @@
-"""The tables of docs/rl-apg.md's "Where the energy goes on v2", from docs/rl_benchmark/energy_split.json
-(``python -m benchmarks run energy-split``, train/evaluation/energy_split.py)."""
+"""The tables of docs/what-was-tried.md's "Where the energy goes on v2", from docs/rl_benchmark/energy_split.json
+(written by train/evaluation/energy_split.py; archived, rendered by ``python -m benchmarks run archive``)."""
 
 from __future__ import annotations
 

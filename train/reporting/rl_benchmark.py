@@ -242,7 +242,7 @@ def plot_curves(summary: dict[str, Any], path: Path, x: str) -> None:
 
 
 def diagnosis_table(data: dict[str, Any]) -> str:
-    """The table of ``python -m benchmarks run rl-diagnosis``: PTC with exploration noise, what the noise's energy costs."""
+    """The archived table of the diagnosis: PTC with exploration noise, what the noise's energy costs."""
     lines = ["| exploration noise sigma | in time | energy | E/opt | return | noise's energy cost per s | over the "
              "episode |", "|---|---|---|---|---|---|---|"]  # fmt: skip
     for r in data["rows"]:
@@ -270,7 +270,7 @@ def levers_table(data: dict[str, Any]) -> str:
 
 
 def residual_table(data: dict[str, Any]) -> str:
-    """``python -m benchmarks run rl-residual``: each residual agent beside its expert, and where its corrections act."""
+    """The archived residual table: each residual agent beside its expert, and where its corrections act."""
     lines = ["| policy | in time | E/opt | final heading [rad] | energy |", "|---|---|---|---|---|"]
     for name, entry in data["agents"].items():
         for label, m in ((f"{name} (residual)", entry["agent"]), (f"{entry['expert']} alone", entry["expert_alone"])):
@@ -287,7 +287,7 @@ def residual_table(data: dict[str, Any]) -> str:
 
 
 def sweep_table(data: dict[str, Any]) -> str:
-    """The trials of a ``dwr-gym sweep`` (``python -m benchmarks run rl-sweep``): hyperparameters and final evaluation."""
+    """The trials of a ``dwr-gym sweep``: hyperparameters and final evaluation."""
     lines = ["| trial | hyperparameters | in time | return | energy |", "|---|---|---|---|---|"]
     for t in data["trials"]:
         params = ", ".join(f"{k} {v:.4g}" if isinstance(v, float) else f"{k} {v}"
@@ -298,7 +298,7 @@ def sweep_table(data: dict[str, Any]) -> str:
 
 
 def rushing_table(data: dict[str, Any]) -> str:
-    """``python -m benchmarks run rl-rushing``: E/opt split into the price of the arrival time and the price of the motion."""
+    """The archived rushing table: E/opt split into the price of the arrival time and the price of the motion."""
     lines = ["| policy | episodes | arrival / T_con | E/opt | timing: E_opt(t_arr) / E_opt(T_con) | "
              "motion: E / E_opt(t_arr) |", "|---|---|---|---|---|---|"]  # fmt: skip
     for name, r in data["policies"].items():

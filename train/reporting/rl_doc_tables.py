@@ -1,4 +1,4 @@
-"""The tables of the RL benchmark's pages (docs/rl-benchmark.md, rl-v2.md, rl-apg.md, rl-apg-levers.md and
+"""The tables of the RL benchmark's pages (docs/rl-benchmark.md, rl-v2.md, rl-apg.md, what-was-tried.md and
 rl-libraries.md, and the README's summary), each from the JSON that ``dwr-gym benchmark`` or a benchmark script
 wrote: :data:`RL_TABLES`, which :data:`train.reporting.doc_tables.TABLES` includes.
 """

@@ -50,7 +50,7 @@ class APGSettings:
     state_grad_clip_final: float | None = None
     """With a value, the clip decays geometrically from ``state_grad_clip`` to this over the updates the budget buys
     (then stays there): a wide clip first, which lets the pose at T_con into the gradient and learns to arrive, and a
-    tight one last, which weighs the energy more (docs/rl-apg-levers.md, the clip probes); None (the default): fixed."""
+    tight one last, which weighs the energy more (docs/what-was-tried.md, the clip probes); None (the default): fixed."""
     state_grad_clip_decay: float = 1.0
     """The share of the budget's updates over which ``state_grad_clip_final`` is reached (1: at the end, when the
     rate reaches 0 too; 0.5: half-way, so that the second half's updates are at the final clip)."""
@@ -87,7 +87,7 @@ class APGSettings:
     """With > 0 (and a hold window), the update also follows a smooth stand-in for v2's arrival bonus over the same
     last steps: this weight times sigmoid((goal_tolerance - distance) / ``hold_bonus_width``), averaged over them.
     v2 pays its bonus (10) as a step at the tolerance, which has no gradient, while the misses mostly end 1-2 cm from
-    the goal (docs/rl-apg-levers.md, what the misses are): ``hold_weight``'s 10 per metre makes the last centimetre worth
+    the goal (docs/what-was-tried.md, near misses): ``hold_weight``'s 10 per metre makes the last centimetre worth
     0.1; this one's slope at the tolerance is hold_bonus / (4 hold_bonus_width) (500 per metre at 10 and 5 mm), and
     fades beyond a few widths. Gradient only, as ``hold_weight``. 0 (the default): off."""
     hold_bonus_width: float = 0.005
