@@ -69,7 +69,6 @@ SUITE: dict[str, str] = {
     "rl-apg-hold": "benchmarks.recipes.rl_apg_hold",
     "rl-apg-hold-heading10": "benchmarks.recipes.rl_apg_hold_heading10",
     "rl-constrained": "benchmarks.recipes.rl_constrained",
-    "rl-apg-hold-bonus": "benchmarks.recipes.rl_apg_hold_bonus",
     "robust-rl": "benchmarks.recipes.robust_rl",
 }
 

@@ -252,8 +252,15 @@ def _paid_at_the_end(
 
 
 def deadline_cost(
-    ended: Any, is_success: Any, step_count: Any, prescribed_steps: Any, distance: Any, heading: Any,
-    goal_tolerance: Any, heading_tolerance: Any, xp: Any = np,
+    ended: Any,
+    is_success: Any,
+    step_count: Any,
+    prescribed_steps: Any,
+    distance: Any,
+    heading: Any,
+    goal_tolerance: Any,
+    heading_tolerance: Any,
+    xp: Any = np,
 ) -> tuple[Any, Any, Any]:
     """The deadline as a constraint (a constrained MDP's cost, Safety-Gymnasium's ``info["cost"]``): (cost, distance
     violation [m], heading violation [rad]) of robots whose episodes ``ended`` at this step, 0 elsewhere.
@@ -295,8 +302,15 @@ def infos(
             if ended else (0.0, 0.0, 0.0))  # fmt: skip
     else:
         cost, distance_violation, heading_violation = deadline_cost(
-            result.terminated | result.truncated, is_success, state.step_count, state.prescribed_steps,
-            coords.distance, heading, params.goal_tolerance, params.heading_tolerance or 0.0)
+            result.terminated | result.truncated,
+            is_success,
+            state.step_count,
+            state.prescribed_steps,
+            coords.distance,
+            heading,
+            params.goal_tolerance,
+            params.heading_tolerance or 0.0,
+        )
     return {
         "distance": coords.distance,
         "orientation_error": coords.orientation_error,

@@ -142,8 +142,17 @@ def run_both(env_id: str, dtype: str, seed: int) -> dict[str, int]:
             for term, values in final["reward_terms"].items():
                 if not term.startswith("_"):
                     close(f"reward term {term}", info["reward_terms"][term], values, atol * scale, near)
-        for key_name in ("distance", "orientation_error", "heading_error", "energy", "T_con", "time", "pose",
-                         "distance_violation", "heading_violation"):
+        for key_name in (
+            "distance",
+            "orientation_error",
+            "heading_error",
+            "energy",
+            "T_con",
+            "time",
+            "pose",
+            "distance_violation",
+            "heading_violation",
+        ):
             close(
                 f"info {key_name}",
                 info[key_name],

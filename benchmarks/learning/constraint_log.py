@@ -72,7 +72,9 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     data = summarise(args.out)
     if not data["runs"]:
-        print(f"out={str(args.out)!r} has no runs/*/constraint.csv: expected runs of a constrained entry", file=sys.stderr)
+        print(
+            f"out={str(args.out)!r} has no runs/*/constraint.csv: expected runs of a constrained entry", file=sys.stderr
+        )
         return 2
     print(log_table(data), end="")
     if args.json is not None:

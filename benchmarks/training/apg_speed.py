@@ -1,7 +1,7 @@
 """Env steps per second of an APG update against its episodes per update, on the backend jax runs on (CPU or GPU).
 
 The update is `dwr-gym train --algo apg --backend jax`'s, with the options of the benchmark entry
-``apg-hold-bonus-heading10-time-scaled-30min-v2`` (train/hyperparams/apg_teacher.yml under them), only ``episodes``
+``apg-hold-heading10-time-scaled-30min-v2`` (train/hyperparams/apg_teacher.yml under them), only ``episodes``
 changed: how much an update's cost grows with the episodes it plays, which decides whether a wider batch (or a GPU)
 would buy a seed more env steps in the goal's 30 minutes.
 
@@ -27,7 +27,7 @@ from benchmarks.core.timing import jax_machine, jax_timed
 
 ROOT = Path(__file__).resolve().parents[2]
 JSON_PATH = ROOT / "docs" / "jax" / "apg_speed.json"
-ENTRY = "apg-hold-bonus-heading10-time-scaled-30min-v2"
+ENTRY = "apg-hold-heading10-time-scaled-30min-v2"
 EPISODES = (16, 64, 256, 1024)
 
 

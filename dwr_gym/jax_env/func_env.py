@@ -117,8 +117,16 @@ def state_info(state: DWRState, params: FunctionalParams) -> dict[str, Any]:
     # (the functional params write "no heading tolerance" as inf; the cost's convention for it is 0)
     heading_tolerance = jnp.where(jnp.isinf(params.heading_tolerance), 0.0, params.heading_tolerance)
     cost, distance_violation, heading_violation = core.deadline_cost(
-        state.terminated | state.truncated, state.is_success, state.step_count, state.prescribed_steps, state.distance,
-        state.heading_error, params.goal_tolerance, heading_tolerance, jnp)
+        state.terminated | state.truncated,
+        state.is_success,
+        state.step_count,
+        state.prescribed_steps,
+        state.distance,
+        state.heading_error,
+        params.goal_tolerance,
+        heading_tolerance,
+        jnp,
+    )
     return {"distance": state.distance, "orientation_error": state.orientation_error, "heading_error": state.heading_error,
             "time": state.step_count * params.dt, "T_con": state.T_con, "is_success": state.is_success,
             "energy": state.energy, "linear_velocity": state.linear_velocity, "angular_velocity": state.angular_velocity,

@@ -161,14 +161,6 @@ ENTRIES: dict[str, dict[str, Any]] = {
     # and the same for the goal's whole 30 minutes a seed: 700 M env steps (the 400 M runs took about 15 minutes of a
     # core alone and were still climbing when their rate reached 0), its rate decaying over them
     "apg-teacher-time-scaled-30min-v2": apg_teacher_time_scaled(700_000_000),
-    # and with the lesson as DAgger (teacher_rounds 3 of 256 episodes: about the env steps of one round of 512)
-    "apg-dagger-time-scaled-30min-v2": apg_teacher_time_scaled(700_000_000, teacher_episodes=256, teacher_rounds=3),
-    # the state's gradient clip decaying from 16 to 4 over the run (state_grad_clip_final): the wide clip's arrival and
-    # heading first, the recipe's energy last (the clip probes, docs/what-was-tried.md); 560 M env steps, the goal's 30
-    # minutes of a core (the 700 M runs took about 37)
-    "apg-clip-decay-time-scaled-30min-v2": apg_teacher_time_scaled(
-        560_000_000, state_grad_clip=16.0, state_grad_clip_final=4.0
-    ),
     # the lesson fitted 4x longer (clone_steps 16000: the clone 23 % in time, not 9 %) and the episodes that end near the
     # goal but outside its tolerance clipped at 16 (near_miss_clip: the arrival bonus, a step, has no gradient);
     # 560 M env steps, the goal's 30 minutes of a core
@@ -188,31 +180,6 @@ ENTRIES: dict[str, dict[str, Any]] = {
     "apg-hold-heading10-time-scaled-30min-v2": apg_teacher_time_scaled(
         560_000_000, clone_steps=16000, near_miss_clip=16.0, hold_steps=20, hold_heading_weight=10.0
     ),
-    # and the window a tenth of each episode's T_con (hold_fraction: 20 steps at 10 s, 120 at 60 s), the same share at
-    # every deadline as the time-scaled actions are one behaviour of every T_con
-    "apg-hold-fraction-heading10-time-scaled-30min-v2": apg_teacher_time_scaled(
-        560_000_000, clone_steps=16000, near_miss_clip=16.0, hold_fraction=0.1, hold_heading_weight=10.0
-    ),
-    # and a smooth stand-in for the arrival bonus over the same window (hold_bonus: 10 x sigmoid((1 cm - d) / 5 mm)):
-    # the misses end mostly 1-2 cm from the goal, where v2's bonus, a step, has no gradient and the miss's 10 per metre
-    # makes the last centimetre worth 0.1
-    "apg-hold-bonus-heading10-time-scaled-30min-v2": apg_teacher_time_scaled(
-        560_000_000, clone_steps=16000, near_miss_clip=16.0, hold_steps=20, hold_heading_weight=10.0, hold_bonus=10.0
-    ),
-    # and the same at a weight of 3 (slope 150 per metre at the tolerance): at 10 the heading ends at 0.21 rad and 93.5 %
-    # in time; at 3 two probe seeds ended at 95-96 % and 0.12-0.13 rad
-    "apg-hold-bonus3-heading10-time-scaled-30min-v2": apg_teacher_time_scaled(
-        560_000_000, clone_steps=16000, near_miss_clip=16.0, hold_steps=20, hold_heading_weight=10.0, hold_bonus=3.0
-    ),
-    "apg-residual-v2": {
-        "algo": "apg",
-        "backend": "jax",
-        "env_id": V2,
-        "residual": True,
-        "expert": "ptc",
-        "eval_freq": 10_000_000,
-        "checkpoint_freq": 10_000_000,
-    },
     # the deadline and the heading as constraints (train.learning.jitted.lagrangian): multipliers per T_con bin in
     # place of the hand-set weights, over the same window of 20 control periods before T_con; 560 M env steps, the
     # 30 minutes of one core a seed of the benchmark's goals

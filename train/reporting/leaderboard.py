@@ -100,8 +100,11 @@ def measures(row: Row, root: Path = ROOT) -> dict[str, Any]:
         cells["disturbed_in_time"] = _iqm(sets.get("disturbed", {}).get("in_time"))
         for T_con in T_CONS:
             cells[f"in_time_{T_con}"] = _iqm(sets.get(f"T_con={T_con}", {}).get("in_time"))
-        cells.update(seeds=len(entry["seeds"]), seconds=_iqm(entry.get("seconds")),
-                     env=entry.get("env_id", "DWRPointStabilization-v1"))  # (v1: the entries that predate the key)
+        cells.update(
+            seeds=len(entry["seeds"]),
+            seconds=_iqm(entry.get("seconds")),
+            env=entry.get("env_id", "DWRPointStabilization-v1"),
+        )  # (v1: the entries that predate the key)
     elif row.kind == "reference":
         sets = data["references"][row.entry]
         for key in ("in_time", "energy_ratio", "final_heading"):

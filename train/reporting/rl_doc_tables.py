@@ -55,8 +55,10 @@ RL_TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
     "sbx-v2-30min": ("docs/rl_benchmark/sbx_v2_30min.json", lambda data: rl_table(data, "random")),
     **random_and_per_T_con("sbx-v2-30min-tqc", "docs/rl_benchmark/sbx_v2_30min_tqc.json"),
     "rl-constrained": ("docs/rl_benchmark/constrained.json", lambda data: rl_table(data, "random")),
-    "rl-constrained-per-T_con": ("docs/rl_benchmark/constrained.json",
-                                 lambda data: rl_table(data, "per-T_con-heading")),
+    "rl-constrained-per-T_con": (
+        "docs/rl_benchmark/constrained.json",
+        lambda data: rl_table(data, "per-T_con-heading"),
+    ),
     "leaderboard": ("docs/leaderboard.json", lambda data: leaderboard_table(data)),
     "leaderboard-per-T_con": ("docs/leaderboard.json", lambda data: leaderboard_per_T_con(data)),
     "rl-constrained-log": ("docs/rl_benchmark/constrained_log.json", lambda data: constraint_log_table(data)),

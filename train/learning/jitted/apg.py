@@ -13,10 +13,10 @@ pose with less energy; v2's arrival bonus (a step at 1 cm) has no gradient and i
 Gradients through 1,200 steps of a closed loop explode: the cotangent of the env state is clipped to a norm of
 ``state_grad_clip`` at every step on the way back (:func:`clip_gradient`), and the update's gradient to
 ``max_grad_norm``; with ``near_miss_clip`` the episodes that end just outside the goal tolerance get a wider clip of
-their own (:func:`clip_gradient_carried`), and with ``near_miss_weight`` more weight in the update; with
-``hold_steps`` (or ``hold_fraction`` of T_con) the gradient follows the miss (and with ``hold_heading_weight`` the
-heading's error, with ``hold_bonus`` a smooth stand-in for the arrival bonus) over the last steps before T_con too
-(the return stays v2's); with ``short_T_con_share`` a share of each update's episodes has a short T_con. This learns
+their own (:func:`clip_gradient_carried`); with ``hold_steps`` the gradient follows the miss (and with
+``hold_heading_weight`` the heading's error) over the last steps before T_con too (the return stays v2's); with
+``lagrangian`` the deadline and the heading are constraints whose multipliers per T_con bin weigh those terms
+(:mod:`train.learning.jitted.lagrangian`). Other levers were measured and removed (docs/what-was-tried.md). This learns
 from the reward alone: what it uses beside the reward is the env's own derivative, which model-free RL does not have
 (the docs say so where it is compared).
 
@@ -39,7 +39,7 @@ import jax.numpy as jnp
 import optax
 
 from train.learning.jitted import lagrangian
-from train.learning.jitted.apg_settings import INITIAL_OBSERVATIONS, MAX_DROP, APGSettings
+from train.learning.jitted.apg_settings import INITIAL_OBSERVATIONS, APGSettings
 from train.learning.jitted.policy import make_network
 from train.learning.jitted.ppo import ObservationStatistics
 
@@ -127,48 +127,27 @@ class JaxAPG:
         self.obs_dim = int(env.observation_space(env_params).shape[0])
         self.network = make_network(settings.ppo_settings(), int(env.action_space(env_params).shape[0]))
         self.max_steps = int(getattr(env_params, "max_episode_steps", 0) or env_params.max_steps_in_episode)
-        #: The params of the updates' short episodes (``short_T_con_share``): T_con in [low, short_T_con_max] clamped.
-        self.short_params = env_params
-        if settings.short_T_con_share:
-            low, high = (float(bound) for bound in env_params.T_con_range)
-            self.short_params = env_params.replace(T_con_range=(low, max(low, min(high, settings.short_T_con_max))))
         rate: Any = settings.learning_rate
         self.decay_updates = 0
-        if settings.linear_schedule or settings.state_grad_clip_final is not None:
-            # to 0 (the rate) or to the final clip after the updates the budget buys (episodes of the mean T_con)
+        if settings.linear_schedule:
+            # to 0 after the updates the budget buys (episodes of the mean T_con)
             from train.learning.jitted.apg_teacher import teacher_steps
 
             mean_steps = self.mean_episode_steps()
             budget = max(0.0, total_timesteps - teacher_steps(settings, mean_steps))  # (0 without a teacher)
             self.decay_updates = max(1, round(budget / (settings.episodes * mean_steps)))
-        #: The updates over which a decaying clip reaches ``state_grad_clip_final`` (then held).
-        self.clip_decay_updates = max(1.0, settings.state_grad_clip_decay * self.decay_updates)
-        if settings.linear_schedule:
             rate = optax.linear_schedule(settings.learning_rate, 0.0, self.decay_updates)
         self.optimizer = optax.chain(optax.clip_by_global_norm(settings.max_grad_norm), optax.adam(rate))
         self.update = jax.jit(self._update)
         self.validate = jax.jit(self._validate)
-
-    def state_grad_clip(self, updates: Any) -> Any:
-        """The state's gradient clip at update ``updates``: ``state_grad_clip``, or with ``state_grad_clip_final`` its
-        geometric decay to that over :attr:`clip_decay_updates` (then held)."""
-        start, final = self.settings.state_grad_clip, self.settings.state_grad_clip_final
-        if final is None:
-            return start
-        fraction = jnp.minimum(1.0, jnp.asarray(updates, jnp.float32) / self.clip_decay_updates)
-        return start * (final / start) ** fraction
 
     def mean_episode_steps(self) -> float:
         """The mean length of an episode, in env steps, over :data:`INITIAL_OBSERVATIONS` fresh ones (those of v2 end
         at T_con; an earlier end makes the schedule's updates more)."""
         keys = jax.random.split(jax.random.PRNGKey(0), INITIAL_OBSERVATIONS)
 
-        def mean_steps(params: Any) -> float:
-            _, states = jax.vmap(self.env.reset_env, in_axes=(0, None))(keys, params)
-            return float(jnp.mean(jnp.minimum(states.prescribed_steps, self.max_steps)))
-
-        share = self.settings.short_T_con_share  # (the updates' episodes: a share of them short)
-        return (1.0 - share) * mean_steps(self.env_params) + (share * mean_steps(self.short_params) if share else 0.0)
+        _, states = jax.vmap(self.env.reset_env, in_axes=(0, None))(keys, self.env_params)
+        return float(jnp.mean(jnp.minimum(states.prescribed_steps, self.max_steps)))
 
     def init(self, seed: int) -> Any:
         """A fresh state: the network initialised from ``seed`` as the jitted PPO's (a residual's near zero), the
@@ -197,32 +176,25 @@ class JaxAPG:
         mean, _, _ = self.network.apply(params, jnp.asarray(obs, jnp.float32))
         return jnp.clip(mean, -1.0, 1.0)
 
-    def episode(self, params: Any, stats: Any, key: Any, limit: Any = None, mixed: bool = False) -> tuple[Any, Any]:
+    def episode(self, params: Any, stats: Any, key: Any, limit: Any = None) -> tuple[Any, Any]:
         """One episode's return (differentiable in ``params``, the state's gradient clipped to ``limit``, by default
-        ``state_grad_clip``) and its env steps; ``mixed``: an update's episode, short with ``short_T_con_share``."""
-        total, steps, _ = self.play(params, stats, key, limit, mixed)
+        ``state_grad_clip``) and its env steps."""
+        total, steps, _ = self.play(params, stats, key, limit)
         return total, steps
 
     def play(
-        self, params: Any, stats: Any, key: Any, limit: Any = None, mixed: bool = False, multipliers: Any = None
+        self, params: Any, stats: Any, key: Any, limit: Any = None, multipliers: Any = None
     ) -> tuple[Any, Any, Any]:
         """:meth:`episode`'s return and env steps, and the episode's last state. With ``multipliers`` (the
         constraint's, (2, bins)), the gradient also follows the constraints' smooth violations over the window before
         T_con, each weighed by its multiplier at this episode's T_con (:mod:`train.learning.jitted.lagrangian`)."""
         key_reset, key_steps = jax.random.split(key)
         _, start = self.env.reset_env(key_reset, self.env_params)
-        share = self.settings.short_T_con_share
-        if mixed and share:  # the same start pose, its T_con from the short range (the others' keys as without it)
-            _, short = self.env.reset_env(key_reset, self.short_params)
-            is_short = jax.random.uniform(jax.random.fold_in(key_reset, 1)) < share
-            start = jax.tree.map(lambda a, b: jnp.where(is_short, a, b), short, start)
         limit = self.settings.state_grad_clip if limit is None else limit
 
-        near_miss = self.settings.near_miss_clip is not None or self.settings.near_miss_weight != 1.0
+        near_miss = self.settings.near_miss_clip is not None
         hold: Any = self.settings.hold_steps
-        if self.settings.hold_fraction:  # the window a share of this episode's T_con (at least one step)
-            hold = jnp.maximum(1, jnp.ceil(self.settings.hold_fraction * start.prescribed_steps)).astype(jnp.float32)
-        holding = bool(self.settings.hold_steps or self.settings.hold_fraction)
+        holding = bool(self.settings.hold_steps)
         weights = None
         if multipliers is not None:  # this episode's multipliers, constants of its gradient
             constraint = self.settings.constraint
@@ -241,17 +213,16 @@ class JaxAPG:
             _, after, reward, done, _ = self.env.step_env(jax.random.fold_in(key_steps, t), state, action,
                                                           self.env_params)  # fmt: skip
             total = total + jnp.where(alive, reward, 0.0)
-            if holding:  # the miss over the last `hold` steps up to T_con (hold_steps, hold_fraction): the gradient
+            if holding:  # the miss over the last `hold` steps up to T_con (hold_steps): the gradient
                 last = after.step_count > after.prescribed_steps - hold
                 if weights is not None:  # the multipliers weigh the smooth violations (distance, heading error)
                     miss = weights[0] * after.distance + weights[1] * 2.0 * jnp.abs(jnp.sin(0.5 * after.psi))
                 else:
                     miss = self.settings.hold_weight * after.distance
-                if weights is None and self.settings.hold_heading_weight:  # the heading's error, linear near 0 (2 |sin(psi / 2)|)
+                if (
+                    weights is None and self.settings.hold_heading_weight
+                ):  # the heading's error, linear near 0 (2 |sin(psi / 2)|)
                     miss = miss + self.settings.hold_heading_weight * 2.0 * jnp.abs(jnp.sin(0.5 * after.psi))
-                if weights is None and self.settings.hold_bonus:  # the arrival bonus, smoothed: a slope at the tolerance
-                    edge = (self.env_params.goal_tolerance - after.distance) / self.settings.hold_bonus_width
-                    miss = miss - self.settings.hold_bonus * jax.nn.sigmoid(edge)
                 held = held - jnp.where(alive & last, miss / hold, 0.0)
             state = jax.tree.map(lambda new, old: jnp.where(alive, new, old), after, state)
             return (state, carrier, alive & ~done, total, held, steps + alive.astype(jnp.int32)), None
@@ -265,10 +236,7 @@ class JaxAPG:
         if holding:  # + 0: the return as it is, the held miss's gradient in it
             total = total + (held - jax.lax.stop_gradient(held))
         if near_miss:  # + bound * 0: the return as it is, the episode's clip into the carrier's cotangent
-            weight = jax.lax.stop_gradient(self.episode_weight(final))
-            # the same value, its gradient times the weight (and the clip times it: weight x the clipped gradient)
-            total = total + (weight - 1.0) * (total - jax.lax.stop_gradient(total))
-            total = total + jax.lax.stop_gradient(self.episode_clip(final, limit) * weight) * carrier
+            total = total + jax.lax.stop_gradient(self.episode_clip(final, limit)) * carrier
         return total, steps, final
 
     def near_miss(self, final: Any) -> Any:
@@ -284,11 +252,6 @@ class JaxAPG:
         if self.settings.near_miss_clip is None:
             return limit
         return jnp.where(self.near_miss(final), self.settings.near_miss_clip, limit)
-
-    def episode_weight(self, final: Any) -> Any:
-        """The weight of the episode whose last state is ``final`` in the update: ``near_miss_weight`` for a near
-        miss, else 1."""
-        return jnp.where(self.near_miss(final), self.settings.near_miss_weight, 1.0).astype(jnp.float32)
 
     def exported_params(self, state: Any) -> Any:
         """The network a run exports: with ``keep_best`` the best measured (:meth:`validate`), else the last."""
@@ -311,20 +274,18 @@ class JaxAPG:
         rng, key = jax.random.split(state.rng)
         keys = jax.random.split(key, self.settings.episodes)
 
-        limit = self.state_grad_clip(state.updates)
+        limit = self.settings.state_grad_clip
 
         constrained = self.settings.constraint.lagrangian
 
         def loss(params: Any) -> tuple[Any, tuple[Any, Any, Any]]:
-            # (the short T_con of short_T_con_share; without it the episode as validate plays it)
-            mixed = bool(self.settings.short_T_con_share)
             if constrained:
-                play = functools.partial(self.play, mixed=mixed, multipliers=state.multipliers.value)
+                play = functools.partial(self.play, multipliers=state.multipliers.value)
                 returns, steps, final = jax.vmap(play, in_axes=(None, None, 0, None))(params, state.obs_stats, keys,
                                                                                      limit)  # fmt: skip
             else:
-                episode = functools.partial(self.episode, mixed=True) if mixed else self.episode
-                returns, steps = jax.vmap(episode, in_axes=(None, None, 0, None))(params, state.obs_stats, keys, limit)
+                returns, steps = jax.vmap(self.episode, in_axes=(None, None, 0, None))(params, state.obs_stats, keys,
+                                                                                       limit)  # fmt: skip
                 final = None
             return -jnp.sum(returns), (returns, steps, final)
 
@@ -341,20 +302,13 @@ class JaxAPG:
         grads = jax.tree.map(lambda g: jnp.where(finite, g, 0.0), grads)
         updates, opt_state = self.optimizer.update(grads, state.opt_state, state.params)
         params = optax.apply_updates(state.params, updates)
-        accepted = jnp.asarray(True)
-        if self.settings.max_return_drop < MAX_DROP:  # the same episodes again: an update that loses return is undone
-            after, replayed = jax.vmap(self.episode, in_axes=(None, None, 0))(params, state.obs_stats, keys)
-            accepted = jnp.mean(after) >= jnp.mean(returns) - self.settings.max_return_drop
-            steps = steps + replayed
-            params, opt_state = jax.tree.map(lambda new, old: jnp.where(accepted, new, old), (params, opt_state),
-                                             (state.params, state.opt_state))  # fmt: skip
         multipliers, constraint_metrics = state.multipliers, {}
         if constrained:  # the multipliers from this update's fresh episodes' violations, per T_con bin
             multipliers, constraint_metrics = self.constraint_step(state.multipliers, final)
         state = state.replace(params=params, opt_state=opt_state, rng=rng, updates=state.updates + 1,
                               multipliers=multipliers)  # fmt: skip
         metrics = {"steps": jnp.sum(steps), "return_mean": jnp.mean(returns), "grad_norm": optax.tree.norm(grads),
-                   "accepted": accepted, "skipped": ~finite, **constraint_metrics}  # fmt: skip
+                   "skipped": ~finite, **constraint_metrics}  # fmt: skip
         return state, metrics
 
     def constraint_step(self, multipliers: Any, final: Any) -> tuple[Any, dict[str, Any]]:

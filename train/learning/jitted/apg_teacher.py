@@ -12,10 +12,8 @@ sequences' states). This is guided policy search's idea (Levine & Koltun 2013) i
 computed from the reward and the env's derivative only (no law, no optimal-control solver, nothing at run time), so
 the learner stays "from the reward". Its env steps (each iteration plays every episode once) count in the budget.
 
-With ``teacher_rounds`` > 1 the lesson goes on as DAgger (Ross et al. 2011) does: each further round plays the cloned
-policy on ``teacher_episodes`` fresh episodes, stops each at a uniformly drawn step, searches the best sequence from
-that state to T_con, and refits the policy on every pair taught so far, so that the states the policy itself reaches
-are taught too, not only the teacher's.
+(Further rounds as DAgger, teaching the states the cloned policy reaches, were measured and removed: they cost their
+env steps and changed neither the in-time rate nor the energy, docs/what-was-tried.md.)
 """
 
 from __future__ import annotations
@@ -29,35 +27,8 @@ CLONE_LEARNING_RATE = 1e-3
 
 
 def teacher_steps(settings: Any, mean_episode_steps: float) -> float:
-    """The env steps the teacher spends, about: every iteration, and the final rollout, plays each episode once; a
-    further round (``teacher_rounds``) plays the policy's episodes once and searches from half-way on average."""
-    per_search = settings.teacher_episodes * mean_episode_steps * (settings.teacher_iterations + 1)
-    rounds = settings.teacher_rounds - 1
-    return per_search * (1 + 0.5 * rounds) + rounds * settings.teacher_episodes * mean_episode_steps
-
-
-def visited_states(apg: Any, params: Any, stats: Any, starts: Any, key: Any) -> tuple[Any, Any, Any]:
-    """Each of ``starts``' episodes played by the policy ``params`` (its mean action) until a step drawn uniformly
-    in [0, T_con): (the state there, whether the episode was still running there, the env steps played)."""
-    import jax
-    import jax.numpy as jnp
-
-    stops = jnp.floor(jax.random.uniform(key, starts.T_con.shape) * starts.prescribed_steps).astype(jnp.int32)
-
-    def play(start: Any, stop: Any) -> tuple[Any, Any, Any]:
-        def one_step(carry: tuple[Any, Any, Any], t: Any) -> tuple[tuple[Any, Any, Any], None]:
-            state, alive, steps = carry
-            running = alive & (t < stop)
-            action = apg.act(params, state.observation, stats)
-            _, after, _, done, _ = apg.env.step_env(jax.random.PRNGKey(0), state, action, apg.env_params)
-            state = jax.tree.map(lambda new, old: jnp.where(running, new, old), after, state)
-            return (state, jnp.where(running, ~done, alive), steps + running.astype(jnp.int32)), None
-
-        carry = (start, jnp.asarray(True), jnp.asarray(0, jnp.int32))
-        (state, alive, steps), _ = jax.lax.scan(one_step, carry, jnp.arange(apg.max_steps))
-        return state, alive, steps
-
-    return jax.jit(jax.vmap(play))(starts, stops)
+    """The env steps the teacher spends, about: every iteration, and the final rollout, plays each episode once."""
+    return float(settings.teacher_episodes * mean_episode_steps * (settings.teacher_iterations + 1))
 
 
 def clone_from_teacher(apg: Any, state: Any, progress: bool = False) -> tuple[Any, dict[str, float]]:
@@ -109,17 +80,6 @@ def clone_from_teacher(apg: Any, state: Any, progress: bool = False) -> tuple[An
     targets = jnp.tanh(sequences).reshape(-1, 2)[mask]
     steps = float(jnp.sum(alive)) * (settings.teacher_iterations + 1)
     params, value = fitted(state.params, key_clone, inputs, targets)
-    for round_ in range(1, settings.teacher_rounds):  # DAgger: the states the policy reaches, taught too
-        rng, key_starts, key_stops, key_clone = jax.random.split(rng, 4)
-        _, starts = jax.vmap(env.reset_env, in_axes=(0, None))(jax.random.split(key_starts, len(keys)), env_params)
-        visited, running, played = visited_states(apg, params, state.obs_stats, starts, key_stops)
-        more, _, _, (observations, alive) = taught(visited, round_)
-        alive = alive & running[:, None]  # (an episode that left the arena before its stop teaches nothing)
-        mask = alive.reshape(-1)
-        inputs = jnp.concatenate([inputs, observations.reshape(-1, observations.shape[-1])[mask]])
-        targets = jnp.concatenate([targets, jnp.tanh(more).reshape(-1, 2)[mask]])
-        steps += float(jnp.sum(played)) + float(jnp.sum(alive)) * (settings.teacher_iterations + 1)
-        params, value = fitted(params, key_clone, inputs, targets)
     state = state.replace(params=params, opt_state=apg.optimizer.init(params), best_params=params, rng=rng)
     measures = {
         "steps": steps,
@@ -131,4 +91,4 @@ def clone_from_teacher(apg: Any, state: Any, progress: bool = False) -> tuple[An
     return state, measures
 
 
-__all__ = ["CLONE_BATCH", "CLONE_LEARNING_RATE", "clone_from_teacher", "teacher_steps", "visited_states"]
+__all__ = ["CLONE_BATCH", "CLONE_LEARNING_RATE", "clone_from_teacher", "teacher_steps"]

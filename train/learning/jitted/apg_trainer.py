@@ -70,11 +70,9 @@ class APGTrainer:
 
             state, measures = clone_from_teacher(self.apg, state, progress=self.progress)
             steps += int(measures["steps"])
-            rounds = self.settings.teacher_rounds
-            dagger = f" after {rounds} rounds ({int(measures['pairs']):,} pairs)" if rounds > 1 else ""
             print(f"open-loop teacher: {measures['teacher_in_time']:.0%} of its {self.settings.teacher_episodes} "
                   f"sequences in time, mean return {measures['teacher_return']:.2f}; cloned (least squares "
-                  f"{measures['clone_loss']:.2g}){dagger} in {int(measures['steps']):,} env steps",
+                  f"{measures['clone_loss']:.2g}) in {int(measures['steps']):,} env steps",
                   file=sys.stderr)  # fmt: skip
         while True:
             if every and int(state.updates) % every == 0:
@@ -118,36 +116,22 @@ class APGTrainer:
         taught = (
             f"; the policy first cloned from the best sequences of {s.teacher_episodes} episodes "
             f"({s.teacher_iterations} Adam steps each)"
-            + (f", then {s.teacher_rounds - 1} DAgger rounds from its own states" if s.teacher_rounds > 1 else "")
             if s.teacher_episodes
             else ""
         )
         near, within = "", f"within {s.near_miss_distance:g} m of the goal but not at it"
         if s.near_miss_clip is not None:
             near += f" ({s.near_miss_clip:g} for the episodes that end {within})"
-        weighed = (f"; the episodes that end {within} weigh {s.near_miss_weight:g} times the others in the update"
-                   if s.near_miss_weight != 1.0 else "")  # fmt: skip
-        if (s.hold_steps or s.hold_fraction) and not s.constraint.lagrangian:
-            window = f"{s.hold_steps} steps" if s.hold_steps else f"{s.hold_fraction:g} of T_con"
-            weighed += (f"; the gradient follows the miss over the last {window} before T_con too "
+        weighed = ""
+        if s.hold_steps and not s.constraint.lagrangian:
+            weighed += (f"; the gradient follows the miss over the last {s.hold_steps} steps before T_con too "
                         f"({s.hold_weight:g} per metre"
                         + (f", and the heading's error at {s.hold_heading_weight:g} per radian"
-                           if s.hold_heading_weight else "")
-                        + (f", and the arrival bonus smoothed to {s.hold_bonus:g} x a sigmoid "
-                           f"{s.hold_bonus_width:g} m wide" if s.hold_bonus else "") + ")")  # fmt: skip
-        clip = (
-            f"{s.state_grad_clip:g}"
-            if s.state_grad_clip_final is None
-            else f"{s.state_grad_clip:g} decaying to {s.state_grad_clip_final:g} over "
-            f"{round(self.apg.clip_decay_updates)} updates"
-        ) + near
-        if s.short_T_con_share:
-            low, high = self.apg.short_params.T_con_range
-            weighed += f"; {s.short_T_con_share:g} of the updates' episodes with T_con in [{low:g}, {high:g}] s"
+                           if s.hold_heading_weight else "") + ")")  # fmt: skip
+        clip = f"{s.state_grad_clip:g}{near}"
         c = s.constraint
         if c.lagrangian:
-            window = f"the last {s.hold_steps} steps" if s.hold_steps else (
-                f"the last {s.hold_fraction:g} of T_con" if s.hold_fraction else "T_con")
+            window = f"the last {s.hold_steps} steps" if s.hold_steps else "T_con"
             weighed += (f"; the deadline a constraint (at most {c.cost_budget:g} of episodes late) and the heading one "
                         f"(a mean of at most {c.heading_budget:g} rad), their multipliers in {c.multiplier_bins} T_con "
                         f"bins from {c.multiplier_init:g}, PID gains {c.pid_kp:g}/{c.pid_ki:g}/{c.pid_kd:g}, weighing "
