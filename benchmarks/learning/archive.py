@@ -43,6 +43,10 @@ LEVERS: dict[str, str] = {
     "apg_hold_fraction.json": "+ the hold window a tenth of each episode's T_con",
     "apg_hold_bonus.json": "+ a smooth arrival bonus in the hold window, weight 10",
     "apg_hold_bonus3.json": "+ the smooth arrival bonus at weight 3",
+    "constrained_200m_probe.json": "the deadline and the heading as constraints (Lagrange multipliers per T_con bin) in "
+    "place of the hold weights and the near-miss clip, 200 M env steps, integral gain 1, no anti-windup",
+    "constrained.json": "the same at 560 M env steps, integral gain 0.2, multipliers capped at 100; the residual on PTC "
+    "under the same constraints",
 }
 
 
