@@ -164,3 +164,13 @@ def test_a_tiny_run_logs_each_bin_and_resumes_bit_for_bit_with_its_multipliers(t
     assert np.all(np.isfinite(multipliers)) and np.all(multipliers >= 0.0)
     assert sum(int(row["episodes"]) for row in straight) > 0
     assert multipliers[:, 0].max() > 1.0  # (from multiplier_init 1: the untrained policy is late)
+
+
+def test_the_benchmark_entry_is_the_v2_recipe_with_the_constraint(tmp_path: Path) -> None:
+    from train.learning.benchmark import parse_entry, train_config
+
+    config = train_config(parse_entry("ppo-lagrangian-v2"), 0, tmp_path, {"env_steps": 1024})
+    settings = PPOSettings.from_algo_kwargs(config.algo_kwargs, int(config.num_envs or 0))
+    assert config.env_id == "DWRPointStabilization-v2" and config.backend == "jax"
+    assert settings.gamma == 1.0 and settings.log_std_fixed and settings.normalize_observations
+    assert settings.constraint == LagrangeSettings(lagrangian=True)

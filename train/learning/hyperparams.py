@@ -344,6 +344,8 @@ def build_algo_kwargs(params: dict[str, Any], backend: str = "sb3") -> dict[str,
     kwargs["policy_kwargs"] = policy_kwargs
     kwargs.pop("log_std_final", None)  # PPO's annealed noise: a callback of train.learning.training, not SB3's
     kwargs.pop("log_std_fixed", None)
+    for key in LAGRANGE_DEFAULTS:  # PPO-Lagrangian's (the jitted PPO's): its SB3 export is a plain PPO
+        kwargs.pop(key, None)
     sigma = kwargs.pop("action_noise_sigma", None)
     if sigma:
         from stable_baselines3.common.noise import NormalActionNoise
