@@ -87,11 +87,13 @@ class PPOTrainer:
         if self.constraint_log is None:
             self.constraint_log = ConstraintLog(Path(str(self.config.run_dir)) / CONSTRAINT_FILE,
                                                 self.ppo.env_params.T_con_range, steps, every=1)  # fmt: skip
-        while n_updates > 0:  # in chunks of CONSTRAINT_LOG_UPDATES, each a row of the log
+        while n_updates > 0:  # in chunks of CONSTRAINT_LOG_UPDATES, each a row of the log; Ctrl-C between two
             chunk = min(n_updates, CONSTRAINT_LOG_UPDATES)
             runner, metrics = self.ppo.run(runner, chunk, self.total_timesteps)
             n_updates -= chunk
             self.constraint_log.add(constraint_rows(metrics, runner.multipliers), int(runner.updates) * per_update)
+            if stop():
+                break
         return runner, int(runner.updates) * per_update
 
     def export(self, runner: Any, steps: int) -> Any:
