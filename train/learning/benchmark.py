@@ -195,6 +195,16 @@ ENTRIES: dict[str, dict[str, Any]] = {
         "eval_freq": 5_000_000,
         "checkpoint_freq": 5_000_000,
     },
+    # PPO-Lagrangian (train.learning.jitted.ppo_lagrangian), the on-policy reference of constrained RL: the v2 recipe
+    # of the jitted PPO (gamma 1, the noise on its fixed schedule) with a cost critic and the same multipliers per
+    # T_con bin as the Lagrangian APG
+    "ppo-lagrangian-v2": {
+        "algo": "ppo",
+        "backend": "jax",
+        "env_id": V2,
+        "hyperparams": str(HYPERPARAMS_DIR / "ppo_jax_v2.yml"),
+        "hyperparam_overrides": {"lagrangian": 1},
+    },
     "sac-sbx-v2": {"algo": "sac", "backend": "sbx", "env_id": V2},
     "tqc-sbx-v2": {"algo": "tqc", "backend": "sbx", "env_id": V2},
     "crossq-sbx-v2": {"algo": "crossq", "backend": "sbx", "env_id": V2},

@@ -13,6 +13,7 @@ from typing import Any
 
 from dwr_gym.validation import as_bool, as_float, as_int
 from train.learning.config import MAX_TIMESTEPS, MAX_TRAIN_ENVS, ConfigError, TrainConfig
+from train.learning.jitted.lagrangian import LAGRANGE_DEFAULTS, LagrangeSettings
 from train.learning.learners import find_learner
 
 ENV_SECTION = re.compile(r"^(dwr_gym:)?DWRPointStabilization-v\d+$")
@@ -166,6 +167,21 @@ def resolve_hyperparams(config: TrainConfig, explicit: set[str]) -> TrainConfig:
     return fill_budget(config)
 
 
+def _check_lagrange_keys(algo: str, params: dict[str, Any], backend: str) -> dict[str, Any]:
+    """PPO-Lagrangian's keys (train.learning.jitted.lagrangian) checked: the jitted PPO's only, each in its range."""
+    given = sorted(set(params) & set(LAGRANGE_DEFAULTS))
+    if not given:
+        return params
+    if algo != "ppo" or backend != "jax":
+        raise ConfigError(f"hyperparameter(s) {given} are options of --algo ppo --backend jax (PPO-Lagrangian) and "
+                          f"--algo apg, not of --algo {algo} --backend {backend}")  # fmt: skip
+    try:
+        LagrangeSettings.from_values({**LAGRANGE_DEFAULTS, **{key: params[key] for key in given}})
+    except ValueError as error:
+        raise ConfigError(str(error)) from None
+    return params
+
+
 ACTIVATIONS = ("nn.Tanh", "nn.ReLU", "nn.ELU", "nn.LeakyReLU", "nn.SiLU", "nn.GELU", "nn.Sigmoid")
 _INT_KEYS = {"n_steps": 1, "batch_size": 1, "n_epochs": 1, "buffer_size": 1, "learning_starts": 0,
              "gradient_steps": -1, "target_update_interval": 1, "policy_delay": 1, "stats_window_size": 1,
@@ -234,6 +250,8 @@ def check_algo_kwargs(algo: str, params: dict[str, Any], backend: str = "sb3") -
     cls = algorithm_class(algo, backend)
     accepted = set(inspect.signature(cls.__init__).parameters) - {"self", "env", "device", "seed"}
     accepted |= {"action_noise_sigma"} | ({"log_std_final", "log_std_fixed"} if algo == "ppo" else set())
+    params = _check_lagrange_keys(algo, params, backend)
+    accepted |= set(LAGRANGE_DEFAULTS) if algo == "ppo" and backend == "jax" else set()
     unknown = sorted(set(params) - accepted)
     if unknown:
         import difflib
@@ -326,6 +344,8 @@ def build_algo_kwargs(params: dict[str, Any], backend: str = "sb3") -> dict[str,
     kwargs["policy_kwargs"] = policy_kwargs
     kwargs.pop("log_std_final", None)  # PPO's annealed noise: a callback of train.learning.training, not SB3's
     kwargs.pop("log_std_fixed", None)
+    for key in LAGRANGE_DEFAULTS:  # PPO-Lagrangian's (the jitted PPO's): its SB3 export is a plain PPO
+        kwargs.pop(key, None)
     sigma = kwargs.pop("action_noise_sigma", None)
     if sigma:
         from stable_baselines3.common.noise import NormalActionNoise

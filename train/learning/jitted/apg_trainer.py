@@ -16,11 +16,7 @@ from typing import Any
 
 from train.learning.config import ConfigError, TrainConfig
 from train.learning.jitted.apg_settings import APGSettings
-
-#: The constraint's log in the run directory: per T_con bin, its violation rate, multipliers and energy.
-CONSTRAINT_FILE = "constraint.csv"
-#: Updates averaged into one row of the constraint's log.
-CONSTRAINT_LOG_EVERY = 25
+from train.learning.jitted.constraint_log import CONSTRAINT_FILE, ConstraintLog
 
 
 def apg_policy_kwargs(settings: APGSettings) -> dict[str, Any]:
@@ -139,62 +135,6 @@ class APGTrainer:
                         f"in {CONSTRAINT_FILE}")  # fmt: skip
         return (f"APG: {s.episodes} episodes per update, Adam {rate}, the state's gradient clipped to {clip} per step "
                 f"in each episode{weighed}{kept}{taught}")  # fmt: skip
-
-
-class ConstraintLog:
-    """The constraint's log (:data:`CONSTRAINT_FILE`): a row per :data:`CONSTRAINT_LOG_EVERY` updates (and at the end
-    of each chunk of updates: an evaluation, a checkpoint, the run's end) and T_con bin,
-    the violation rate, the mean final heading error and energy over those updates' episodes, and the multipliers at
-    the last of them. A resumed run's rows past its checkpoint are dropped first, so the log stays monotonic."""
-
-    FIELDS = ("timesteps", "T_con_low", "T_con_high", "episodes", "violation_rate", "heading", "energy",
-              "deadline_multiplier", "heading_multiplier")  # fmt: skip
-
-    def __init__(self, path: Path, T_con_range: Any, steps: int) -> None:
-        import csv
-
-        from train.learning.runs import truncate_log
-
-        self.path = path
-        self.low, self.high = (float(bound) for bound in T_con_range)
-        truncate_log(path, steps)
-        if not path.exists():
-            with path.open("w", newline="") as handle:
-                csv.writer(handle).writerow(self.FIELDS)
-        self.pending: list[dict[str, Any]] = []
-
-    def add(self, metrics: dict[str, Any], steps: int) -> None:
-        """One update's metrics; every :data:`CONSTRAINT_LOG_EVERY` updates their summary is appended."""
-        import numpy as np
-
-        self.pending.append({key: np.asarray(metrics[key]) for key in self.FIELDS[3:]})
-        if len(self.pending) >= CONSTRAINT_LOG_EVERY:
-            self.flush(steps)
-
-    def flush(self, steps: int) -> None:
-        """Append the summary of the updates not yet logged (none: nothing)."""
-        if not self.pending:
-            return
-        import csv
-
-        import numpy as np
-
-        counts = np.sum([m["episodes"] for m in self.pending], axis=0)
-        weight = np.maximum(counts, 1.0)
-
-        def mean(key: str) -> Any:
-            return np.sum([m[key] * m["episodes"] for m in self.pending], axis=0) / weight
-
-        rate, heading, energy = mean("violation_rate"), mean("heading"), mean("energy")
-        last = self.pending[-1]
-        edges = np.linspace(self.low, self.high, len(counts) + 1)
-        with self.path.open("a", newline="") as handle:
-            writer = csv.writer(handle)
-            for b in range(len(counts)):
-                writer.writerow([steps, f"{edges[b]:g}", f"{edges[b + 1]:g}", int(counts[b]), f"{rate[b]:.4f}",
-                                 f"{heading[b]:.4f}", f"{energy[b]:.4f}", f"{last['deadline_multiplier'][b]:.4f}",
-                                 f"{last['heading_multiplier'][b]:.4f}"])  # fmt: skip
-        self.pending = []
 
 
 def train(

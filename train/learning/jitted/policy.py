@@ -11,10 +11,11 @@ SB3 model tensor for tensor.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 from train.learning.config import ConfigError
+from train.learning.jitted.lagrangian import LAGRANGE_DEFAULTS, LagrangeSettings
 
 #: SB3 PPO hyperparameters the jitted trainer implements, with SB3's defaults.
 SB3_PPO_DEFAULTS: dict[str, Any] = {
@@ -76,6 +77,10 @@ class PPOSettings:
     critic_warmup: int = 0
     """``--critic-warmup``: env steps at the start during which only the critic learns (the actor's gradients are
     zero, so Adam leaves it as it is): a residual agent's advantages then come from a fitted value function."""
+    constraint: LagrangeSettings = field(default_factory=LagrangeSettings)
+    """PPO-Lagrangian (``lagrangian: 1`` and :class:`train.learning.jitted.lagrangian.LagrangeSettings`' keys): the
+    deadline and the heading as constraints, a cost critic and multipliers per T_con bin
+    (:mod:`train.learning.jitted.ppo_lagrangian`)."""
 
     @property
     def steps_per_update(self) -> int:
@@ -98,10 +103,16 @@ class PPOSettings:
         policy = dict(kwargs.pop("policy_kwargs", None) or {})
         log_std_final = kwargs.pop(ANNEAL_KEY, None)
         log_std_fixed = bool(kwargs.pop(FIXED_KEY, False))
+        given = {key: kwargs.pop(key) for key in LAGRANGE_DEFAULTS if key in kwargs}
+        try:
+            constraint = LagrangeSettings.from_values({**LAGRANGE_DEFAULTS, **given})
+        except ValueError as error:
+            raise ConfigError(str(error)) from None
         unknown = sorted(set(kwargs) - set(SB3_PPO_DEFAULTS))
         if unknown:
             raise ConfigError(f"hyperparameter(s) {unknown} are not implemented by --backend jax; it implements "
-                              f"{', '.join(SB3_PPO_DEFAULTS)}, {ANNEAL_KEY}, {FIXED_KEY} and policy_kwargs {', '.join(POLICY_KEYS)}")  # fmt: skip
+                              f"{', '.join(SB3_PPO_DEFAULTS)}, {ANNEAL_KEY}, {FIXED_KEY}, {', '.join(LAGRANGE_DEFAULTS)} "
+                              f"and policy_kwargs {', '.join(POLICY_KEYS)}")  # fmt: skip
         unknown = sorted(set(policy) - set(POLICY_KEYS) - {NORMALIZE_KEY})
         if unknown:
             raise ConfigError(f"policy_kwargs {unknown} are not implemented by --backend jax; it implements "
@@ -128,7 +139,7 @@ class PPOSettings:
             activation=activation, log_std_init=float(policy.get("log_std_init", 0.0)),
             ortho_init=bool(policy.get("ortho_init", True)),
             log_std_final=None if log_std_final is None else float(log_std_final), log_std_fixed=log_std_fixed,
-            normalize_observations=bool(policy.get(NORMALIZE_KEY, False)),
+            normalize_observations=bool(policy.get(NORMALIZE_KEY, False)), constraint=constraint,
         )  # fmt: skip
         settings.check()
         return settings
@@ -147,7 +158,11 @@ class PPOSettings:
         return self.log_std_init + (final - self.log_std_init) * fraction
 
     def as_dict(self) -> dict[str, Any]:
-        return {f.name: getattr(self, f.name) for f in fields(self)}
+        """The settings by name; the constraint's keys only where it is on (else as before it existed)."""
+        values = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "constraint"}
+        if self.constraint.lagrangian:
+            values.update({f.name: getattr(self.constraint, f.name) for f in fields(self.constraint)})
+        return values
 
 
 ACTIVATIONS = ("tanh", "relu", "elu", "leakyrelu", "silu", "gelu", "sigmoid")

@@ -81,12 +81,18 @@ class Transition(NamedTuple):
     terminated: Any
     truncated: Any
     final_obs: Any
+    info: Any = None
+    """The step's info values a subclass asks for (:attr:`JaxPPO.info_keys`; PPO-Lagrangian's cost), else None."""
 
 
-def env_step(env: Any, env_params: Any, key: Any, state: Any, action: Any) -> tuple[Any, ...]:
+def env_step(
+    env: Any, env_params: Any, key: Any, state: Any, action: Any, info_keys: tuple[str, ...] = ()
+) -> tuple[Any, ...]:
     """One step of a gymnax-style env (``step_env`` and ``reset_env``) with auto-reset: (obs, state, reward,
     terminated, truncated, final_obs, success); ``final_obs`` is the observation the step reached (the one that
-    ended the episode, where one ended), which SB3's PPO bootstraps a truncated episode's value from.
+    ended the episode, where one ended), which SB3's PPO bootstraps a truncated episode's value from. With
+    ``info_keys``, an eighth element: those values of the step's info (of the ended episode where one ended), as
+    float32.
 
     Termination and truncation are ``info["terminated"]`` and ``info["truncated"]`` where the env reports them,
     else ``done`` and gymnax's ``is_truncated``."""
@@ -100,7 +106,10 @@ def env_step(env: Any, env_params: Any, key: Any, state: Any, action: Any) -> tu
     state = jax.tree.map(lambda r, s: jax.lax.select(ended, r, s), state_reset, state_step)
     obs = jax.lax.select(ended, obs_reset, obs_step)
     success = jnp.asarray(info.get("is_success", False), bool)
-    return obs, state, jnp.asarray(reward, jnp.float32), terminated, truncated, obs_step, success
+    result = (obs, state, jnp.asarray(reward, jnp.float32), terminated, truncated, obs_step, success)
+    if info_keys:
+        return (*result, {name: jnp.asarray(info[name], jnp.float32) for name in info_keys})
+    return result
 
 
 def gae(rewards: Any, values: Any, terminated: Any, truncated: Any, final_values: Any, last_value: Any,
@@ -123,6 +132,13 @@ def gae(rewards: Any, values: Any, terminated: Any, truncated: Any, final_values
     return advantages, advantages + values
 
 
+def clipped_surrogate(log_prob: Any, old_log_prob: Any, advantages: Any, clip_range: float) -> Any:
+    """PPO's clipped surrogate loss (Schulman et al. 2017, eq. (7), negated): the mean of -min(r A, clip(r) A)."""
+    ratio = jnp.exp(log_prob - old_log_prob)
+    clipped = jnp.clip(ratio, 1.0 - clip_range, 1.0 + clip_range)
+    return -jnp.mean(jnp.minimum(advantages * ratio, advantages * clipped))
+
+
 def actor_masked_grad(grad: Any, frozen: Any, params: Any, batch: Any) -> Any:
     """``grad(params, batch)`` with the actor's gradients (the policy layers, the mean head, log_std) zero where
     ``frozen``."""
@@ -136,6 +152,9 @@ def actor_masked_grad(grad: Any, frozen: Any, params: Any, batch: Any) -> Any:
 class JaxPPO:
     """The jitted PPO of one configuration on one functional env: :meth:`init` a :class:`Runner`, :meth:`run` it
     for some updates; :meth:`run_seeds` and :meth:`init_seeds` do the same for several seeds under ``vmap``."""
+
+    #: The step's info values each transition keeps (:attr:`Transition.info`): none for PPO.
+    info_keys: tuple[str, ...] = ()
 
     def __init__(self, settings: PPOSettings, env: Any, env_params: Any) -> None:
         settings.check()
@@ -170,8 +189,7 @@ class JaxPPO:
     def _run(self, runner: Runner, n_updates: Any, total_timesteps: Any) -> tuple[Runner, dict[str, Any]]:
         """``n_updates`` updates (a traced number: one compilation serves every chunk length); the metrics are
         sums over them (episodes ended, their returns and successes, env steps)."""
-        zero = {"episodes": 0.0, "return_sum": 0.0, "successes": 0.0, "reward_sum": 0.0}
-        metrics = {k: jnp.asarray(v, jnp.float32) for k, v in zero.items()}
+        metrics = self.zero_metrics()
 
         def body(_: Any, carry: tuple[Runner, dict[str, Any]]) -> tuple[Runner, dict[str, Any]]:
             runner, totals = carry
@@ -180,12 +198,16 @@ class JaxPPO:
 
         return jax.lax.fori_loop(0, n_updates, body, (runner, metrics))
 
+    def zero_metrics(self) -> dict[str, Any]:
+        """The metrics :meth:`update` returns, at 0: what :meth:`_run` sums over updates."""
+        return {k: jnp.asarray(0.0, jnp.float32) for k in ("episodes", "return_sum", "successes", "reward_sum")}
+
     def policy(self, params: Any, obs: Any) -> tuple[Any, Any, Any]:
         return self.network.apply(params, obs)
 
     def collect(self, runner: Runner) -> tuple[Runner, Transition, dict[str, Any]]:
         """n_steps steps of the n_envs envs under the current policy (``lax.scan``)."""
-        step = functools.partial(env_step, self.env, self.env_params)
+        step = functools.partial(env_step, self.env, self.env_params, info_keys=self.info_keys)
 
         def one_step(carry: tuple[Runner, dict[str, Any]], _: Any) -> tuple[tuple[Runner, dict[str, Any]], Any]:
             runner, totals = carry
@@ -195,9 +217,9 @@ class JaxPPO:
             log_prob = gaussian_log_prob(action, mean, log_std)
             clipped = jnp.clip(action, self.action_low, self.action_high)
             keys = jax.random.split(key_env, self.settings.n_envs)
-            obs, env_state, reward, terminated, truncated, final_obs, success = jax.vmap(step, in_axes=(0, 0, 0))(
-                keys, runner.env_state, clipped
-            )
+            stepped = jax.vmap(step, in_axes=(0, 0, 0))(keys, runner.env_state, clipped)
+            obs, env_state, reward, terminated, truncated, final_obs, success = stepped[:7]
+            info = stepped[7] if self.info_keys else None
             stats = runner.obs_stats
             obs, final_obs = obs.astype(jnp.float32), final_obs.astype(jnp.float32)
             if self.settings.normalize_observations:
@@ -211,7 +233,8 @@ class JaxPPO:
                 "successes": totals["successes"] + jnp.sum(done & success),
                 "reward_sum": totals["reward_sum"] + jnp.sum(reward),
             }
-            transition = Transition(runner.obs, action, log_prob, value, reward, terminated, truncated, final_obs)
+            transition = Transition(runner.obs, action, log_prob, value, reward, terminated, truncated, final_obs,
+                                    info)  # fmt: skip
             runner = runner.replace(env_state=env_state, obs=obs, obs_stats=stats, rng=rng,
                                     episode_return=jnp.where(done, 0.0, episode_return))  # fmt: skip
             return (runner, totals), transition
@@ -227,6 +250,12 @@ class JaxPPO:
         return gae(transitions.reward, transitions.value, transitions.terminated, transitions.truncated, final_values,
                    last_value, self.settings.gamma, self.settings.gae_lambda)  # fmt: skip
 
+    def prepare(self, runner: Runner, transitions: Transition) -> tuple[Runner, tuple[Any, ...], dict[str, Any]]:
+        """What the epochs learn from, arrays (n_steps, n_envs, ...) in :meth:`loss`'s order (observations, actions,
+        log-probabilities, advantages, returns), the runner to learn on and metrics beside :meth:`collect`'s."""
+        advantages, returns = self.advantages(runner.params, transitions, runner.obs)
+        return runner, (transitions.obs, transitions.action, transitions.log_prob, advantages, returns), {}
+
     def loss(self, params: Any, batch: tuple[Any, ...]) -> Any:
         """SB3's PPO loss on one minibatch: clipped surrogate + ent_coef * (-entropy) + vf_coef * MSE(returns)."""
         s = self.settings
@@ -234,9 +263,8 @@ class JaxPPO:
         mean, log_std, values = self.policy(params, obs)
         if s.normalize_advantage and advantages.shape[0] > 1:
             advantages = (advantages - advantages.mean()) / (jnp.std(advantages, ddof=1) + 1e-8)
-        ratio = jnp.exp(gaussian_log_prob(actions, mean, log_std) - old_log_prob)
-        clipped = jnp.clip(ratio, 1.0 - s.clip_range, 1.0 + s.clip_range)
-        policy_loss = -jnp.mean(jnp.minimum(advantages * ratio, advantages * clipped))
+        policy_loss = clipped_surrogate(gaussian_log_prob(actions, mean, log_std), old_log_prob, advantages,
+                                        s.clip_range)  # fmt: skip
         value_loss = jnp.mean((returns - values) ** 2)
         entropy_loss = -jnp.mean(gaussian_entropy(log_std) * jnp.ones_like(values))
         return policy_loss + s.ent_coef * entropy_loss + s.vf_coef * value_loss
@@ -245,11 +273,9 @@ class JaxPPO:
         """One PPO update: a rollout, its advantages, then n_epochs passes of shuffled minibatches."""
         s = self.settings
         runner, transitions, totals = self.collect(runner)
-        advantages, returns = self.advantages(runner.params, transitions, runner.obs)
-        flat = jax.tree.map(
-            lambda x: x.reshape((s.steps_per_update, *x.shape[2:])),
-            (transitions.obs, transitions.action, transitions.log_prob, advantages, returns),
-        )
+        runner, batch, extra = self.prepare(runner, transitions)
+        totals = {**totals, **extra}
+        flat = jax.tree.map(lambda x: x.reshape((s.steps_per_update, *x.shape[2:])), batch)
         done_after = (runner.updates + 1).astype(jnp.float32) * s.steps_per_update
         progress_remaining = 1.0 - done_after / jnp.asarray(total_timesteps, jnp.float32)
         rate = s.learning_rate * (jnp.maximum(progress_remaining, 0.0) if s.linear_schedule else 1.0)

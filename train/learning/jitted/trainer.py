@@ -15,7 +15,11 @@ from pathlib import Path
 from typing import Any
 
 from train.learning.config import TrainConfig
+from train.learning.jitted.constraint_log import CONSTRAINT_FILE, ConstraintLog
 from train.learning.jitted.setup import check_jitted_options, configure_threads, make_jax_env, use_compilation_cache
+
+#: PPO-Lagrangian's updates per row of the constraint's log (and per jitted call: the log reads the sums of each).
+CONSTRAINT_LOG_UPDATES = 10
 
 
 def check_jax_config(config: TrainConfig) -> None:
@@ -45,13 +49,20 @@ class PPOTrainer:
         self.settings = PPOSettings.from_algo_kwargs(config.algo_kwargs, int(config.num_envs or 0))
         self.settings = dataclasses.replace(self.settings, critic_warmup=config.critic_warmup)
         self.residual = bool(config.residual)
+        self.config = config  # (its run_dir is set when the run starts: the constraint's log goes there)
+        self.constraint_log: ConstraintLog | None = None
         env, env_params = make_jax_env(config)
         use_compilation_cache()
         from train.learning.jitted.export import SB3Exporter
         from train.learning.jitted.ppo import JaxPPO
         from train.learning.training_env import make_training_env
 
-        self.ppo = JaxPPO(self.settings, env, env_params)
+        if self.settings.constraint.lagrangian:
+            from train.learning.jitted.ppo_lagrangian import JaxPPOLagrangian
+
+            self.ppo: JaxPPO = JaxPPOLagrangian(self.settings, env, env_params)
+        else:
+            self.ppo = JaxPPO(self.settings, env, env_params)
         venv = make_training_env(config)
         self.exporter = SB3Exporter(venv, config.algo_kwargs, config.seed)
         venv.close()
@@ -68,7 +79,21 @@ class PPOTrainer:
     def advance(self, runner: Any, steps: int, target: int, stop: Callable[[], bool]) -> tuple[Any, int]:
         per_update = self.settings.steps_per_update
         n_updates = max(1, -(-(target - steps) // per_update))
-        runner, _ = self.ppo.run(runner, n_updates, self.total_timesteps)
+        if not self.settings.constraint.lagrangian:
+            runner, _ = self.ppo.run(runner, n_updates, self.total_timesteps)
+            return runner, int(runner.updates) * per_update
+        from train.learning.jitted.ppo_lagrangian import constraint_rows
+
+        if self.constraint_log is None:
+            self.constraint_log = ConstraintLog(Path(str(self.config.run_dir)) / CONSTRAINT_FILE,
+                                                self.ppo.env_params.T_con_range, steps, every=1)  # fmt: skip
+        while n_updates > 0:  # in chunks of CONSTRAINT_LOG_UPDATES, each a row of the log; Ctrl-C between two
+            chunk = min(n_updates, CONSTRAINT_LOG_UPDATES)
+            runner, metrics = self.ppo.run(runner, chunk, self.total_timesteps)
+            n_updates -= chunk
+            self.constraint_log.add(constraint_rows(metrics, runner.multipliers), int(runner.updates) * per_update)
+            if stop():
+                break
         return runner, int(runner.updates) * per_update
 
     def export(self, runner: Any, steps: int) -> Any:
@@ -82,7 +107,15 @@ class PPOTrainer:
     def start_note(self, config: TrainConfig) -> str | None:
         from train.learning.hyperparams import rollout_rounding
 
-        return rollout_rounding(config)
+        note = rollout_rounding(config)
+        c = self.settings.constraint
+        if c.lagrangian:
+            lagrange = (f"PPO-Lagrangian: the deadline a constraint (at most {c.cost_budget:g} of episodes late) and the "
+                        f"heading one (a mean of at most {c.heading_budget:g} rad), a cost critic, their multipliers "
+                        f"in {c.multiplier_bins} T_con bins from {c.multiplier_init:g}, PID gains "
+                        f"{c.pid_kp:g}/{c.pid_ki:g}/{c.pid_kd:g}; per bin in {CONSTRAINT_FILE}")  # fmt: skip
+            note = f"{note}\n{lagrange}" if note else lagrange
+        return note
 
 
 def train(
