@@ -10,6 +10,7 @@ from train.commands.shared import (
     UsageError,
     add_agents_argument,
     add_scenario_arguments,
+    check_agent_paths,
     checked_env,
     checked_optimum,
     checked_selection,
@@ -33,16 +34,18 @@ def add_parser(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Evaluate agents and controllers on the same scenarios; print the table, write CSV, JSON and plots."""
-    with command_threads(args):
-        return _run(args)
-
-
-def _run(args: argparse.Namespace) -> int:
-    from pathlib import Path
-
+    """Evaluate agents and controllers on the same scenarios; print the table, write CSV, JSON and plots. Every
+    argument is checked first, before the heavy imports (torch, the agents), so that bad input is answered at once."""
     env_id, env_kwargs = checked_env(args)
     controllers = checked_selection(args)
+    check_agent_paths(args.agents)
+    with command_threads(args):
+        return _run(args, env_id, env_kwargs, controllers)
+
+
+def _run(args: argparse.Namespace, env_id: str, env_kwargs: dict[str, Any], controllers: list[str]) -> int:
+    from pathlib import Path
+
     try:
         import matplotlib  # noqa: F401
         import stable_baselines3  # noqa: F401

@@ -8,6 +8,7 @@ from typing import Any
 from train.commands.shared import (
     add_agents_argument,
     add_scenario_arguments,
+    check_agent_paths,
     checked_env,
     checked_optimum,
     checked_selection,
@@ -26,14 +27,16 @@ def add_parser(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Evaluate controllers (and saved agents) on named scenario sets."""
-    with command_threads(args):
-        return _run(args)
-
-
-def _run(args: argparse.Namespace) -> int:
+    """Evaluate controllers (and saved agents) on named scenario sets; every argument is checked first, before the
+    heavy imports (torch, the agents), so that bad input is answered at once."""
     env_id, env_kwargs = checked_env(args)
     names = checked_selection(args)
+    check_agent_paths(args.agents)
+    with command_threads(args):
+        return _run(args, env_id, env_kwargs, names)
+
+
+def _run(args: argparse.Namespace, env_id: str, env_kwargs: dict[str, Any], names: list[str]) -> int:
     policies: dict[str, Any] = {name: name for name in names}
     policies.update(load_agents(args.agents, env_id))
     from train.evaluation.evaluate import evaluate_sets
