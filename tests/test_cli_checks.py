@@ -68,3 +68,19 @@ def test_a_removed_agent_path_names_the_shipped_agents() -> None:
     code, _, stderr = answer("evaluate", "--agents", "train/pretrained/no_such_agent")
     shipped = [path.name for path in pretrained_paths().values()]
     assert code == 2 and shipped and all(name in stderr for name in shipped), stderr
+
+
+def test_a_measure_not_asked_for_has_no_column_and_no_line(tmp_path: Path) -> None:
+    """--optimum none: no E/opt columns (they would be nan throughout) and no word of the optimum in the time line;
+    asked for, the columns are there."""
+    common = ["evaluate", "--controllers", "ptc", "--scenarios", "paper-fig5", "--no-progress"]
+    env = {**os.environ, "MPLBACKEND": "Agg"}
+    runs = {}
+    for optimum in ("none", "pose"):
+        runs[optimum] = subprocess.run([sys.executable, "-m", "train.cli", *common, "--optimum", optimum, "--out",
+                                        str(tmp_path / optimum)], capture_output=True, text=True, cwd=ROOT, env=env,
+                                       timeout=600)  # fmt: skip
+        assert runs[optimum].returncode == 0, runs[optimum].stderr
+    without = runs["none"].stdout
+    assert "E/opt" not in without and "nan" not in without and "optimum" not in without.splitlines()[-1]
+    assert "E/opt mean" in runs["pose"].stdout and "optimum" in runs["pose"].stdout.splitlines()[-1]

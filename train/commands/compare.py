@@ -57,7 +57,7 @@ def _run(args: argparse.Namespace, env_id: str, env_kwargs: dict[str, Any], cont
     from train.reporting.compare_figures import plot_learning_curves, plot_time_series, plot_trajectories
     from train.reporting.results import write_results
     from train.reporting.robust_headline import DISTURBED, headline_table, plot_pareto
-    from train.reporting.tables import EVAL_COLUMNS, print_blocks, table_notes
+    from train.reporting.tables import EVAL_COLUMNS, asked_columns, print_blocks, table_notes
 
     paths = [Path(p) for p in args.agents] if args.agents else list(pretrained_paths().values())
     if not paths:
@@ -75,9 +75,10 @@ def _run(args: argparse.Namespace, env_id: str, env_kwargs: dict[str, Any], cont
         done[:] = found
 
     clock = StageClock(progress=not args.no_progress)
+    optimum = checked_optimum(args)
     try:
         rows, recorded, labels = compare(agents, controllers, args.scenarios, args.n, args.seed, env_kwargs,
-                                         progress=not args.no_progress, optimum=checked_optimum(args),
+                                         progress=not args.no_progress, optimum=optimum,
                                          T_cons=args.T_con, n_optimal=args.n_optimal, on_rows=keep,
                                          clock=clock, address=args.address)  # fmt: skip
     except KeyboardInterrupt:
@@ -94,7 +95,7 @@ def _run(args: argparse.Namespace, env_id: str, env_kwargs: dict[str, Any], cont
         figures.append(out / "learning_curves.png")
         plot_learning_curves(run_dirs, figures[2])
     print(f"env: {env_id}")
-    print_blocks(rows, EVAL_COLUMNS)
+    print_blocks(rows, asked_columns(EVAL_COLUMNS, optimum))
     if table_notes(rows):
         print(table_notes(rows))
     if any(r["scenario"] == "random" for r in rows) and any(r["scenario"] in DISTURBED for r in rows):

@@ -42,7 +42,7 @@ def _run(args: argparse.Namespace, env_id: str, env_kwargs: dict[str, Any], name
     from train.evaluation.evaluate import evaluate_sets
     from train.evaluation.stages import StageClock
     from train.reporting.results import write_results
-    from train.reporting.tables import EVAL_COLUMNS, print_blocks, table_notes
+    from train.reporting.tables import EVAL_COLUMNS, asked_columns, print_blocks, table_notes
 
     done: list[dict[str, Any]] = []  # the rows of the scenario sets finished so far
 
@@ -50,9 +50,10 @@ def _run(args: argparse.Namespace, env_id: str, env_kwargs: dict[str, Any], name
         done[:] = found
 
     clock = StageClock(progress=not args.no_progress, description="evaluate")
+    optimum = checked_optimum(args)
     try:
         rows = evaluate_sets(policies, args.scenarios, args.n, args.seed, env_kwargs, progress=not args.no_progress,
-                             optimum=checked_optimum(args), T_cons=args.T_con, n_optimal=args.n_optimal,
+                             optimum=optimum, T_cons=args.T_con, n_optimal=args.n_optimal,
                              on_rows=keep, clock=clock, address=args.address)  # fmt: skip
     except KeyboardInterrupt:
         clock.close()
@@ -60,7 +61,7 @@ def _run(args: argparse.Namespace, env_id: str, env_kwargs: dict[str, Any], name
     clock.close()
     rows = [{**row, "env_id": env_id} for row in rows]
     print(f"env: {env_id}")
-    print_blocks(rows, EVAL_COLUMNS)
+    print_blocks(rows, asked_columns(EVAL_COLUMNS, optimum))
     if table_notes(rows):
         print(table_notes(rows))
     for path in write_results(rows, args.out, "evaluation"):
