@@ -1,4 +1,4 @@
-"""The RL options of dwr-gym train (action repeat, normalisation, TQC/CrossQ) and the benchmark protocol (issue 32)."""
+"""The RL options of dwr-gym train (action repeat, normalisation, TQC/CrossQ) and the benchmark protocol."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Where the energy goes on v2, and how far the laws get by their gains alone (issue 40's residual goal, sized).
+"""Where the energy goes on v2, and how far the laws get by their gains alone (the v2 residual goal, sized).
 
     python -m benchmarks run energy-split --docs         # 100 episodes each (about 1.5 min on 2 cores)
     python -m benchmarks run energy-split --n 20         # a quick look (printed, nothing written)

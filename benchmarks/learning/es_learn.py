@@ -1,4 +1,4 @@
-"""What `dwr-gym train --algo es --backend jax` learns on DWRPointStabilization-v1 within a wall-clock budget (issue 41).
+"""What `dwr-gym train --algo es --backend jax` learns on DWRPointStabilization-v1 within a wall-clock budget.
 
     nice -n 5 python -m benchmarks run es-learn --seeds 0 --time-limit 900 --docs     # docs/jax/es_learn.json
     nice -n 5 python -m benchmarks run es-learn --name es-arena50 --seeds 0 --time-limit 900 \
@@ -8,7 +8,7 @@ Each seed trains in ``<out>/<name>-seed<k>`` with the shipped settings (train/hy
 given (and the training env's keywords ``--env-kwargs``; the evaluation is on v1 as registered), for
 ``--time-limit`` seconds (compilation included) or ``--env-steps``, evaluated every ``--eval-freq`` env
 steps on `dwr-gym train`'s fixed set (100 starts of v1, seed 12345); then its last model (model.zip) is evaluated
-as `dwr-gym benchmark` evaluates an agent: issue 32's metrics on the benchmark's nominal set (``--n`` starts of v1,
+as `dwr-gym benchmark` evaluates an agent: the RL benchmark's metrics on its nominal set (``--n`` starts of v1,
 seed 3232; E/opt on its first 50 episodes, the optimum cached) and at each fixed T_con of 10, 20, 40 and 60 s. The
 time to the first evaluation with >= 99 % in time is read from evaluations.csv. A run already finished is only
 evaluated again. Each call adds its rows to the JSON (by name and seed).

@@ -1,4 +1,4 @@
-"""What v1's and v2's returns pay for, side by side (issue 40): the optimum ranks first, and no pay for rushing.
+"""What v1's and v2's returns pay for, side by side: the optimum ranks first, and no pay for rushing.
 
     python -m benchmarks run incentives --docs   # 200 episodes (ranking), 100 a cell (rushing): about an hour, 2 cores
     python -m benchmarks run incentives --n 20 --n-rush 4 --sigmas 0  # a quick look (printed, nothing written)

@@ -1,4 +1,4 @@
-"""What limits RL on DWRPointStabilization-v1 (issue 32): the energy that exploration noise costs, measured.
+"""What limits RL on DWRPointStabilization-v1: the energy that exploration noise costs, measured.
 
 v1 charges ``energy_weight * dt * (u^2 + omega^2)`` on the commands executed. An RL agent explores by adding
 Gaussian noise of standard deviation sigma (in normalised action units) to its actions, so while it learns it

@@ -1,4 +1,4 @@
-"""Short runs of the levers that might make PPO learn v1 from its reward (issue 32), one seed each.
+"""Short runs of the levers that might make PPO learn v1 from its reward, one seed each.
 
 Each lever is ``dwr-gym train`` with a few options, stopped after ``--seconds`` of wall time (the machine's share
 of 2 busy cores decides the env steps); its learning curve (evaluations.csv on 100 v1 episodes) goes to

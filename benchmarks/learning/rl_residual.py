@@ -1,4 +1,4 @@
-"""What a residual agent learned (issue 32): where it acts on top of its expert, and what that buys.
+"""What a residual agent learned: where it acts on top of its expert, and what that buys.
 
 Runs a residual agent (a run directory of ``dwr-gym train --residual``) and its expert alone on the benchmark's
 nominal set and reports the in-time rate, the energy, E/opt and the final heading of both, and the residual's

@@ -1,4 +1,4 @@
-"""How much of an agent's excess energy is its timing (issue 32's diagnosis): E/opt split into two factors.
+"""How much of an agent's excess energy is its timing (the RL benchmark's diagnosis): E/opt split into two factors.
 
 An agent that arrives at ``t_arr`` before T_con pays twice: the least energy to arrive by ``t_arr`` is more than the
 least energy to arrive by T_con (``timing = E_opt(t_arr) / E_opt(T_con)``), and its motion costs more than that

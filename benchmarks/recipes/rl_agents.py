@@ -1,4 +1,4 @@
-"""The RL benchmark of issue 32 and the agents it ships; then the residual, diagnosis and rushing tables.
+"""The RL benchmark and the agents it ships; then the residual, diagnosis and rushing tables.
 
     python -m benchmarks run rl-agents
 

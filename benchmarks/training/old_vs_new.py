@@ -5,7 +5,7 @@
 
 Each run is the `dwr-gym train` command line (DWRPointStabilization-v1, seeds 0, 1, 2), stopped by Ctrl-C
 (SIGINT, which saves the model) after ``--cap`` seconds of wall time: the full budgets do not fit on 2
-shared cores, so the figure shows the first minutes of each run. The old defaults are those before issue 23
+shared cores, so the figure shows the first minutes of each run. The old defaults are those before the batch-sized ones
 (16 robots; PPO: n_steps 256, batch 512, 10 epochs; evaluations every 20,000 and checkpoints every 50,000
 env steps); the new are the defaults now. Old and new runs alternate, so a change in the machine's load
 falls on both. The curves are the runs' own evaluations (``evaluations.csv``: 100 fixed random scenarios),

@@ -1,4 +1,4 @@
-"""``dwr-gym benchmark`` (issue 32): train every agent x seed from v1's reward, evaluate, and keep the results.
+"""``dwr-gym benchmark``: train every agent x seed from v1's reward, evaluate, and keep the results.
 
 An *entry* is a name and either the options of ``dwr-gym train`` (:data:`ENTRIES`, or ``NAME:KEY=VALUE,...``
 on the command line) or, from Python, any function ``make(seed, run_dir) -> policy`` whose policy has
@@ -99,11 +99,11 @@ ENTRIES: dict[str, dict[str, Any]] = {
         "expert": "pt-astolfi",
         "env_id": "DWRPointStabilization-v2",
     },
-    # sbx-rl, the JAX stable-baselines (issue 40): the same algorithms and settings, compiled by XLA
+    # sbx-rl, the JAX stable-baselines: the same algorithms and settings, compiled by XLA
     "sac-sbx": {"algo": "sac", "backend": "sbx"},
     "tqc-sbx": {"algo": "tqc", "backend": "sbx"},
     "crossq-sbx": {"algo": "crossq", "backend": "sbx"},
-    # the task held to T_con (issue 40): gamma 1 (the v2 sections of train/hyperparams/), the jitted PPO with its
+    # the task held to T_con: gamma 1 (the v2 sections of train/hyperparams/), the jitted PPO with its
     # exploration noise on a fixed schedule, the off-policy learners of sbx
     "ppo-jax-v2": {"algo": "ppo", "backend": "jax", "env_id": V2},
     "ppo-jax-fixed-noise-v2": {
