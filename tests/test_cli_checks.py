@@ -84,3 +84,14 @@ def test_a_measure_not_asked_for_has_no_column_and_no_line(tmp_path: Path) -> No
     without = runs["none"].stdout
     assert "E/opt" not in without and "nan" not in without and "optimum" not in without.splitlines()[-1]
     assert "E/opt mean" in runs["pose"].stdout and "optimum" in runs["pose"].stdout.splitlines()[-1]
+
+
+def test_compare_without_the_optimum_has_no_E_opt_in_its_tables_and_no_pareto_figure(tmp_path: Path) -> None:
+    env = {**os.environ, "MPLBACKEND": "Agg"}
+    result = subprocess.run([sys.executable, "-m", "train.cli", "compare", "--controllers", "ptc", "--scenarios",
+                             "random", "noise", "--n", "5", "--optimum", "none", "--no-progress", "--agents",
+                             "train/pretrained/dagger", "--out", str(tmp_path)], capture_output=True, text=True,
+                            cwd=ROOT, env=env, timeout=600)  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    assert "the robust headline" in result.stdout and "E/opt" not in result.stdout
+    assert "optimum" not in result.stdout.splitlines()[-1] and not (tmp_path / "pareto.png").exists()

@@ -99,10 +99,13 @@ def _run(args: argparse.Namespace, env_id: str, env_kwargs: dict[str, Any], cont
     if table_notes(rows):
         print(table_notes(rows))
     if any(r["scenario"] == "random" for r in rows) and any(r["scenario"] in DISTURBED for r in rows):
-        print("\nthe robust headline (in time, final heading error and energy on each set; E/opt on the nominal one):")
-        print(headline_table(rows))
-        figures.append(out / "pareto.png")
-        plot_pareto(rows, figures[-1])
+        asked = optimum != "none"
+        print("\nthe robust headline (in time, final heading error and energy on each set"
+              + ("; E/opt on the nominal one):" if asked else "):"))  # fmt: skip
+        print(headline_table(rows, energy_ratio=asked))
+        if asked:  # E/opt against the worst in-time rate: nothing to draw without the optimum
+            figures.append(out / "pareto.png")
+            plot_pareto(rows, figures[-1])
     for path in write_results(rows, args.out, "comparison"):
         print(f"wrote {path}")
     for figure in figures:
