@@ -63,7 +63,7 @@ def add_parser(sub: Any) -> None:
     )
     p.add_argument("--seed", type=count, default=0, help="seed of the start poses and disturbances (default: 0)")
     p.add_argument("--T-con", type=float, metavar="SECONDS",
-                   help="the prescribed time of every episode, replacing v1's T_con_range (default: 20, or T_con of "
+                   help="the prescribed time of every episode, replacing the env's T_con_range (default: 20, or T_con of "
                    "--env-kwargs)")  # fmt: skip
     add_env_arguments(p, "observation_noise=0.01")
     p.add_argument("--out", default="results/robustness", help="output directory (default: results/robustness)")
