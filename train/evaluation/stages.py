@@ -58,6 +58,8 @@ CALIBRATE_AFTER = 0.5
 EXTRAPOLATE_AFTER = 0.1
 #: The bar counts the share of the work done in these units (a thousandth: a percentage with a decimal to spare).
 BAR_UNITS = 1000
+#: Seconds between redraws of a bar whose share done is held (the estimate grew): its clock and time left still move.
+REDRAW_HELD = 0.5
 
 
 def estimated_seconds(policy: str, episodes: int, steps: int, scenario: str = "random", cold: bool = False) -> float:
@@ -107,6 +109,7 @@ class StageClock:
         self._left_beside: dict[str, float] = {}  # and of those run in the second process
         self._logged = 0  # tenths of the work already written to a redirected log
         self._shown = 0.0  # the share of the work shown done: never less than before
+        self._drawn = 0.0  # when a held bar was last redrawn
         self._description = description
         self._bar: Any = None
         self._log = progress and not self._file.isatty()
@@ -270,6 +273,9 @@ class StageClock:
             step = round(self._shown * BAR_UNITS) - self._bar.n
             if step > 0:
                 self._bar.update(step)  # redrawn at most every tenth of a second (tqdm's mininterval)
+            elif now - self._drawn >= REDRAW_HELD:  # a bar held where it is: its elapsed and time left still move
+                self._bar.refresh()
+                self._drawn = now
         tenths = int(self._shown / LOG_STEP + 1e-9)
         if self._log and tenths > self._logged:
             self._logged = tenths
