@@ -87,7 +87,7 @@ def test_evaluate_runs_on_the_task_the_paper_sets_keep_their_T_con_and_T_con_rep
 @pytest.mark.parametrize("command", ["train", "evaluate", "compare", "robustness", "sweep", "imitate"])
 def test_every_command_that_makes_an_env_takes_env_and_refuses_an_abbreviation(command: str) -> None:
     wrong = dwr_gym(command, "--env", "CartPole-v1")
-    assert wrong.returncode == 2 and "--env 'CartPole-v1' is invalid: expected DWRPointStabilization-v1" in wrong.stderr
+    assert wrong.returncode == 2 and "--env 'CartPole-v1' is invalid: expected DWRPointStabilization-v2" in wrong.stderr
     abbreviated = dwr_gym(command, "--env-kw", "T_con=25")
     assert abbreviated.returncode == 2 and "unrecognized arguments: --env-kw" in abbreviated.stderr
 
