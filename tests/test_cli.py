@@ -19,7 +19,7 @@ def dwr_gym(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[
 
 
 def test_info_prints_versions_registration_and_defaults() -> None:
-    result = dwr_gym("info")
+    result = dwr_gym("info", "--env", "DWRPointStabilization-v1")
     assert result.returncode == 0, result.stderr
     for text in ("dwr-gym", "gymnasium", "DWRPointStabilization-v0", "T_con = 20.0", "max_episode_steps = 1800"):
         assert text in result.stdout

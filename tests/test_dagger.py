@@ -131,7 +131,7 @@ def test_a_run_with_a_handover_section_loads_as_a_handover_policy_and_a_bad_one_
 
 
 def test_the_shipped_handover_agent_arrives_with_the_heading_for_less_energy_than_ptc() -> None:
-    """The claim of the README's issue-10 table, on a smaller set than the benchmark's (60 starts, T_con 10 and 40)."""
+    """The claim of the prescribed-time goal's table, on a smaller set than the benchmark's (60 starts, T_con 10, 40)."""
     from train.evaluation.evaluate import evaluate
     from train.evaluation.scenarios import make_scenario
     from train.learning.agents import PRETRAINED

@@ -47,6 +47,16 @@ def test_snippet_runs(code: str, tmp_path: Path) -> None:
         assert "episodic_return=" in result.stdout
 
 
+README_SNIPPETS = [code for code, why in snippets(ROOT / "README.md") if why is None]
+
+
+@pytest.mark.parametrize("code", README_SNIPPETS)
+def test_the_readmes_snippets_print_no_warning(code: str, tmp_path: Path) -> None:
+    """What a newcomer runs first says nothing but its output: no Gymnasium "out of date" warning, no other."""
+    result = run(code, tmp_path)
+    assert result.returncode == 0 and "Warning" not in result.stderr, result.stderr[-2000:]
+
+
 def test_the_page_for_other_libraries_has_a_snippet_for_gymnasium_sb3_and_cleanrl() -> None:
     text = (ROOT / "docs" / "vector-and-interop.md").read_text()
     section = text[text.index("## Using dwr-gym with other libraries") :]

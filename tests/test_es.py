@@ -159,8 +159,9 @@ def test_the_exported_agent_acts_as_the_evolved_policy(small_es: Any) -> None:
     np.testing.assert_allclose(actions, expected, atol=1e-4)  # (float32, the scaling folded into the first layer)
 
 
-TINY = ("train", "--algo", "es", "--backend", "jax", "--eval-episodes", "3", "--no-progress", "--env-kwargs",
-        "T_con_range=[10,11]", "--hyperparams", "population_size=4", "episodes=2", "policy_kwargs=dict(net_arch=[16])")  # fmt: skip
+TINY = ("train", "--algo", "es", "--backend", "jax", "--env", "DWRPointStabilization-v1", "--eval-episodes", "3",
+        "--no-progress", "--env-kwargs", "T_con_range=[10,11]", "--hyperparams", "population_size=4", "episodes=2",
+        "policy_kwargs=dict(net_arch=[16])")  # fmt: skip
 
 
 @pytest.mark.slow

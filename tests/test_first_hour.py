@@ -1,4 +1,4 @@
-"""The first hour of a new user (issue 25): each friction they met, tried as they tried it, in a subprocess."""
+"""The first hour of a new user: each friction they met, tried as they tried it, in a subprocess."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from train.env_ids import PAPER_ENV_ID, TASK_ENV_ID
+from train.env_ids import DEFAULT_ENV_ID, HELD_ENV_ID, PAPER_ENV_ID, TASK_ENV_ID
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -22,7 +22,8 @@ def dwr_gym(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[
                           env=env, timeout=600)  # fmt: skip
 
 
-# 1. One env id story: v1 is the task and every command's default; v0 is the paper's reward, kept for reproduction.
+# 1. One env id story: v2, the task held to T_con, is every command's default and the newest id, so it does not warn;
+# v1 is the task ending on arrival (its agents keep it); v0 is the paper's reward, kept for reproduction.
 
 
 def test_train_takes_the_env_id_and_records_it_with_the_discount_of_that_env(tmp_path: Path) -> None:
@@ -34,12 +35,14 @@ def test_train_takes_the_env_id_and_records_it_with_the_discount_of_that_env(tmp
     assert config["env_id"] == TASK_ENV_ID and config["algo_kwargs"]["gamma"] == 0.999
 
 
-def test_the_default_env_is_the_task_and_v0_keeps_its_own_hyperparameters() -> None:
+def test_the_default_env_is_the_task_held_to_T_con_and_v0_keeps_its_own_hyperparameters() -> None:
     from train.learning.config import TrainConfig
     from train.learning.hyperparams import resolve_hyperparams
 
     task = resolve_hyperparams(TrainConfig(), set())
-    assert task.env_id == TASK_ENV_ID and task.env_params().T_con_range == (10.0, 60.0)
+    assert DEFAULT_ENV_ID == HELD_ENV_ID and task.env_id == HELD_ENV_ID
+    assert task.env_params().T_con_range == (10.0, 60.0) and task.env_params().hold_to_T_con
+    assert task.algo_kwargs["gamma"] == 1.0  # the discount v2's return is defined with
     paper = resolve_hyperparams(TrainConfig(env_id=PAPER_ENV_ID), set())
     assert paper.env_params().T_con_range is None and paper.algo_kwargs["gamma"] == 0.99
 
@@ -66,10 +69,10 @@ def test_evaluate_runs_on_the_task_the_paper_sets_keep_their_T_con_and_T_con_rep
     task = dwr_gym("evaluate", *common, "--out", str(tmp_path / "task"), "--agent", str(ROOT / "train/pretrained/ppo"))
     assert task.returncode == 0, task.stderr
     rows = json.loads((tmp_path / "task" / "evaluation.json").read_text())
-    assert {(r["scenario"], r["T_con"], r["env_id"]) for r in rows} == {("paper-fig5", 20.0, TASK_ENV_ID),
-                                                                         ("random", None, TASK_ENV_ID)}  # fmt: skip
+    assert {(r["scenario"], r["T_con"], r["env_id"]) for r in rows} == {("paper-fig5", 20.0, DEFAULT_ENV_ID),
+                                                                         ("random", None, DEFAULT_ENV_ID)}  # fmt: skip
     assert "random, T_con drawn per episode" in task.stdout
-    assert f"note: ppo trained on {PAPER_ENV_ID}, run here on {TASK_ENV_ID}" in task.stderr
+    assert f"note: ppo trained on {PAPER_ENV_ID}, run here on {DEFAULT_ENV_ID}" in task.stderr
     fixed = dwr_gym("evaluate", *common, "--T-con", "30", "--out", str(tmp_path / "fixed"))
     assert fixed.returncode == 0, fixed.stderr
     assert [r["T_con"] for r in json.loads((tmp_path / "fixed" / "evaluation.json").read_text())] == [30.0, 30.0]
@@ -84,7 +87,7 @@ def test_evaluate_runs_on_the_task_the_paper_sets_keep_their_T_con_and_T_con_rep
 @pytest.mark.parametrize("command", ["train", "evaluate", "compare", "robustness", "sweep", "imitate"])
 def test_every_command_that_makes_an_env_takes_env_and_refuses_an_abbreviation(command: str) -> None:
     wrong = dwr_gym(command, "--env", "CartPole-v1")
-    assert wrong.returncode == 2 and "--env 'CartPole-v1' is invalid: expected DWRPointStabilization-v1" in wrong.stderr
+    assert wrong.returncode == 2 and "--env 'CartPole-v1' is invalid: expected DWRPointStabilization-v2" in wrong.stderr
     abbreviated = dwr_gym(command, "--env-kw", "T_con=25")
     assert abbreviated.returncode == 2 and "unrecognized arguments: --env-kw" in abbreviated.stderr
 
@@ -312,9 +315,10 @@ def test_check_env_on_a_headless_machine_prints_nothing_from_sdl() -> None:
 def test_info_lists_every_registered_env_and_the_unknown_keyword_error_lists_every_keyword() -> None:
     result = dwr_gym("info")
     assert result.returncode == 0, result.stderr
-    for env_id in ("DWRPointStabilization-v1", "DWRPointStabilization-v0", "DWRPointStabilizationGoal-v0"):
+    for env_id in (HELD_ENV_ID, TASK_ENV_ID, PAPER_ENV_ID, "DWRPointStabilizationGoal-v0"):
         assert f"  {env_id}  " in result.stdout
-    assert "defaults of DWRPointStabilization-v1" in result.stdout and "T_con_range = (10.0, 60.0)" in result.stdout
+    assert f"defaults of {DEFAULT_ENV_ID}" in result.stdout and "hold_to_T_con = True" in result.stdout
+    assert "T_con_range = (10.0, 60.0)" in result.stdout and "T_con_range = (10.0, 60.0)" in result.stdout
     wrong = dwr_gym("evaluate", "--env-kwargs", "T_conn=3")
     allowed = wrong.stderr.split("allowed: ", 1)[1].strip().split(", ")
     assert {"robot", "wheel_saturation", "disturbances", "T_con"} <= set(allowed)

@@ -1,4 +1,4 @@
-"""The first hour of a new user (issue 25), its progress bars and Ctrl-C: each friction they met, tried as they tried
+"""The first hour of a new user, its progress bars and Ctrl-C: each friction they met, tried as they tried
 it, in a subprocess (the rest: test_first_hour.py)."""
 
 from __future__ import annotations

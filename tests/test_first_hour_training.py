@@ -1,4 +1,4 @@
-"""The first hour of a new user (issue 35), training and comparing: a short run that evaluates at its end, the best
+"""The first hour of a new user, training and comparing: a short run that evaluates at its end, the best
 model chosen by the task, and the smaller frictions of evaluate, compare and train."""
 
 from __future__ import annotations
@@ -64,7 +64,7 @@ def row(success: float, energy: float, ret: float) -> dict[str, float]:
 
 
 def test_the_best_model_is_the_one_that_arrives_in_time_most_not_the_one_with_the_highest_return() -> None:
-    assert task_score(row(0.56, 3.0, -14.96)) > task_score(row(0.09, 1.0, -13.17))  # issue 35's 600 k-step run
+    assert task_score(row(0.56, 3.0, -14.96)) > task_score(row(0.09, 1.0, -13.17))  # a 600 k-step run
     assert task_score(row(0.5, 2.0, -20.0)) > task_score(row(0.5, 2.5, -10.0))  # equal share: the lower energy
     assert task_score(row(0.5, 2.0, -10.0)) > task_score(row(0.5, 2.0, -20.0))  # then the return
     # arriving nowhere, standing still would be the cheapest: the return decides
@@ -79,7 +79,7 @@ def test_a_run_saved_with_a_return_as_its_best_score_resumes_with_that_evaluatio
         writer.writeheader()
         writer.writerows([{"timesteps": 0, **row(0.0, 0.5, -20.0)}, {"timesteps": 200, **row(0.09, 1.0, -13.17)},
                           {"timesteps": 400, **row(0.56, 3.0, -14.96)}])  # fmt: skip
-    older = saved_best({"best_score": -13.17}, evaluations)  # run_state.json before issue 35
+    older = saved_best({"best_score": -13.17}, evaluations)  # run_state.json before --threads
     assert older == task_score(row(0.09, 1.0, -13.17))
     assert saved_best({"best_score": -13.17, "best": row(0.56, 3.0, -14.96)}, evaluations) > older
     assert saved_best({}, evaluations) < task_score(row(0.0, 0.0, -1e9))

@@ -1,4 +1,4 @@
-"""The env's float64 results are pinned: seeded rollouts equal the recorded ones to 1e-12 (issue 14's speed work
+"""The env's float64 results are pinned: seeded rollouts equal the recorded ones to 1e-12 (the env-speed's speed work
 must not change them). Re-record with ``python -m benchmarks run golden-rollouts --write`` only for a new env version."""
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """What the returns pay for (train/evaluation/incentives.py): on v2 the optimum earns the most and arriving later
-pays more; on v1 the discount pays for the early arrival (issue 32's diagnosis). Few episodes: the docs' table has
-200 (ranking) and 16 per cell (rushing), from benchmarks/incentives.py."""
+pays more; on v1 the discount pays for the early arrival (the RL benchmark's diagnosis). Few episodes: the docs'
+table has 200 (ranking) and 16 per cell (rushing), from benchmarks/incentives.py."""
 
 from __future__ import annotations
 

@@ -304,7 +304,7 @@ def test_each_activation_is_the_one_the_exported_sb3_model_computes() -> None:
 def test_settings_read_the_yaml_and_refuse_what_they_do_not_implement() -> None:
     config = resolved()
     settings = PPOSettings.from_algo_kwargs(config.algo_kwargs, 256)
-    assert (settings.n_steps, settings.batch_size, settings.n_epochs, settings.gamma) == (64, 1024, 4, 0.999)
+    assert (settings.n_steps, settings.batch_size, settings.n_epochs, settings.gamma) == (64, 1024, 4, 1.0)  # v2's
     assert settings.net_arch == (64, 64) and settings.activation == "tanh" and settings.minibatches == 16
     with pytest.raises(ConfigError, match=r"\['use_sde'\] are not implemented by --backend jax"):
         PPOSettings.from_algo_kwargs({**config.algo_kwargs, "use_sde": True}, 256)

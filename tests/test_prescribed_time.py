@@ -48,7 +48,7 @@ def random_actions_rollout(env_id: str, kwargs: dict[str, object], seed: int, st
 )
 def test_v0_returns_are_what_they_were(kwargs: dict[str, object], seed: int, total: float) -> None:
     """Total rewards of seeded v0 episodes, pinned before v1 and T_con_range existed (bit for bit until the
-    speed work of issue 14, which keeps them to 1e-12; tests/test_golden.py pins whole trajectories)."""
+    env-speed work, which keeps them to 1e-12; tests/test_golden.py pins whole trajectories)."""
     assert random_actions_rollout(V0, kwargs, seed)[1] == pytest.approx(total, rel=0, abs=1e-9)
 
 

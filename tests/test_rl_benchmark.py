@@ -1,4 +1,4 @@
-"""The RL options of dwr-gym train (action repeat, normalisation, TQC/CrossQ) and the benchmark protocol (issue 32)."""
+"""The RL options of dwr-gym train (action repeat, normalisation, TQC/CrossQ) and the benchmark protocol."""
 
 from __future__ import annotations
 
@@ -201,7 +201,7 @@ def test_a_runs_recorded_recipe_trains_the_same_configuration(
     assert command[:2] == ["dwr-gym", "train"] and main(command[1:]) == 0
     (again,) = captured
     for name in ("algo", "backend", "residual", "expert", "action_repeat", "hyperparams", "total_timesteps", "seed",
-                 "eval_freq", "checkpoint_freq", "eval_episodes", "eval_seed", "time_limit"):  # fmt: skip
+                 "eval_freq", "checkpoint_freq", "eval_episodes", "eval_seed", "time_limit", "env_id"):  # fmt: skip
         assert getattr(again, name) == getattr(config, name), name
     assert again.algo_kwargs == config.algo_kwargs
 

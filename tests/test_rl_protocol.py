@@ -1,4 +1,4 @@
-"""The RL benchmark's numbers (issue 44): the IQM and its bootstrap interval against hand computations, the curves'
+"""The RL benchmark's numbers: the IQM and its bootstrap interval against hand computations, the curves'
 band, the seed shipped, E/opt over the in-time episodes only, and each (entry, seed) in its own run on the
 benchmark's fixed evaluation set."""
 
@@ -382,7 +382,7 @@ def test_an_entrys_own_budget_and_a_repeats_share_of_the_evaluations_are_whole_n
 
 def test_an_entrys_own_time_limit_beats_the_benchmarks(tmp_path: Path) -> None:
     """``--agents 'NAME:time_limit=S'`` stops that entry's runs after S seconds whatever the benchmark's --time-limit
-    (a run of issue 40's 30-minute measure trained on past it when the budget's None replaced the entry's 1800)."""
+    (a run of the v2's 30-minute measure trained on past it when the budget's None replaced the entry's 1800)."""
     own = parse_entry("ppo-30min:time_limit=1800")
     assert train_config(own, 0, tmp_path / "own", {}).time_limit == 1800
     assert train_config(own, 0, tmp_path / "both", {"time_limit": 60.0}).time_limit == 1800

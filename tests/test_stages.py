@@ -66,10 +66,13 @@ def test_the_time_left_learns_each_policys_pace_from_its_stages_that_ended(manua
     # ptc has not run: 41 s for 20 estimated so far, 2.05 each
     assert clock.left() == pytest.approx(3 * 1.0 + 3 * 40.0 + 4 * 10.0 * 41.0 / 20.0)
     with clock.stage("fig5", "ptc", 10.0, 5) as advance:
-        manual_time.now += 5.0
-        advance(0.5)  # its own pace once a tenth is done: 5 s more
-        assert clock.left() == pytest.approx(5.0 + 3 * 1.0 + 3 * 40.0 + 3 * 10.0 * 41.0 / 20.0)
-        manual_time.now += 5.0
+        manual_time.now += 3.0
+        advance(0.1)  # its first step (where a planner plans): not yet a pace
+        assert clock.left() == pytest.approx(0.9 * 10.0 * 41.0 / 20.0 + 3 * 1.0 + 3 * 40.0 + 3 * 10.0 * 41.0 / 20.0)
+        manual_time.now += 2.0
+        advance(0.5)  # its own pace since its first step, once a tenth is done after it: 0.4 in 2 s, 2.5 s more
+        assert clock.left() == pytest.approx(2.5 + 3 * 1.0 + 3 * 40.0 + 3 * 10.0 * 41.0 / 20.0)
+        manual_time.now += 5.0  # it slowed down: 10 s in all, as estimated
     assert clock.left() == pytest.approx(3 * 1.0 + 3 * 40.0 + 3 * 10.0)
     clock.record("random", "ptc", 10.0, 1000, 10.0)  # ran in another process: done, counted where it ran
     assert clock.left() == pytest.approx(3 * 1.0 + 3 * 40.0 + 2 * 10.0)
@@ -187,3 +190,69 @@ def test_a_first_run_plans_the_planners_cold_and_a_second_run_warm(tmp_path: Pat
     second = dict(planned_seconds(policies, [scenario], "none", None))
     assert first[("random", "robust-pt")] > second[("random", "robust-pt")]
     assert first[("random", "ptc")] == second[("random", "ptc")]
+
+
+def synthetic_compare(seed: int) -> list[tuple[str, str, float, float, float]]:
+    """Stages as compare runs them, (set, policy, estimate, true seconds, share of them in the first step): each
+    estimate (:func:`estimated_seconds`) off by the machine's factor, the policy's and the set's; a planner's time
+    mostly in its first step, where it solves every robot's plan."""
+    import numpy as np
+
+    from train.evaluation.stages import estimated_seconds
+
+    rng = np.random.default_rng(seed)
+    sets = {"paper-fig5": (8, 2000), "paper-fig7": (4, 7000), "random": (1000, 9000), "disturbed": (1000, 9000),
+            "fault": (1000, 9000), "delay": (1000, 9000), "noise": (1000, 9000)}  # fmt: skip
+    planners = ("optimal", "robust-pt", "robust")
+    policies = [*planners, "ptc", "astolfi", "pt-astolfi", *(f"agent-{i}" for i in range(6))]
+    machine = rng.uniform(0.5, 3.0)
+    by_policy = {policy: rng.uniform(0.5, 2.0) for policy in policies}
+    stages = []
+    for name, (episodes, steps) in sets.items():
+        by_set = rng.uniform(0.8, 1.25)
+        for policy in policies:
+            n = 50 if policy == "optimal" and name not in ("paper-fig5", "paper-fig7", "random") else episodes
+            estimate = estimated_seconds(policy, n, steps, name)
+            true = estimate * machine * by_policy[policy] * by_set * rng.uniform(0.9, 1.1)
+            stages.append((name, policy, estimate, true, 0.7 if policy in planners else 0.01))
+    return stages
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_the_share_done_never_goes_back_and_the_time_left_after_a_fifth_is_within_1_5x_the_truth(
+    manual_time: ManualTime, seed: int
+) -> None:
+    stages = synthetic_compare(seed)
+    clock = StageClock(progress=True, file=io.StringIO())
+    clock.plan([((name, policy), estimate) for name, policy, estimate, _, _ in stages])
+    total = sum(true for *_, true, _ in stages)
+    shown, worst = 0.0, 0.0
+    for name, policy, estimate, true, first in stages:
+        with clock.stage(name, policy, estimate, 100) as advance:
+            for step in range(1, 51):  # the first step, then 49 of the same cost
+                manual_time.now += true * (first if step == 1 else (1.0 - first) / 49)
+                advance(step / 50)
+                assert clock.fraction >= shown  # the bar never goes back
+                shown = clock.fraction
+                truth = total - manual_time.now
+                if shown >= 0.2 and truth > 1.0:
+                    worst = max(worst, clock.left() / truth)
+    assert clock.fraction == pytest.approx(1.0)
+    assert worst <= 1.5, f"the time left said {worst:.2f}x the truth after 20 %"
+    clock.close()
+
+
+def test_a_stages_label_on_the_bar_has_no_leading_comma() -> None:
+    class Terminal(io.StringIO):
+        def isatty(self) -> bool:
+            return True
+
+    screen = Terminal()
+    clock = StageClock(progress=True, file=screen)
+    clock.plan([(("random", "robust"), 1.0)])
+    with clock.stage("random", "robust", 1.0, 10) as advance:
+        advance(0.5)
+        clock._bar.refresh()
+    clock.close()
+    drawn = screen.getvalue()
+    assert "| random: robust [" in drawn and ", random" not in drawn

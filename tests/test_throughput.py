@@ -21,7 +21,7 @@ def test_each_docs_block_is_what_the_benchmarks_render_from_their_json(block: st
 def test_the_record_holds_the_loaded_run_and_the_goals() -> None:
     results = json.loads(throughput.JSON_PATH.read_text())
     assert "loaded" in results and results["load_processes"] >= 2
-    assert "\n".join(goals(results)).count("issue 23") == 5
+    assert "\n".join(goals(results)).count("the busy-machine goal") == 5
 
 
 def test_the_background_load_runs_in_its_block_and_ends_with_it() -> None:

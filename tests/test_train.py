@@ -199,7 +199,7 @@ def test_save_load_and_resume_round_trip(tmp_path: Path) -> None:
 def test_zoo_yaml_hyperparameters(tmp_path: Path) -> None:
     yaml_path = tmp_path / "ppo.yml"
     yaml_path.write_text(
-        "DWRPointStabilization-v1:\n  n_timesteps: !!float 1e3\n  n_envs: 2\n  policy: 'MlpPolicy'\n"
+        "DWRPointStabilization-v2:\n  n_timesteps: !!float 1e3\n  n_envs: 2\n  policy: 'MlpPolicy'\n"
         '  n_steps: 64\n  learning_rate: lin_1e-3\n  policy_kwargs: "dict(net_arch=[32, 32], activation_fn=nn.Tanh)"\n'
     )
     config = resolve_hyperparams(TrainConfig(hyperparams=str(yaml_path)), set())
@@ -207,7 +207,7 @@ def test_zoo_yaml_hyperparameters(tmp_path: Path) -> None:
     assert config.algo_kwargs["policy_kwargs"] == {"net_arch": [32, 32], "activation_fn": "nn.Tanh"}
     explicit = resolve_hyperparams(TrainConfig(hyperparams=str(yaml_path), total_timesteps=77), {"total_timesteps"})
     assert explicit.total_timesteps == 77
-    yaml_path.write_text("DWRPointStabilization-v1:\n  n_stepz: 64\n")
+    yaml_path.write_text("DWRPointStabilization-v2:\n  n_stepz: 64\n")
     with pytest.raises(ConfigError, match="n_stepz"):
         resolve_hyperparams(TrainConfig(hyperparams=str(yaml_path)), set())
     with pytest.raises(ConfigError, match="policy_kwargs"):
@@ -239,7 +239,7 @@ def test_train_bad_input_exits_2_before_training(args: list[str], message: str, 
 
 def test_train_cli_end_to_end_and_refuses_to_overwrite(tmp_path: Path) -> None:
     yaml_path = tmp_path / "hp.yml"
-    yaml_path.write_text("DWRPointStabilization-v1:\n  n_steps: 32\n  batch_size: 64\n")
+    yaml_path.write_text("DWRPointStabilization-v2:\n  n_steps: 32\n  batch_size: 64\n")
     args = ["train", "--residual", "--total-timesteps", "256", "--num-envs", "4", "--eval-freq", "128",
             "--eval-episodes", "8", "--hyperparams", str(yaml_path), "--run-dir", "run", "--no-progress"]  # fmt: skip
     result = dwr_gym(*args, cwd=tmp_path)

@@ -15,10 +15,14 @@ from tqdm.auto import tqdm
 
 
 class Progress(tqdm):  # type: ignore[misc]
-    """A ``tqdm`` bar whose rate, and so its time left, is measured from the end of the first item."""
+    """A ``tqdm`` bar whose rate, and so its time left, is measured from the end of the first item.
+
+    ``fields`` are more keys for a ``bar_format`` (e.g. ``{label}``: tqdm's own ``{postfix}`` starts with a comma).
+    """
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         self._after_first: tuple[float, float] | None = None  # (n, time) when the first item was done
+        self.fields: dict[str, str] = dict(kwargs.pop("fields", None) or {})
         super().__init__(*args, **kwargs)
 
     def update(self, n: float | None = 1) -> bool | None:
@@ -30,7 +34,7 @@ class Progress(tqdm):  # type: ignore[misc]
 
     @property
     def format_dict(self) -> dict[str, Any]:
-        values = super().format_dict
+        values = {**super().format_dict, **getattr(self, "fields", {})}
         if self.disable or "rate" not in values:
             return values
         rate = 0.0  # tqdm shows a rate of 0 as unknown ('?'), as it does the time left

@@ -25,6 +25,7 @@ from typing import Any
 from benchmarks.core.commands import checkout_env, parser_for
 from benchmarks.core.commands import dwr_gym as run_cli
 from benchmarks.core.docs import Schema, table
+from train.env_ids import TASK_ENV_ID
 
 ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "docs" / "datasets" / "suite.json"
@@ -55,8 +56,10 @@ def medium_agent(work: Path) -> Path:
     """A PPO run of ``dwr-gym train`` stopped at a fifth of its default budget."""
     run = work / "ppo-medium"
     if not (run / "model.zip").is_file():
-        dwr_gym("train", "--total-timesteps", str(MEDIUM_STEPS), "--checkpoint-freq", str(MEDIUM_STEPS),
-                "--eval-freq", str(MEDIUM_STEPS), "--run-dir", str(run), "--overwrite", "--no-progress")  # fmt: skip
+        # on v1, the env of the suite's datasets and of its published table
+        dwr_gym("train", "--env", TASK_ENV_ID, "--total-timesteps", str(MEDIUM_STEPS), "--checkpoint-freq",
+                str(MEDIUM_STEPS), "--eval-freq", str(MEDIUM_STEPS), "--run-dir", str(run), "--overwrite",
+                "--no-progress")  # fmt: skip
     return run
 
 
@@ -101,8 +104,9 @@ def baselines(work: Path, d3rlpy_python: str | None, epochs: int, n: int, steps:
                            env=checkout_env())  # fmt: skip
         agents.append(str(run))
     out = work / "evaluate"
-    dwr_gym("evaluate", "--controllers", "optimal", "robust-pt", "ptc", "--agents", *agents, "--scenarios", "random",
-            "disturbed", "--n", str(n), "--n-optimal", "20", "--out", str(out), "--no-progress")  # fmt: skip
+    dwr_gym("evaluate", "--env", TASK_ENV_ID, "--controllers", "optimal", "robust-pt", "ptc", "--agents", *agents,
+            "--scenarios", "random", "disturbed", "--n", str(n), "--n-optimal", "20", "--out", str(out),
+            "--no-progress")  # fmt: skip
     return json.loads((out / "evaluation.json").read_text())
 
 

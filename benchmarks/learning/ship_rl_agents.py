@@ -1,4 +1,4 @@
-"""Copy the best seed of each agent of a ``dwr-gym benchmark`` into train/pretrained/ (issue 32).
+"""Copy the best seed of each agent of a ``dwr-gym benchmark`` into train/pretrained/.
 
 The best seed is the one ``benchmark.json`` names (most episodes in time on the nominal set, then the lowest
 E/opt). Each shipped directory gets the run's config.yaml (its ``command`` is the ``dwr-gym train`` recipe that

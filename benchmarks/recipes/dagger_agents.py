@@ -1,4 +1,4 @@
-"""The DAgger hand-over agents (issue 10), three seeds, then their prescribed-time goal.
+"""The DAgger hand-over agents, three seeds, then their prescribed-time goal.
 
     python -m benchmarks run dagger-agents
 

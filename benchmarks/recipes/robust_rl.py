@@ -1,4 +1,4 @@
-"""The `robust` agent's network fine-tuned by PPO under disturbances, five seeds, and its goal (issue 32).
+"""The `robust` agent's network fine-tuned by PPO under disturbances, five seeds, and its goal.
 
     python -m benchmarks run robust-rl
 

@@ -1,4 +1,4 @@
-"""The goal of issue 22, measured: the deadline under disturbances at near-minimum energy.
+"""The robust goal, measured: the deadline under disturbances at near-minimum energy.
 
 On fresh seeded starts 0.3-3 m away, at T_con in {10, 20, 40, 60} s, on the nominal set (`random`) and the four
 disturbed sets as shipped (`disturbed`, `fault`, `delay`, `noise`), it evaluates the agent (or agents) given, beside

@@ -24,7 +24,7 @@ machine's load hit both sides of a ratio):
   on this CPU and (on a CPU with AVX512) in a process with numpy's and torch's AVX512 switched off: where
   torch starts to pay, which is what ``dwr_gym.model.TORCH_MIN_SIZE`` is.
 
-Then the goals of issues 14 and 23, met or not, and the machine and library versions. ``--docs`` writes
+Then the env-speed and busy-machine goals, met or not, and the machine and library versions. ``--docs`` writes
 every figure into the JSON, from which the results block of docs/throughput.md is rendered
 (:mod:`benchmarks.speed.throughput_report`). Compare two versions of the code with ``compare-commits``
 (alternating runs) or ``instructions`` (counts).

@@ -1,4 +1,4 @@
-"""The report of ``throughput``: its goals (issues 14 and 23) and its lines, from the JSON alone."""
+"""The report of ``throughput``: its goals and its lines, from the JSON alone."""
 
 from __future__ import annotations
 
@@ -10,25 +10,28 @@ def verdict(ok: bool) -> str:
 
 
 def goals(results: dict[str, Any]) -> list[str]:
-    """The goals of issues 14 and 23, each with the measured figure."""
+    """The env-speed and busy-machine goals, each with the measured figure."""
     lines = []
     quiet = results["quiet"]
     if "4096" in quiet["vector"]:
         rates = quiet["vector"]["4096"]
         lines += [
-            f"issue 14: vector env, float64, N = 4096, >= 10 M env-steps/s: {rates['f64'] / 1e6:.2f} M -> "
+            f"the env-speed goal: vector env, float64, N = 4096, >= 10 M env-steps/s: {rates['f64'] / 1e6:.2f} M -> "
             f"{verdict(rates['f64'] >= 1e7)}",
-            f"issue 23: vector env, float64, N = 4096, quiet, >= 0.5x CartPoleVectorEnv: {rates['f64/cart']:.2f}x -> "
+            f"the busy-machine goal: vector env, float64, N = 4096, quiet, >= 0.5x CartPoleVectorEnv: "
+            f"{rates['f64/cart']:.2f}x -> "
             f"{verdict(rates['f64/cart'] >= 0.5)}",
         ]
         if "loaded" in results:
             loaded = results["loaded"]["vector"]["4096"]["f64/cart"]
             lines.append(
-                f"issue 23: vector env, float64, N = 4096, {results['load_processes']} busy processes, >= 0.4x "
+                f"the busy-machine goal: vector env, float64, N = 4096, {results['load_processes']} busy processes, "
+                ">= 0.4x "
                 f"CartPoleVectorEnv: {loaded:.2f}x -> {verdict(loaded >= 0.4)}"
             )
     single = quiet["single"]["gym.make"]["ratio"]
-    lines.append(f"issue 23: single env step through gym.make, quiet, <= 1.5x CartPole-v1's: {single:.2f}x -> "
+    lines.append("the busy-machine goal: single env step through gym.make, quiet, <= 1.5x CartPole-v1's: "
+                 f"{single:.2f}x -> "
                  f"{verdict(single <= 1.5)}")  # fmt: skip
     threshold = results["machine"]["torch_min_size"]
     for condition in ("quiet", "loaded"):
@@ -45,7 +48,8 @@ def goals(results: dict[str, Any]) -> list[str]:
                 else ""
             )
             lines.append(
-                f"issue 23: vector env not slower than its numpy-only path, {condition}: slowest float64/numpy-only "
+                f"the busy-machine goal: vector env not slower than its numpy-only path, {condition}: "
+                "slowest float64/numpy-only "
                 f"ratio {ratios[worst]:.2f}x (N = {worst}){noise} -> {verdict(ratios[worst] >= floor)}"
             )
     return lines

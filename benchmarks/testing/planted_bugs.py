@@ -1,4 +1,4 @@
-"""Plant each bug of issue 26's audit in a copy of the tree, run the test suite there, and record what fails.
+"""Plant each bug of the first test audit in a copy of the tree, run the test suite there, and record what fails.
 
     python -m benchmarks run planted-bugs              # every bug, one suite run each (~5 min each on 2 cores)
     python -m benchmarks run planted-bugs --bugs sinc_1_over_24
@@ -52,7 +52,7 @@ BUGS: dict[str, tuple[str, str, str, str]] = {
         "zero_init_last_layer does nothing", "train/residual.py",
         '    policy = model.policy\n    if hasattr(policy, "action_net"):',
         '    return\n    policy = model.policy\n    if hasattr(policy, "action_net"):'),
-    # issue 34: behaviours no test looked at
+    # the second test audit: behaviours no test looked at
     "distribution_ignores_seed": (
         "DisturbanceDistribution ignores its seed", "dwr_gym/randomization.py",
         "seed = self.distribution.seed", "seed = 0"),

@@ -1,4 +1,4 @@
-"""The reliability check of issue 11: fuzz count, bad-input table, interrupt/resume. Everything must be green.
+"""The reliability check: fuzz count, bad-input table, interrupt/resume. Everything must be green.
 
     OMP_NUM_THREADS=1 python -m benchmarks run reliability              # about 2 minutes on 2 cores
     python -m benchmarks run reliability --states 1e6                   # the full fuzz (the fuzz entry)

@@ -1,4 +1,4 @@
-"""Env steps per second of an ES generation against the jitted PPO's, and on two cores against one (issue 41).
+"""Env steps per second of an ES generation against the jitted PPO's, and on two cores against one.
 
 The generation is `dwr-gym train --algo es --backend jax`'s.
 

@@ -1,4 +1,4 @@
-"""The jitted PPO of `dwr-gym train --backend jax` against `dwr-gym train`'s stable-baselines3 PPO (issue 36).
+"""The jitted PPO of `dwr-gym train --backend jax` against `dwr-gym train`'s stable-baselines3 PPO.
 
     nice -n 10 python -m benchmarks run jax-training speed --threads 1 --docs   # docs/jax/training_speed_1thread.json
     nice -n 10 python -m benchmarks run jax-training speed --threads 2 --docs   # docs/jax/training_speed_2thread.json
@@ -13,7 +13,7 @@ its evaluations), the jitted PPO on one seed, five seeds under ``vmap``, and the
 functional env and the policy, no update: what limits the rest). Compilation is timed apart.
 
 ``learn``: wall-clock time from scratch (compilation included) until each of five seeds, trained together under
-``vmap``, meets issue 32's criteria on `dwr-gym train`'s fixed evaluation set (100 starts of v1, seed 12345):
+``vmap``, meets the RL benchmark's criteria on `dwr-gym train`'s fixed evaluation set (100 starts of v1, seed 12345):
 in time >= 99 %, energy / optimum <= 1.5 (mean over the episodes in time), mean final heading error <= 0.1 rad.
 Each evaluation exports each seed's policy into an SB3 model and runs the SB3 path's rollout on the numpy env;
 the time it takes counts. Process CPU time is recorded beside wall time, since the machine is shared.

@@ -11,7 +11,7 @@ Two things are added where the recorded command relied on what were defaults the
 config>`` to a ``dwr-gym train`` command that names no env (the default env was v0 before it became v1),
 and a module that moved since (``train.dagger``, ``train.learning.dagger``) is read as its new place. Everything
 else a command leaves unset takes today's defaults: the `dwr-gym train` recipes train with the batch-sized defaults
-of issue 23 (docs/training.md), not the 16 robots the shipped agents were trained with.
+of the batch-sized defaults (docs/training.md), not the 16 robots the shipped agents were trained with.
 
 ``--budget F`` multiplies the budget flags of every recipe (``--total-timesteps``, ``--episodes``,
 ``--dagger-episodes``) by F when the full budgets do not fit; the JSON and the docs block say so.
@@ -224,7 +224,7 @@ def render(results: dict[str, Any]) -> list[str]:
     agents_everyone = results.get("all_agents", True) and every_seed
     verdict = "met" if minutes <= results["goal_minutes"] and full and agents_everyone else "NOT met"
     stalled = results.get("stalled_seconds", 0.0) / 60
-    lines += ["", f"wall time of all of it: {minutes:.1f} min (the machine stalled {stalled:.1f} min of it); issue 23 goal, every shipped agent over 3 seeds at "
+    lines += ["", f"wall time of all of it: {minutes:.1f} min (the machine stalled {stalled:.1f} min of it); the busy-machine goal, every shipped agent over 3 seeds at "
               f"the full budget in <= {results['goal_minutes']:.0f} min: {verdict}"]  # fmt: skip
     return lines
 

@@ -2,7 +2,7 @@
 
     OMP_NUM_THREADS=1 nice -n 10 python -m benchmarks run training-speed --docs   # docs/training/speed.json, its block
 
-Issue 23's goal: `dwr-gym train` with its defaults (PPO on DWRPointStabilization-v1, evaluations and
+The busy-machine goal: `dwr-gym train` with its defaults (PPO on DWRPointStabilization-v1, evaluations and
 checkpoints included) runs at >= 20x the env steps per second of ``PPO("MlpPolicy", "CartPole-v1")``,
 both on one thread. Both are timed alternately in this process (``--repeats`` rounds), with the old
 defaults of `dwr-gym train` (16 robots, n_steps 256, batch 512, 10 epochs, evaluations every 20,000 and
@@ -33,7 +33,7 @@ JSON_PATH = ROOT / "docs" / "training" / "speed.json"
 GOAL = 20.0
 OLD_DEFAULTS = {"num_envs": 16, "eval_freq": 20_000, "checkpoint_freq": 50_000,
                 "hyperparam_overrides": {"n_steps": 256, "batch_size": 512, "n_epochs": 10}}  # fmt: skip
-"""`dwr-gym train`'s defaults before issue 23 (PPO; the rest of train/hyperparams/ppo.yml unchanged)."""
+"""`dwr-gym train`'s defaults before the batch-sized defaults (PPO; the rest of train/hyperparams/ppo.yml unchanged)."""
 
 
 def cartpole_fps(steps: int) -> float:
@@ -111,7 +111,7 @@ def render(results: dict[str, Any]) -> list[str]:
     per_round = ", ".join(f"{r['train_defaults'] / r['cartpole_sb3_ppo']:.1f}x" for r in results["rounds"])
     lines += ["", f"dwr-gym train defaults / CartPole, per round: {per_round}",
               f"new defaults / old defaults: {results['ratio_new_to_old_defaults']:.1f}x",
-              f"issue 23 goal, dwr-gym train defaults >= {results['goal']:.0f}x SB3 PPO on CartPole-v1: "
+              f"the busy-machine goal, dwr-gym train defaults >= {results['goal']:.0f}x SB3 PPO on CartPole-v1: "
               f"{results['ratio_train_defaults_to_cartpole']:.1f}x, {verdict}"]  # fmt: skip
     return lines
 

@@ -1,5 +1,5 @@
 """``dwr-gym benchmark``: agents x seeds trained from v1's reward, evaluated on fixed sets, aggregated with rliable
-(issue 32; docs/rl-benchmark.md)."""
+(docs/rl-benchmark.md)."""
 
 from __future__ import annotations
 

@@ -10,6 +10,7 @@ from train.commands.shared import (
     UsageError,
     add_agents_argument,
     add_scenario_arguments,
+    check_agent_paths,
     checked_env,
     checked_optimum,
     checked_selection,
@@ -33,16 +34,18 @@ def add_parser(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Evaluate agents and controllers on the same scenarios; print the table, write CSV, JSON and plots."""
-    with command_threads(args):
-        return _run(args)
-
-
-def _run(args: argparse.Namespace) -> int:
-    from pathlib import Path
-
+    """Evaluate agents and controllers on the same scenarios; print the table, write CSV, JSON and plots. Every
+    argument is checked first, before the heavy imports (torch, the agents), so that bad input is answered at once."""
     env_id, env_kwargs = checked_env(args)
     controllers = checked_selection(args)
+    check_agent_paths(args.agents)
+    with command_threads(args):
+        return _run(args, env_id, env_kwargs, controllers)
+
+
+def _run(args: argparse.Namespace, env_id: str, env_kwargs: dict[str, Any], controllers: list[str]) -> int:
+    from pathlib import Path
+
     try:
         import matplotlib  # noqa: F401
         import stable_baselines3  # noqa: F401
@@ -54,7 +57,7 @@ def _run(args: argparse.Namespace) -> int:
     from train.reporting.compare_figures import plot_learning_curves, plot_time_series, plot_trajectories
     from train.reporting.results import write_results
     from train.reporting.robust_headline import DISTURBED, headline_table, plot_pareto
-    from train.reporting.tables import EVAL_COLUMNS, print_blocks, table_notes
+    from train.reporting.tables import EVAL_COLUMNS, asked_columns, print_blocks, table_notes
 
     paths = [Path(p) for p in args.agents] if args.agents else list(pretrained_paths().values())
     if not paths:
@@ -72,9 +75,10 @@ def _run(args: argparse.Namespace) -> int:
         done[:] = found
 
     clock = StageClock(progress=not args.no_progress)
+    optimum = checked_optimum(args)
     try:
         rows, recorded, labels = compare(agents, controllers, args.scenarios, args.n, args.seed, env_kwargs,
-                                         progress=not args.no_progress, optimum=checked_optimum(args),
+                                         progress=not args.no_progress, optimum=optimum,
                                          T_cons=args.T_con, n_optimal=args.n_optimal, on_rows=keep,
                                          clock=clock, address=args.address)  # fmt: skip
     except KeyboardInterrupt:
@@ -91,14 +95,17 @@ def _run(args: argparse.Namespace) -> int:
         figures.append(out / "learning_curves.png")
         plot_learning_curves(run_dirs, figures[2])
     print(f"env: {env_id}")
-    print_blocks(rows, EVAL_COLUMNS)
+    print_blocks(rows, asked_columns(EVAL_COLUMNS, optimum))
     if table_notes(rows):
         print(table_notes(rows))
     if any(r["scenario"] == "random" for r in rows) and any(r["scenario"] in DISTURBED for r in rows):
-        print("\nthe robust headline (in time, final heading error and energy on each set; E/opt on the nominal one):")
-        print(headline_table(rows))
-        figures.append(out / "pareto.png")
-        plot_pareto(rows, figures[-1])
+        asked = optimum != "none"
+        print("\nthe robust headline (in time, final heading error and energy on each set"
+              + ("; E/opt on the nominal one):" if asked else "):"))  # fmt: skip
+        print(headline_table(rows, energy_ratio=asked))
+        if asked:  # E/opt against the worst in-time rate: nothing to draw without the optimum
+            figures.append(out / "pareto.png")
+            plot_pareto(rows, figures[-1])
     for path in write_results(rows, args.out, "comparison"):
         print(f"wrote {path}")
     for figure in figures:

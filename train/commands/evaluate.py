@@ -8,6 +8,7 @@ from typing import Any
 from train.commands.shared import (
     add_agents_argument,
     add_scenario_arguments,
+    check_agent_paths,
     checked_env,
     checked_optimum,
     checked_selection,
@@ -26,20 +27,22 @@ def add_parser(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Evaluate controllers (and saved agents) on named scenario sets."""
-    with command_threads(args):
-        return _run(args)
-
-
-def _run(args: argparse.Namespace) -> int:
+    """Evaluate controllers (and saved agents) on named scenario sets; every argument is checked first, before the
+    heavy imports (torch, the agents), so that bad input is answered at once."""
     env_id, env_kwargs = checked_env(args)
     names = checked_selection(args)
+    check_agent_paths(args.agents)
+    with command_threads(args):
+        return _run(args, env_id, env_kwargs, names)
+
+
+def _run(args: argparse.Namespace, env_id: str, env_kwargs: dict[str, Any], names: list[str]) -> int:
     policies: dict[str, Any] = {name: name for name in names}
     policies.update(load_agents(args.agents, env_id))
     from train.evaluation.evaluate import evaluate_sets
     from train.evaluation.stages import StageClock
     from train.reporting.results import write_results
-    from train.reporting.tables import EVAL_COLUMNS, print_blocks, table_notes
+    from train.reporting.tables import EVAL_COLUMNS, asked_columns, print_blocks, table_notes
 
     done: list[dict[str, Any]] = []  # the rows of the scenario sets finished so far
 
@@ -47,9 +50,10 @@ def _run(args: argparse.Namespace) -> int:
         done[:] = found
 
     clock = StageClock(progress=not args.no_progress, description="evaluate")
+    optimum = checked_optimum(args)
     try:
         rows = evaluate_sets(policies, args.scenarios, args.n, args.seed, env_kwargs, progress=not args.no_progress,
-                             optimum=checked_optimum(args), T_cons=args.T_con, n_optimal=args.n_optimal,
+                             optimum=optimum, T_cons=args.T_con, n_optimal=args.n_optimal,
                              on_rows=keep, clock=clock, address=args.address)  # fmt: skip
     except KeyboardInterrupt:
         clock.close()
@@ -57,7 +61,7 @@ def _run(args: argparse.Namespace) -> int:
     clock.close()
     rows = [{**row, "env_id": env_id} for row in rows]
     print(f"env: {env_id}")
-    print_blocks(rows, EVAL_COLUMNS)
+    print_blocks(rows, asked_columns(EVAL_COLUMNS, optimum))
     if table_notes(rows):
         print(table_notes(rows))
     for path in write_results(rows, args.out, "evaluation"):

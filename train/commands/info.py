@@ -10,7 +10,8 @@ from train.commands.shared import UsageError
 
 #: What each registered id is for, as ``info`` lists them.
 DESCRIPTIONS = {
-    "DWRPointStabilization-v1": "the task, every command's default: T_con drawn per episode, energy-optimal reward",
+    "DWRPointStabilization-v2": "the task held to T_con, every command's default: the pose at T_con less the energy",
+    "DWRPointStabilization-v1": "the same task ending on arrival (energy-optimal reward): the v1 agents' env",
     "DWRPointStabilization-v0": "the paper's original reward at T_con = 20 s, kept bit for bit for reproduction",
     "DWRPointStabilizationGoal-v0": "the goal-conditioned task for HER (Dict observations)",
 }
@@ -18,11 +19,11 @@ DESCRIPTIONS = {
 
 def add_parser(sub: Any) -> None:
     """The ``info`` subcommand."""
-    from train.env_ids import TASK_ENV_ID
+    from train.env_ids import DEFAULT_ENV_ID
 
     p = sub.add_parser("info", help="versions, the registered envs and their defaults")
-    p.add_argument("--env", default=TASK_ENV_ID, metavar="ID",
-                   help=f"the env whose defaults to print: any registered id (default: {TASK_ENV_ID})")  # fmt: skip
+    p.add_argument("--env", default=DEFAULT_ENV_ID, metavar="ID",
+                   help=f"the env whose defaults to print: any registered id (default: {DEFAULT_ENV_ID})")  # fmt: skip
     p.set_defaults(func=run)
 
 

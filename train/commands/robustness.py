@@ -15,6 +15,7 @@ from train.commands.shared import (
     add_agents_argument,
     add_env_arguments,
     add_threads_argument,
+    check_agent_paths,
     checked_env,
     checked_selection,
     command_threads,
@@ -62,7 +63,7 @@ def add_parser(sub: Any) -> None:
     )
     p.add_argument("--seed", type=count, default=0, help="seed of the start poses and disturbances (default: 0)")
     p.add_argument("--T-con", type=float, metavar="SECONDS",
-                   help="the prescribed time of every episode, replacing v1's T_con_range (default: 20, or T_con of "
+                   help="the prescribed time of every episode, replacing the env's T_con_range (default: 20, or T_con of "
                    "--env-kwargs)")  # fmt: skip
     add_env_arguments(p, "observation_noise=0.01")
     p.add_argument("--out", default="results/robustness", help="output directory (default: results/robustness)")
@@ -79,15 +80,8 @@ def add_parser(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Sweep disturbances for the controllers and agents; print the tolerance table, write CSV, JSON, PNG, MD."""
-    with command_threads(args):
-        return _run(args)
-
-
-def _run(args: argparse.Namespace) -> int:
-    from train.evaluation.robustness import SWEEPS, sweep
-    from train.reporting.results import write_results
-
+    """Sweep disturbances for the controllers and agents; print the tolerance table, write CSV, JSON, PNG, MD. Every
+    argument is checked first, before the heavy imports (torch, the agents), so that bad input is answered at once."""
     out = Path(args.out)
     if args.from_json:  # tables and figures of earlier runs, e.g. of disturbances swept in parallel
         rows = []
@@ -97,6 +91,15 @@ def _run(args: argparse.Namespace) -> int:
             except (OSError, ValueError) as error:
                 raise UsageError(f"--from-json {path!r} is invalid: {error}") from error
         return report(rows, out, args.no_plots)
+    env_id, env_kwargs, names = _checked(args)
+    with command_threads(args):
+        return _run(args, env_id, env_kwargs, names)
+
+
+def _checked(args: argparse.Namespace) -> tuple[str, dict[str, Any], list[str]]:
+    """The env id, the env's keywords at the one T_con of the sweep, and the controllers; bad input a UsageError."""
+    from train.evaluation.robustness import SWEEPS
+
     env_id, env_kwargs = checked_env(args)
     T_con = args.T_con if args.T_con is not None else float(env_kwargs.get("T_con", 20.0))
     if not 0.0 < T_con <= 1e6:
@@ -108,18 +111,27 @@ def _run(args: argparse.Namespace) -> int:
         if name not in SWEEPS:
             raise UsageError(f"--disturbances {name!r} is invalid: expected any of {', '.join(SWEEPS)}")
     args.scenarios, args.T_con = [], None
-    policies: dict[str, Any] = {name: name for name in checked_selection(args)}
+    names = checked_selection(args)
+    check_agent_paths(args.agents)
+    if args.n_optimal < 1:
+        raise UsageError(f"--n-optimal {args.n_optimal} is invalid: expected an integer >= 1")
+    if not 0.0 <= args.give_up_below <= 1.0:
+        raise UsageError(f"--give-up-below {args.give_up_below} is invalid: expected a share in [0, 1]")
+    return env_id, env_kwargs, names
+
+
+def _run(args: argparse.Namespace, env_id: str, env_kwargs: dict[str, Any], names: list[str]) -> int:
+    from train.evaluation.robustness import sweep
+    from train.reporting.results import write_results
+
+    out = Path(args.out)
+    policies: dict[str, Any] = {name: name for name in names}
     paths = list(args.agents or [])
     if not args.no_shipped_agents:
         from train.learning.agents import pretrained_paths
 
         paths = [str(path) for path in pretrained_paths().values()] + paths
-    agents = load_agents(paths, env_id)  # (loaded here too: a bad path is an error before any work)
-    policies.update(agents)
-    if args.n_optimal < 1:
-        raise UsageError(f"--n-optimal {args.n_optimal} is invalid: expected an integer >= 1")
-    if not 0.0 <= args.give_up_below <= 1.0:
-        raise UsageError(f"--give-up-below {args.give_up_below} is invalid: expected a share in [0, 1]")
+    policies.update(load_agents(paths, env_id))
     workers = args.workers or min(os.cpu_count() or 1, 8)
     if workers > 1:
         from train.evaluation.robustness import sweep_parallel

@@ -153,9 +153,9 @@ def _float_or_text(raw: str) -> float | str:
 
 def add_env_arguments(p: argparse.ArgumentParser, kwargs_example: str = "T_con=25 dt=0.02") -> None:
     """``--env ID`` and ``--env-kwargs KEY=VALUE ...``: the env every command that makes one runs on."""
-    from train.env_ids import ENV_HELP, TASK_ENV_ID
+    from train.env_ids import DEFAULT_ENV_ID, ENV_HELP
 
-    p.add_argument("--env", default=TASK_ENV_ID, metavar="ID", help=f"{ENV_HELP} (default: {TASK_ENV_ID})")
+    p.add_argument("--env", default=DEFAULT_ENV_ID, metavar="ID", help=f"{ENV_HELP} (default: {DEFAULT_ENV_ID})")
     p.add_argument("--env-kwargs", nargs="*", metavar="KEY=VALUE",
                    help=f"env keywords on top of the env id's, e.g. {kwargs_example}")  # fmt: skip
 
@@ -292,6 +292,20 @@ def add_scenario_arguments(p: argparse.ArgumentParser, out: str, sets: Sequence[
                    "needs the sweep extra)")  # fmt: skip
     add_threads_argument(p)
     add_env_arguments(p)
+
+
+def check_agent_paths(paths: Sequence[str] | None, flag: str = "--agents") -> None:
+    """Before any heavy import: every path of ``--agents`` exists, else a UsageError naming the agents shipped with
+    dwr-gym (a path that a user copied from an older version's docs is the common case)."""
+    from pathlib import Path
+
+    for path in paths or ():
+        if not Path(path).exists():
+            from train.learning.agents import PRETRAINED_DIR, pretrained_paths
+
+            shipped = ", ".join(p.name for p in pretrained_paths().values()) or "none"
+            raise UsageError(f"{flag} {str(path)!r} is invalid: no such file or directory; the agents shipped with "
+                             f"dwr-gym, in {PRETRAINED_DIR}: {shipped}")  # fmt: skip
 
 
 def load_agents(paths: Sequence[str] | None, env_id: str | None = None) -> dict[str, Any]:

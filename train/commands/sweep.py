@@ -78,27 +78,24 @@ def add_parser(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run the sweep, then write trials.csv, best.yml and learning_curves.png in --out."""
+    """Run the sweep, then write trials.csv, best.yml and learning_curves.png in --out; every argument is checked
+    first, before Ray and torch are imported."""
+    checked = _checked(args)
+    from importlib.util import find_spec
+
+    if find_spec("ray") is None or find_spec("ray.tune") is None:
+        raise UsageError('Ray Tune is not installed: pip install "dwr-gym[sweep]"')
     with command_threads(args):
-        return _run(args)
+        return _run(args, *checked)
 
 
-def _run(args: argparse.Namespace) -> int:
+def _checked(args: argparse.Namespace) -> tuple[Path, dict[str, Any], dict[str, Any], dict[str, float], list[int],
+                                                list[dict[str, Any]]]:  # fmt: skip
+    """--out, the base configuration, the search space, a trial's resources, the seeds and the configurations; bad
+    input a UsageError."""
     from train.learning.config import ConfigError
-    from train.learning.sweep import (
-        optuna_space,
-        parse_param,
-        parse_resources,
-        sample_configurations,
-        trainable,
-        trial_config,
-    )
+    from train.learning.sweep import parse_param, parse_resources, sample_configurations, trial_config
 
-    try:
-        import ray
-        from ray import tune
-    except ImportError as error:
-        raise UsageError('Ray Tune is not installed: pip install "dwr-gym[sweep]"') from error
     out = Path(args.out).resolve()
     base = {"algo": args.algo, "residual": args.residual, "total_timesteps": args.total_timesteps,
             "num_envs": args.num_envs, "env_id": args.env, "env_kwargs": parse_env_kwargs(args.env_kwargs),
@@ -132,10 +129,22 @@ def _run(args: argparse.Namespace) -> int:
             trial_config(base, hp, 0, out / "runs" / "check")
     except ConfigError as error:
         raise UsageError(str(error)) from error
-    experiment = out / "ray"
-    name = args.name or f"{args.algo}{'-residual' if args.residual else ''}"
     if not args.resume and (out / "runs").exists():
         raise UsageError(f"--out {str(out)!r} already holds a sweep: use --resume to continue it, or another --out")
+    return out, base, space, resources, seeds, configs
+
+
+def _run(
+    args: argparse.Namespace, out: Path, base: dict[str, Any], space: dict[str, Any], resources: dict[str, float],
+    seeds: list[int], configs: list[dict[str, Any]],
+) -> int:  # fmt: skip
+    import ray
+    from ray import tune
+
+    from train.learning.sweep import optuna_space, trainable
+
+    experiment = out / "ray"
+    name = args.name or f"{args.algo}{'-residual' if args.residual else ''}"
     ray.init(address=args.address, include_dashboard=False, configure_logging=False, log_to_driver=False)
     metric = args.metric
     mode = "max" if metric in ("return_mean", "success_rate") else "min"

@@ -60,16 +60,20 @@ def run(args: argparse.Namespace) -> int:
     given = {k: v for k, v in vars(args).items() if k not in ("func", "command")}
     if "env_kwargs" in given:
         given["env_kwargs"] = parse_env_kwargs(given["env_kwargs"])
-    try:
-        import stable_baselines3  # noqa: F401
-    except ImportError as error:
-        raise UsageError('stable-baselines3 is not installed: pip install "dwr-gym[train]"') from error
     from train.learning.config import ConfigError, TrainConfig
-    from train.learning.hyperparams import parse_overrides, resolve_hyperparams
-    from train.learning.runs import RunDirError, resume_config
-    from train.learning.training import train
+    from train.learning.runs import RunDirError
 
     try:
+        if "resume" not in given:  # the options alone, checked before torch and the learners are imported
+            TrainConfig(**{k: v for k, v in given.items() if k != "hyperparams"}).validate()
+        from importlib.util import find_spec
+
+        if find_spec("stable_baselines3") is None:
+            raise UsageError('stable-baselines3 is not installed: pip install "dwr-gym[train]"')
+        from train.learning.hyperparams import parse_overrides, resolve_hyperparams
+        from train.learning.runs import resume_config
+        from train.learning.training import train
+
         if "hyperparams" in given:
             given["hyperparams"], overrides = split_hyperparams(given["hyperparams"])
             given["hyperparam_overrides"] = parse_overrides(overrides)

@@ -1,4 +1,4 @@
-"""The evaluation of ``dwr-gym benchmark`` (issue 32): one fixed nominal set and the four disturbed sets.
+"""The evaluation of ``dwr-gym benchmark``: one fixed nominal set and the four disturbed sets.
 
 The nominal set is :data:`EVAL_EPISODES` starts of ``DWRPointStabilization-v1`` (0.3-3 m away, T_con drawn in
 [10, 60] s) drawn with :data:`EVAL_SEED`, a seed no training run uses; the disturbed sets are the same starts on
@@ -19,7 +19,7 @@ from train.evaluation.evaluate import evaluate_sets
 from train.evaluation.rollout import Policy
 
 EVAL_SEED = 3232
-"""Seed of the benchmark's evaluation starts (issue 32): kept apart from every training and evaluation seed."""
+"""Seed of the benchmark's evaluation starts: kept apart from every training and evaluation seed."""
 EVAL_EPISODES = 1000
 DISTURBED_EPISODES = 200
 """Episodes per disturbed set: the starts of the nominal set drawn with ``n = 200`` (the same seed), on the

@@ -1,6 +1,6 @@
-"""Where a policy's energy goes on an env id, and how far the analytic laws get by their gains alone (issue 40).
+"""Where a policy's energy goes on an env id, and how far the analytic laws get by their gains alone.
 
-Two measurements that tell the residual-on-PTC goal's size (E/opt <= 1.6 at a final heading <= 0.15 rad):
+Two measurements that tell the size of the residual-on-PTC goal (:data:`train.goals.RESIDUAL_ON_PTC`):
 
 - :func:`energy_split`: each policy's energy ``E = int u^2 + omega^2 dt`` (the env's, counted until the episode ends:
   on v2 until T_con) split into its linear part (``u^2``) and its turning part (``omega^2``), and its share in each
@@ -20,6 +20,7 @@ import numpy as np
 
 from train.env_ids import env_keywords
 from train.evaluation.incentives import controller_policy, random_episodes
+from train.goals import RESIDUAL_ON_PTC
 
 V2 = "DWRPointStabilization-v2"
 #: Parts of T_con the energy is shared over (fifths).
@@ -29,8 +30,8 @@ GAIN_GRIDS: dict[str, dict[str, tuple[float, ...]]] = {
     "ptc": {"K1": (1.2, 1.5, 2.0, 3.0), "K2": (2.0, 5.0, 10.0)},
     "pt-astolfi": {"k_rho": (1.0, 1.2, 1.5), "k_alpha": (4.7, 7.0, 10.0), "k_beta": (-0.5, -1.0, -1.7, -3.0)},
 }
-#: The residual-on-PTC goal's bounds (issue 40): in time and final heading [rad].
-GOAL_IN_TIME, GOAL_HEADING = 0.995, 0.15
+#: The residual-on-PTC goal's bounds: in time and final heading [rad].
+GOAL_IN_TIME, GOAL_HEADING = RESIDUAL_ON_PTC.in_time, RESIDUAL_ON_PTC.final_heading
 
 
 def energy_split(

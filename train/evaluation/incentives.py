@@ -1,4 +1,4 @@
-"""What an env id's return pays for (issue 40): does the optimum earn the most, and does arriving early pay?
+"""What an env id's return pays for: does the optimum earn the most, and does arriving early pay?
 
 Two measurements, each on any env id, scored with the discount the shipped hyperparameters train that id with
 (``gamma`` of ``train/hyperparams/ppo.yml``: 0.999 on v1, 1 on v2):
@@ -9,7 +9,7 @@ Two measurements, each on any env id, scored with the discount the shipped hyper
   optimal-control problem, ``optimal`` with ``arrival_fraction`` f, re-planned every second from the observed pose,
   so it arrives under noise too), executed with Gaussian action noise of standard deviation sigma (the env's
   ``actuation_noise``, on the normalised action, the noise an exploring agent adds): the return should be highest
-  at the latest arrival, whatever sigma; on v1 the early arrival pays (issue 32's diagnosis, as numbers).
+  at the latest arrival, whatever sigma; on v1 the early arrival pays (the RL benchmark's diagnosis, as numbers).
 """
 
 from __future__ import annotations

@@ -16,10 +16,13 @@ from typing import Any
 
 import numpy as np
 
+from train.goals import RESIDUAL_ON_PTC
+
 #: Per-episode measures of :func:`train.learning.jitted.open_loop_bound.open_loop_bound`, in its rows.
 MEASURES = ("in_time", "energy", "final_heading", "return")
-#: The residual goal's final heading (issue 40) [rad]: :func:`summary` gives the share of episodes within it.
-HEADING_GOAL = 0.15
+#: The residual goal's final heading [rad] (:data:`train.goals.RESIDUAL_ON_PTC`): :func:`summary` gives the share of
+#: episodes within it.
+HEADING_GOAL = RESIDUAL_ON_PTC.final_heading
 
 
 def episode_fn(env: Any, env_params: Any) -> Any:

@@ -5,11 +5,14 @@ policy on each set. :class:`StageClock` shows one bar for all of them, counted i
 left spans every stage to come, and it records the wall time of each stage for the results (``seconds`` and
 ``optimum_seconds`` of each row) and the closing line (:meth:`summary`).
 
-The bar counts wall seconds: those so far, and an estimate of those to come. Each stage to come is
+The bar shows the share of the work done, wall seconds so far against those and the estimate of those to come,
+and never goes back (an estimate that grows holds it where it is), beside the time left itself. Each stage to come is
 :func:`estimated_seconds`, corrected by the ratio of wall to estimated seconds of the policy's stages that ended (a
 planner takes minutes where its plans must be solved and seconds where :mod:`baselines.plan_store` holds them), or of
 every policy's until the policy has run (a planner's estimate is measured per set, cold where the plan store is
-empty, warm where it holds plans); the stage running here goes at its own pace once a tenth of it is done. A
+empty, warm where it holds plans); the stage running here goes at its own pace once a tenth of it is done after
+its first step (a planner solves every robot's plan at its first step: a pace measured from the stage's start would
+take the plans' minutes for the rate of the seconds of steps that follow). A
 set whose stages run in two processes (the planners here, the others in a second one,
 :mod:`train.evaluation.side_process`) takes the longer of this process's stages and half of all; the second
 process's stages leave the estimate as they end there.
@@ -51,8 +54,12 @@ LOG_STEP = 0.1
 FIGURES = "figures"
 #: The estimated seconds of a policy's ended stages from which their ratio to the wall time corrects its stages to come.
 CALIBRATE_AFTER = 0.5
-#: The fraction of a running stage from which its own pace tells the rest of it.
+#: The fraction of a running stage, after its first step, from which its own pace tells the rest of it.
 EXTRAPOLATE_AFTER = 0.1
+#: The bar counts the share of the work done in these units (a thousandth: a percentage with a decimal to spare).
+BAR_UNITS = 1000
+#: Seconds between redraws of a bar whose share done is held (the estimate grew): its clock and time left still move.
+REDRAW_HELD = 0.5
 
 
 def estimated_seconds(policy: str, episodes: int, steps: int, scenario: str = "random", cold: bool = False) -> float:
@@ -94,21 +101,23 @@ class StageClock:
         self._unnamed = 0.0  # estimated seconds planned without a stage's name, not run yet
         self._took: dict[tuple[str, str], list[float]] = {}  # by (name, group): [wall s, estimated s] of those ended
         self._groups: dict[str, str] = {}  # scenario -> the group a policy's pace is learned in (plan's groups)
-        self._running: tuple[str, str, float, float, float] | None = None  # here: set, name, estimate, start, fraction
+        self._running: _Running | None = None  # the stage running here
         self._ratios: dict[tuple[str, str], float] = {}  # ratio() by (name, group), worked out again as a stage ends
         self._beside: set[str] = set()  # the names of the stages run in a second process (plan's beside)
         self._left_unnamed = 0.0  # the corrected estimates of the stages not run yet: without names,
         self._left_here: dict[str, float] = {}  # by set, of those run here,
         self._left_beside: dict[str, float] = {}  # and of those run in the second process
         self._logged = 0  # tenths of the work already written to a redirected log
+        self._shown = 0.0  # the share of the work shown done: never less than before
+        self._drawn = 0.0  # when a held bar was last redrawn
         self._description = description
         self._bar: Any = None
         self._log = progress and not self._file.isatty()
         if progress and not self._log:
             from train.progress import Progress
 
-            self._bar = Progress(total=0.0, desc=description, unit="s", file=self._file,
-                                 bar_format="{desc}: {percentage:3.0f}%|{bar}| {postfix} [{elapsed}<{remaining}]")  # fmt: skip
+            self._bar = Progress(total=BAR_UNITS, desc=description, file=self._file, fields={"label": "", "left": "?"},
+                                 bar_format="{desc}: {percentage:3.0f}%|{bar}| {label} [{elapsed}<{left}]")  # fmt: skip
 
     @property
     def shown(self) -> bool:
@@ -146,11 +155,13 @@ class StageClock:
         began = time.perf_counter()
         estimate = self._take(scenario, name, weight)
         self._correct()
-        self._running = (scenario, name, estimate, began, 0.0)
+        running = self._running = _Running(scenario, name, estimate, began)
         self._label(f"{scenario}: {name}")
 
         def advance(fraction: float) -> None:
-            self._running = (scenario, name, estimate, began, min(max(fraction, 0.0), 1.0))
+            running.fraction = min(max(fraction, 0.0), 1.0)
+            if running.first is None and running.fraction > 0.0:  # its first step: a planner's plans in it
+                running.first = (time.perf_counter(), running.fraction)
             self._move()
 
         try:
@@ -173,14 +184,18 @@ class StageClock:
 
     def left(self, now: float | None = None) -> float:
         """The wall seconds to come: the stages not run yet, each estimate corrected by :meth:`ratio`, and the rest of
-        the stage running here (from its own pace once a tenth of it is done); a set whose stages run in two processes
-        takes the longer of this process's and half of all."""
+        the stage running here (at its own pace since its first step once a tenth of it is done after that step, else
+        its corrected estimate's share); a set whose stages run in two processes takes the longer of this process's and
+        half of all."""
         here = dict(self._left_here)
         if self._running is not None:
-            scenario, name, estimate, began, fraction = self._running
-            elapsed = (time.perf_counter() if now is None else now) - began
-            pace = elapsed / fraction if fraction >= EXTRAPOLATE_AFTER else estimate * self.ratio(name, scenario)
-            here[scenario] = here.get(scenario, 0.0) + max((1.0 - fraction) * pace, 0.0)
+            stage = self._running
+            now = time.perf_counter() if now is None else now
+            rest = (1.0 - stage.fraction) * stage.estimate * self.ratio(stage.name, stage.scenario)
+            if stage.first is not None and stage.fraction - stage.first[1] >= EXTRAPOLATE_AFTER:
+                since, at = stage.first
+                rest = (1.0 - stage.fraction) * (now - since) / (stage.fraction - at)
+            here[stage.scenario] = here.get(stage.scenario, 0.0) + max(rest, 0.0)
         left = self._left_unnamed
         for scenario in here.keys() | self._left_beside.keys():
             mine, theirs = here.get(scenario, 0.0), self._left_beside.get(scenario, 0.0)
@@ -235,26 +250,36 @@ class StageClock:
 
     def _label(self, text: str) -> None:
         if self._bar is not None:
-            self._bar.set_postfix_str(text, refresh=False)
+            self._bar.fields["label"] = text
+
+    @property
+    def fraction(self) -> float:
+        """The share of the work the bar shows done: wall seconds so far against those and :meth:`left`, never less
+        than it showed before."""
+        return self._shown
 
     def _move(self) -> None:
-        """The wall seconds so far and the total (those and :meth:`left`), on the bar or in a redirected log."""
+        """The share of the work done and the time left (:meth:`left`), on the bar or in a redirected log."""
         if not self.shown:
             return
         now = time.perf_counter()
-        done = now - self.began  # the bar counts wall seconds: done so far, and to come
-        self._total = done + self.left(now)
+        done = now - self.began
+        left = self.left(now)
+        self._done, self._total = done, done + left
+        if self._total > 0.0:
+            self._shown = max(self._shown, min(done / self._total, 1.0))  # an estimate that grows holds the bar
         if self._bar is not None:
-            self._bar.total = round(self._total, 1)
-            self._bar.update(max(round(done, 1) - round(self._done, 1), 0.0))  # redrawn at most every tenth of a second
-        self._done = done
-        if self._total <= 0.0:
-            return
-        tenths = int(self._done / self._total / LOG_STEP + 1e-9)
+            self._bar.fields["left"] = self._bar.format_interval(left)
+            step = round(self._shown * BAR_UNITS) - self._bar.n
+            if step > 0:
+                self._bar.update(step)  # redrawn at most every tenth of a second (tqdm's mininterval)
+            elif now - self._drawn >= REDRAW_HELD:  # a bar held where it is: its elapsed and time left still move
+                self._bar.refresh()
+                self._drawn = now
+        tenths = int(self._shown / LOG_STEP + 1e-9)
         if self._log and tenths > self._logged:
             self._logged = tenths
-            left = self._total - self._done
-            print(f"{self._description}: {100 * self._done / self._total:.0f}% after {format_seconds(self._done)}, "
+            print(f"{self._description}: {100 * self._shown:.0f}% after {format_seconds(done)}, "
                   f"about {format_seconds(left)} left", file=self._file, flush=True)  # fmt: skip
 
     def close(self) -> None:
@@ -268,7 +293,8 @@ class StageClock:
         return sum(t.seconds for t in self.times if t.scenario == scenario and t.stage == stage)
 
     def summary(self) -> str:
-        """One line: the total, the optimum (plans, plans/s), the policies (the slowest three named), the rest."""
+        """One line: the total, the optimum (plans, plans/s; "cached" where every one was; nothing where none was
+        asked for), the policies (the slowest three named), the rest."""
         total = time.perf_counter() - self.began
         optimum = [t for t in self.times if t.stage == "optimum"]
         policies = [t for t in self.times if t.stage != "optimum" and t.scenario != FIGURES]
@@ -280,7 +306,7 @@ class StageClock:
         if solved:
             parts.append(f"optimum {format_seconds(optimum_seconds)} ({solved:,} plans, "
                          f"{solved / max(optimum_seconds, 1e-9):.1f}/s)")  # fmt: skip
-        else:
+        elif optimum:  # the optimum's stages ran, and found every plan in the cache
             parts.append("optimum cached")
         by_policy: dict[str, float] = {}
         for t in policies:
@@ -291,6 +317,18 @@ class StageClock:
         parts.append(f"policies {format_seconds(waited)} ({named}{', ...' if len(by_policy) > 3 else ''}{beside})")
         parts.append(f"the rest (loading, figures, files) {format_seconds(other)}")
         return f"time: {format_seconds(total)}: " + "; ".join(parts)
+
+
+@dataclass
+class _Running:
+    """The stage running here: its estimate, its start, the fraction done, and when its first step ended."""
+
+    scenario: str
+    name: str
+    estimate: float
+    began: float
+    fraction: float = 0.0
+    first: tuple[float, float] | None = None  # (time, fraction) at the end of its first step
 
 
 def format_seconds(seconds: float) -> str:

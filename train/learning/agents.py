@@ -14,7 +14,7 @@ PRETRAINED = {
     "dagger": PRETRAINED_DIR / "dagger",
     "dagger-handover": PRETRAINED_DIR / "dagger_handover",
     "robust": PRETRAINED_DIR / "robust",
-    # learned from v1's reward by `dwr-gym benchmark` (issue 32, docs/rl-benchmark.md): the best seed of each
+    # learned from v1's reward by `dwr-gym benchmark` (docs/rl-benchmark.md): the best seed of each
     "ppo-v1": PRETRAINED_DIR / "ppo_v1",
     "ppo-jax-v1": PRETRAINED_DIR / "ppo_jax_v1",
     "residual-ppo-v1": PRETRAINED_DIR / "residual_ppo_v1",

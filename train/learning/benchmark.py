@@ -1,4 +1,4 @@
-"""``dwr-gym benchmark`` (issue 32): train every agent x seed from v1's reward, evaluate, and keep the results.
+"""``dwr-gym benchmark``: train every agent x seed from v1's reward, evaluate, and keep the results.
 
 An *entry* is a name and either the options of ``dwr-gym train`` (:data:`ENTRIES`, or ``NAME:KEY=VALUE,...``
 on the command line) or, from Python, any function ``make(seed, run_dir) -> policy`` whose policy has
@@ -31,6 +31,9 @@ from train.learning.config import ConfigError, TrainConfig
 from train.learning.hyperparams import HYPERPARAMS_DIR
 
 V2 = "DWRPointStabilization-v2"
+#: The env of an entry that names none: v1, whose reward the benchmark's first entries (ppo, sac, ...) learned from
+#: and whose published tables they are; the entries of v2 name it.
+ENTRY_ENV_ID = TASK_ENV_ID
 
 
 def apg_teacher_time_scaled(total_timesteps: int, **overrides: Any) -> dict[str, Any]:
@@ -96,11 +99,11 @@ ENTRIES: dict[str, dict[str, Any]] = {
         "expert": "pt-astolfi",
         "env_id": "DWRPointStabilization-v2",
     },
-    # sbx-rl, the JAX stable-baselines (issue 40): the same algorithms and settings, compiled by XLA
+    # sbx-rl, the JAX stable-baselines: the same algorithms and settings, compiled by XLA
     "sac-sbx": {"algo": "sac", "backend": "sbx"},
     "tqc-sbx": {"algo": "tqc", "backend": "sbx"},
     "crossq-sbx": {"algo": "crossq", "backend": "sbx"},
-    # the task held to T_con (issue 40): gamma 1 (the v2 sections of train/hyperparams/), the jitted PPO with its
+    # the task held to T_con: gamma 1 (the v2 sections of train/hyperparams/), the jitted PPO with its
     # exploration noise on a fixed schedule, the off-policy learners of sbx
     "ppo-jax-v2": {"algo": "ppo", "backend": "jax", "env_id": V2},
     "ppo-jax-fixed-noise-v2": {
@@ -267,6 +270,7 @@ def train_config(entry: Entry, seed: int, run_dir: Path, budget: dict[str, Any])
     options = {**entry.options}
     overrides = options.pop("hyperparams", None)
     repeat = int(options.get("action_repeat", 1))
+    options.setdefault("env_id", ENTRY_ENV_ID)
     config = TrainConfig(**options, seed=seed, run_dir=str(run_dir), progress=False,
                          eval_seed=EVAL_SEED, eval_episodes=int(budget.get("eval_episodes", EVAL_EPISODES)))  # fmt: skip
     if budget.get("env_steps") and "total_timesteps" not in entry.options:  # an entry's own budget wins
@@ -293,14 +297,16 @@ def train_command(entry: Entry, config: TrainConfig) -> list[str]:
     ``python -m benchmarks run retrain-pretrained`` runs again)."""
     command = ["dwr-gym", "train", "--seed", str(config.seed), "--total-timesteps", str(config.total_timesteps),
                "--eval-freq", str(config.eval_freq), "--checkpoint-freq", str(config.checkpoint_freq),
-               "--eval-episodes", str(config.eval_episodes), "--eval-seed", str(config.eval_seed)]  # fmt: skip
+               "--eval-episodes", str(config.eval_episodes), "--eval-seed", str(config.eval_seed),
+               "--env", config.env_id]  # fmt: skip
     if config.time_limit is not None:
         command += ["--time-limit", str(config.time_limit)]
     files: list[str] = []  # one --hyperparams (the CLI's only form): the YAML file, then the KEY=VALUE overrides
     overrides: list[str] = []
     for key, value in entry.options.items():
         flag = "--" + key.replace("_", "-")
-        if key in ("total_timesteps", "eval_freq", "checkpoint_freq", "eval_episodes", "eval_seed", "time_limit"):
+        if key in ("total_timesteps", "eval_freq", "checkpoint_freq", "eval_episodes", "eval_seed", "time_limit",
+                   "env_id"):  # fmt: skip
             continue  # given above, from the config
         if key in ("hyperparams", "hyperparam_overrides") and isinstance(value, dict):
             overrides += [f"{k}={_cli_value(v)}" for k, v in value.items()]
@@ -354,7 +360,7 @@ def run_one(entry: Entry, seed: int, out: Path, budget: dict[str, Any], progress
         _, policy = load_agent(run_dir)
         repeat, config_dict = config.action_repeat, config.to_dict()
     train_seconds = time.time() - start
-    env_id = config_dict.get("env_id", TASK_ENV_ID)  # each agent on its own env id: v1's or v2's episode end
+    env_id = config_dict.get("env_id", ENTRY_ENV_ID)  # each agent on its own env id: v1's or v2's episode end
     n_eval = int(budget.get("eval_episodes", EVAL_EPISODES))
     sets = evaluate_policy(policy, env_id=env_id, n=n_eval, n_per_T_con=min(PER_T_CON_EPISODES, n_eval),
                            n_disturbed=int(budget.get("disturbed_episodes", DISTURBED_EPISODES)),

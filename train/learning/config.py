@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from dwr_gym.validation import as_bool, as_choice, as_float, as_int
-from train.env_ids import ENV_HELP, TASK_ENV_ID, UNRECORDED_ENV_ID, check_env_id, env_keywords
+from train.env_ids import DEFAULT_ENV_ID, ENV_HELP, UNRECORDED_ENV_ID, check_env_id, env_keywords
 from train.learning.learners import ALGORITHMS, BACKENDS, find_learner, options_help
 
 ALGO_HELP, BACKEND_HELP = options_help()
@@ -51,7 +51,7 @@ class TrainConfig:
         shown_default="1: a small network waits on a thread pool, most on a busy machine",
         metavar="N",
     )
-    env_id: str = option(TASK_ENV_ID, ENV_HELP, flag="--env", metavar="ID")
+    env_id: str = option(DEFAULT_ENV_ID, ENV_HELP, flag="--env", metavar="ID")
     total_timesteps: int | None = option(
         None, "total environment steps over all envs", shown_default=BUDGET_HELP["n_timesteps"], metavar="N"
     )

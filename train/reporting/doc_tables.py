@@ -167,7 +167,7 @@ def verdict(by_T_con: dict[str, bool]) -> str:
 
 
 def robust_goal_table(data: dict[str, Any]) -> str:
-    """Issue 22's goal (``python -m benchmarks run robust-goal``): each policy on each (T_con, set), then each one's verdicts."""
+    """The robust goal (``python -m benchmarks run robust-goal``): each policy on each (T_con, set), then each one's verdicts."""
     rows = data["rows"]
     policies = list(dict.fromkeys(r["policy"] for r in rows))
     by = {(r["T_con"], r["set"], r["policy"]): r for r in rows}

@@ -42,23 +42,23 @@ def headline(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     return out
 
 
-def headline_table(rows: list[dict[str, Any]], names: dict[str, str] | None = None) -> str:
-    """The headline as Markdown: a row per policy, the sets side by side."""
+def headline_table(rows: list[dict[str, Any]], names: dict[str, str] | None = None, energy_ratio: bool = True) -> str:
+    """The headline as Markdown: a row per policy, the sets side by side; without ``energy_ratio`` (no optimum asked
+    for) no E/opt column."""
     summary = headline(rows)
     sets = [NOMINAL, *[s for s in DISTURBED if any(s in h["in_time"] for h in summary)]]
     names = names or {}
-    lines = [
-        "| policy | in time [%]: " + " / ".join(sets) + " | \\|psi_end\\| [rad]: " + " / ".join(sets)
-        + " | energy: " + " / ".join(sets) + " | E/opt nominal | command rate RMS: nominal / noise |",
-        "|---|---|---|---|---|---|",
-    ]  # fmt: skip
+    header = ["policy", "in time [%]: " + " / ".join(sets), "\\|psi_end\\| [rad]: " + " / ".join(sets),
+              "energy: " + " / ".join(sets), *(["E/opt nominal"] if energy_ratio else []),
+              "command rate RMS: nominal / noise"]  # fmt: skip
+    lines = ["| " + " | ".join(header) + " |", "|---" * len(header) + "|"]
     for h in summary:
         cells = [
             names.get(h["policy"], f"`{h['policy']}`"),
             " / ".join(percent(h["in_time"].get(s)) for s in sets),
             " / ".join(number(h["heading"].get(s), ".2f") for s in sets),
             " / ".join(number(h["energy"].get(s), ".2f") for s in sets),
-            number(h["energy_ratio"], ".2f"),
+            *([number(h["energy_ratio"], ".2f")] if energy_ratio else []),
             f"{number(h['command_rate'].get(NOMINAL), '.2f')} / {number(h['command_rate'].get('noise'), '.2f')}",
         ]
         lines.append("| " + " | ".join(cells) + " |")

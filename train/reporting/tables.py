@@ -58,6 +58,16 @@ EVAL_COLUMNS = [
     ("command_rate_rms_mean", "rate rms", ".3f"),
 ]
 
+#: The columns of the E/opt measure, there only when an optimum was asked for (``--optimum pose`` or ``position``).
+OPTIMUM_COLUMNS = frozenset({"energy_ratio_mean", "energy_ratio_max"})
+
+
+def asked_columns(columns: list[tuple[str, str, str]], optimum: str) -> list[tuple[str, str, str]]:
+    """``columns`` less those of a measure that was not asked for: E/opt's with ``optimum`` "none" (a column of nan
+    says nothing the user does not know)."""
+    return [column for column in columns if optimum != "none" or column[0] not in OPTIMUM_COLUMNS]
+
+
 FAILS_BY_DESIGN = {
     "fabregas": "fabregas is the slow law of ref. [9] (u = K0 d p, not prescribed-time): the paper compares it at "
     "T_con = 70 s (paper-fig7); it is not designed to arrive by a shorter T_con, so its low success there is by design",

@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 from dwr_gym import core
 from dwr_gym.disturbances import split_env_kwargs
 from dwr_gym.params import EnvParams
-from train.env_ids import ENV_HELP, TASK_ENV_ID, env_keywords
+from train.env_ids import DEFAULT_ENV_ID, ENV_HELP, env_keywords
 from train.learning.config import option
 
 EVAL_FIELDS = ("epoch", "samples", "wall_time", "loss", "success_rate", "arrival_fraction_max",
@@ -37,7 +37,7 @@ EVAL_FIELDS = ("epoch", "samples", "wall_time", "loss", "success_rate", "arrival
 class ImitationConfig:
     """Everything ``dwr-gym imitate`` needs; written beside the model. Each field is an option of the command."""
 
-    env_id: str = option(TASK_ENV_ID, ENV_HELP, flag="--env")
+    env_id: str = option(DEFAULT_ENV_ID, ENV_HELP, flag="--env")
     episodes: int = option(800, "expert episodes to record")
     T_con_range: tuple[float, float] = option((10.0, 60.0), "prescribed times of the episodes [s] (v1's range)")
     start_distance: tuple[float, float] = option((0.3, 3.0), "start distances of the episodes [m] (v1's range)")

@@ -37,7 +37,8 @@ import numpy as np
 from dwr_gym import core
 from dwr_gym.params import EnvParams
 from dwr_gym.randomization import DisturbanceDistribution
-from train.learning.config import TASK_ENV_ID, TrainConfig, check_env_id, env_keywords
+from train.env_ids import TASK_ENV_ID
+from train.learning.config import TrainConfig, check_env_id, env_keywords
 from train.learning.imitation.dagger import (
     DaggerConfig,
     Dataset,

@@ -1,7 +1,7 @@
 """RL fine-tuning of a saved network (``dwr-gym train --init-from``): the run adopts the saved agent's architecture,
 starts from its weights (actor, critic and the exploration noise's log_std), and with ``--critic-warmup N`` lets
 only the value function learn for the first N env steps, so that a critic that cloning never trained does not
-steer the first policy updates (issue 32's robust RL).
+steer the first policy updates (the RL benchmark's robust RL).
 """
 
 from __future__ import annotations
