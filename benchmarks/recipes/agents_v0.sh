@@ -2,7 +2,7 @@
 # The training runs behind the README's results: a residual PPO on the PTC expert and a from-scratch PPO,
 # the same budget (1.5 M env steps, 16 envs) and env (DWRPointStabilization-v0, heading_weight=5), seeds 0, 1, 2.
 # About 4 minutes per run on 2 cores. Seed 0 of each is what ships in train/pretrained/. OLD pins the defaults
-# of `dwr-gym train` at the time (before issue 23's batch-sized defaults, docs/training.md).
+# of `dwr-gym train` at the time (before the batch-sized defaults, docs/training.md).
 set -euo pipefail
 export OMP_NUM_THREADS=1
 OLD=(--num-envs 16 --hyperparams n_steps=256 batch_size=512 n_epochs=10 --eval-freq 20000 --checkpoint-freq 50000)

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Time-scaled actions on DWRPointStabilization-v2 (issue 40; docs/rl-v2.md, 'Time-scaled actions'): ES from
+# Time-scaled actions on DWRPointStabilization-v2 (docs/rl-v2.md, 'Time-scaled actions'): ES from
 # reward alone on v2 (train/hyperparams/es.yml, 100 M env steps a seed), as shipped and with --action-time-scale 10
 # (the action times min(1, 10 s / T_con), train.learning.time_scale), five seeds each, two runs side by side (about
 # 25 minutes on 2 quiet cores). Writes docs/rl_benchmark/time_scale.json and ships the time-scaled entry's best seed

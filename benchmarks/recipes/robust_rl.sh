@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 32's stretch (docs/rl-benchmark.md, 'Robust RL'): the `robust` agent's network, cloned by robust DAgger,
+# The RL benchmark's stretch goal (docs/rl-benchmark.md, 'Robust RL'): the `robust` agent's network, cloned by robust DAgger,
 # fine-tuned by PPO from v1's reward under randomised disturbances (the distribution it was cloned under), five
 # seeds; then the network alone before and after, on the nominal and the four disturbed sets at T_con 20 and 40 s.
 # About 5 minutes of one core per seed; a finished seed is skipped, so the script continues an interrupted run.
