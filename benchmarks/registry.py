@@ -58,7 +58,6 @@ SUITE: dict[str, str] = {
     "reproduce": "benchmarks.quality.reproduce",
     "optimal": "benchmarks.quality.optimal",
     "ship-optima": "benchmarks.quality.ship_optima",
-    "ship-plan-hints": "benchmarks.quality.ship_plan_hints",
     # testing: how good the tests are
     "fuzz": "benchmarks.testing.fuzz",
     "reliability": "benchmarks.testing.reliability",
