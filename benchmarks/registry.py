@@ -18,6 +18,7 @@ SUITE: dict[str, str] = {
     "memory": "benchmarks.speed.memory",
     "jax-env-step": "benchmarks.speed.jax_env_step",
     "compare-time": "benchmarks.speed.compare_time",
+    "compare-cpu-paths": "benchmarks.quality.cpu_paths",
     "optimum-speed": "benchmarks.speed.optimum_speed",
     "env-versions": "benchmarks.speed.env_versions",
     # training: how fast `dwr-gym train` and the JAX learners run, and what a run costs
