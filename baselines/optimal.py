@@ -226,9 +226,18 @@ def solve_plans(jobs: list[dict[str, Any]], workers: int = 1) -> list[Plan | Exc
     thread keeps its own solvers, :func:`thread_solver`), in rounds: the warm starts and every guess of the cold
     searches; the cold guesses of the searches whose warm start failed; then, with IPOPT, the searches fatrop found no
     plan in. Each solve is a pure function of its guess, so the plans are the one-by-one
-    search's to the last bit, whatever the threads and the batch."""
+    search's to the last bit, whatever the threads and the batch.
+
+    A job with ``coarse`` = k > 1 (a long horizon on a fine grid: the optimum's 400-1,200 intervals) is searched on a
+    grid k times coarser first (each command held k times as long, ``pad_to`` divided by k), every guess there; the
+    cheapest coarse plan, each command repeated k times, is then the fine search's warm start, its cold guesses only
+    the fallback. The coarse plan is a feasible point of the fine problem (k exact steps of one command are its
+    exact step over k dt), so the fine search converges in some 6 iterations instead of 15-40 from each of 2-4
+    guesses: on the default episodes the optimum's energies equal the whole fine search's to 1e-7
+    (``dwr-gym optimum verify``), some 5x sooner."""
     results: list[Plan | Exception | None] = [None] * len(jobs)
     problems: dict[int, MinimumEnergyProblem] = {}
+    jobs = _refined(jobs, workers)
     for i, job in enumerate(jobs):
         try:
             problems[i] = minimum_energy_problem(**job)
@@ -253,6 +262,45 @@ def solve_plans(jobs: list[dict[str, Any]], workers: int = 1) -> list[Plan | Exc
         results[i] = Plan(best.commands[:planned], best.states[: planned + 1], problem.h, best.energy,
                           search.iterations, search.seconds, best.solution, best.candidate, search.tried)  # fmt: skip
     return results  # type: ignore[return-value]
+
+
+def _refined(jobs: list[dict[str, Any]], workers: int) -> list[dict[str, Any]]:
+    """The jobs with their ``coarse`` stage solved: each such job warm-started from its coarse plan (see
+    :func:`solve_plans`); the job unchanged where the coarse search found no plan."""
+    refined = [{k: v for k, v in job.items() if k != "coarse"} for job in jobs]
+    staged = {i: job for i, job in enumerate(jobs) if job.get("coarse", 1) != 1}
+    coarse_jobs = []
+    for i, job in staged.items():
+        k, pad_to = job["coarse"], job.get("pad_to", 1)
+        if isinstance(k, bool) or not isinstance(k, int) or k < 1 or pad_to % k:
+            raise ValueError(f"coarse={k!r} is invalid: expected an integer >= 1 that divides pad_to={pad_to}")
+        coarse_jobs.append({**refined[i], "hold_steps": job.get("hold_steps", 1) * k, "pad_to": pad_to // k})
+    if not staged:
+        return refined
+    for (i, job), plan in zip(staged.items(), solve_plans(coarse_jobs, workers), strict=True):
+        if isinstance(plan, Plan):
+            refined[i] = {**refined[i], **_fine_warm_start(plan, job)}
+    return refined
+
+
+def _fine_warm_start(plan: Plan, job: dict[str, Any]) -> dict[str, Any]:
+    """The keywords that make ``job`` (fine) start from the coarse ``plan``: each coarse command held over k fine
+    intervals, the states between by the exact step, then the robot still at the goal up to the fine problem's end."""
+    k, dt = job["coarse"], job["dt"] * job.get("hold_steps", 1)
+    padded_coarse = (plan.solution.size - 3) // 5
+    coarse = plan_from_solution(plan.solution, padded_coarse, plan.interval, plan.energy)
+    planned = math.floor(job["arrival_time"] / dt + 1e-9)
+    pad_to = job.get("pad_to", 1)
+    padded = -(-planned // pad_to) * pad_to
+    commands = np.repeat(coarse.commands, k, axis=0)
+    origins = np.repeat(coarse.states[:-1], k, axis=0)
+    into = np.tile(np.arange(k), padded_coarse) * dt  # the time into each coarse interval [s]
+    x, y, psi = model.unicycle_step_exact(origins[:, 0], origins[:, 1], origins[:, 2], commands[:, 0],
+                                          commands[:, 1], into)  # fmt: skip
+    still = padded - commands.shape[0]  # the fine problem's intervals past the coarse one's: at the goal
+    states = np.concatenate([np.stack([x, y, psi], axis=1), np.tile(coarse.states[-1], (still + 1, 1))])
+    commands = np.concatenate([commands, np.zeros((still, 2))])
+    return {"intervals": planned, "warm_start": np.concatenate([states.ravel(), commands.ravel()])}
 
 
 @dataclass
