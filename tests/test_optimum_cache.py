@@ -31,11 +31,28 @@ def test_the_cache_solves_padded_problems_to_the_same_energy_to_1e_6(start: tupl
     assert padded.energy == pytest.approx(plain.energy, rel=1e-6)
 
 
+@pytest.mark.parametrize("start", [(-1.2, 0.7, 2.5), (2.0, 1.0, -3.0), (-0.3, -2.1, 0.4)])
+def test_the_coarse_then_fine_search_finds_the_whole_fine_searchs_optimum(start: tuple[float, float, float]) -> None:
+    """The optimum is searched on a grid COARSE times coarser, then refined from the cheapest coarse plan alone: the
+    energy of IPOPT's whole fine search (every guess) to 1e-6 relative, from one fine solve of a few iterations; the
+    plan stays on the fine grid, starts at the start and ends at the goal."""
+    plain = solve_minimum_energy(start, 12.0, **LIMITS, pad_to=optimum_module.PAD_TO, solver="ipopt")  # type: ignore[arg-type]
+    staged = solve_minimum_energy(start, 12.0, **LIMITS, pad_to=optimum_module.PAD_TO,  # type: ignore[arg-type]
+                                  coarse=optimum_module.COARSE)  # fmt: skip
+    assert staged.energy == pytest.approx(plain.energy, rel=1e-6)
+    assert staged.intervals == plain.intervals == 240 and staged.interval == 0.05
+    assert staged.tried == 1 and staged.iterations < plain.iterations / 2  # the warm start converged, no cold guess
+    np.testing.assert_allclose(staged.states[0], start, atol=1e-12)
+    np.testing.assert_allclose(staged.states[-1][:2], 0.0, atol=1e-8)
+    with pytest.raises(ValueError, match=r"^coarse=3 is invalid: expected an integer >= 1 that divides pad_to=20$"):
+        solve_minimum_energy(start, 12.0, **LIMITS, pad_to=20, coarse=3)  # type: ignore[arg-type]
+
+
 @pytest.mark.skipif(not ca.has_nlpsol("fatrop"), reason="this CasADi ships no fatrop")
 def test_fatrop_finds_ipopts_plan_in_the_callers_layout() -> None:
     """fatrop sees the unknowns in stage order; the plan it returns is IPOPT's, in the states-then-commands layout."""
     start = (-1.2, 0.7, 2.5)
-    ipopt = solve_minimum_energy(start, 10.0, **LIMITS)  # type: ignore[arg-type]
+    ipopt = solve_minimum_energy(start, 10.0, **LIMITS, solver="ipopt")  # type: ignore[arg-type]
     fatrop = solve_minimum_energy(start, 10.0, **LIMITS, solver="fatrop")  # type: ignore[arg-type]
     assert fatrop.energy == pytest.approx(ipopt.energy, rel=1e-8)
     np.testing.assert_allclose(fatrop.states, ipopt.states, atol=1e-5)
