@@ -17,6 +17,7 @@ CasADi is an optional dependency: ``pip install "dwr-gym[optimal]"``.
 
 from __future__ import annotations
 
+import os
 import threading
 from functools import lru_cache
 from typing import Any
@@ -116,6 +117,15 @@ def stage_order(intervals: int) -> NDArray[np.intp]:
 _LOCAL = threading.local()
 #: CasADi's symbolic graphs are not thread-safe: one thread builds a solver at a time (solving runs in parallel).
 _BUILDING = threading.Lock()
+
+
+def _new_lock_in_child() -> None:
+    """A forked child gets a free lock: the thread that held its parent's is not in the child to release it."""
+    global _BUILDING
+    _BUILDING = threading.Lock()
+
+
+os.register_at_fork(after_in_child=_new_lock_in_child)
 
 
 def thread_solver(intervals: int, max_iter: int, response: bool, solver: str) -> Any:

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import functools
 import math
+import os
 import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, replace
@@ -381,6 +382,8 @@ def _solve_guess(problems: dict[int, MinimumEnergyProblem], task: tuple[int, int
 
 
 _THREADS: dict[int, ThreadPoolExecutor] = {}
+# A forked child has none of its parent's threads: it starts its own (an executor that believes it has some would hang).
+os.register_at_fork(after_in_child=_THREADS.clear)
 
 
 def _threads(workers: int) -> ThreadPoolExecutor:

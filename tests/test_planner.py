@@ -3,6 +3,7 @@ the fallbacks (fatrop to IPOPT, an infeasible re-plan to a late plan), the re-pl
 
 from __future__ import annotations
 
+import sys
 from collections import OrderedDict
 from typing import Any
 
@@ -135,3 +136,22 @@ def test_a_batch_solves_the_plans_of_the_searches_one_by_one_and_a_failure_is_it
                                                                           many.iterations)  # fmt: skip
     assert batch[6].tried == 1  # the re-plan converged from its warm start: no cold guess solved
     assert {one.tried for one in batch[:6]} == {4}  # each facing away: both ways round, forward and reverse
+
+
+def _energies_in_a_batch(jobs: list[dict[str, Any]]) -> list[float]:
+    from baselines.optimal import solve_plans
+
+    return [plan.energy for plan in solve_plans(jobs, workers=2)]  # type: ignore[union-attr]
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="fork is Linux's start method here")
+def test_a_forked_process_solves_on_threads_of_its_own() -> None:
+    """A process forked after this one solved on threads (the command's second process is forked) has none of them:
+    its batch starts threads of its own and returns the parent's plans, instead of waiting on threads that are gone."""
+    import multiprocessing
+
+    jobs = [{"start": (-0.5 - 0.1 * k, 0.2, 0.0), "arrival_time": 3.0, "hold_steps": 5, **LIMITS} for k in range(4)]
+    here = _energies_in_a_batch(jobs)
+    with multiprocessing.get_context("fork").Pool(1) as pool:
+        there = pool.apply_async(_energies_in_a_batch, (jobs,)).get(timeout=120)
+    assert there == here
