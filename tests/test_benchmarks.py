@@ -123,3 +123,17 @@ def test_apg_speed_refuses_a_count_below_one_naming_it(capsys: pytest.CaptureFix
         with pytest.raises(SystemExit) as exit_:
             registry.load("apg-speed").main(argv)
         assert exit_.value.code == 2 and named in capsys.readouterr().err
+
+
+def test_compare_cpu_paths_names_the_cells_that_differ_as_printed() -> None:
+    """Two runs differ where a cell differs as the docs print it: 99 % against 98.9 % does, an energy that differs
+    in the 5th decimal does not; a row only one run has is named too."""
+    from benchmarks.quality.cpu_paths import differences
+
+    row = {"scenario": "fault", "T_con": None, "policy": "robust", "success_rate": 0.99, "energy_mean": 1.00001,
+           "final_heading_error_mean": 0.3912, "energy_ratio_mean": 1.234, "energy_ratio_max": 2.04}  # fmt: skip
+    other = {**row, "success_rate": 0.989, "energy_mean": 1.00002}
+    assert differences([row], [other]) == {"fault / None / robust / success_rate": ["99 %", "98.9 %"]}
+    assert differences([row], [row]) == {}
+    extra = {**row, "policy": "ptc"}
+    assert differences([row], [row, extra])["fault / None / ptc / energy_mean"] == ["absent", "1.000"]
