@@ -329,22 +329,31 @@ def _search(ids: list[int], problems: dict[int, MinimumEnergyProblem], searches:
 
 def _run_round(tasks: list[tuple[int, int, str]], problems: dict[int, MinimumEnergyProblem],
                searches: dict[int, _Search], workers: int) -> None:  # fmt: skip
-    """Solve every (search, guess, solver) of ``tasks`` (the largest problems first, so no thread waits at the end)
-    and fold each result into its search in the guesses' order: the cheapest wins, the first of equals."""
+    """Solve every (search, guess, solver) of ``tasks`` and fold each result into its search in the guesses' order:
+    the cheapest wins, the first of equals. The threads take the tasks in units of one problem size (and solver), the
+    largest first, so that a size is built by one thread where it can be (a solver of 1,000 intervals takes longer to
+    build than a few solves with it); a size with more tasks than a fair share of one thread is split."""
     if not tasks:
         return
-    order = sorted(range(len(tasks)), key=lambda t: -problems[tasks[t][0]].intervals)
     solve = functools.partial(_solve_guess, problems)
     if workers > 1 and len(tasks) > 1:
-        futures = {t: _threads(workers).submit(solve, tasks[t]) for t in order}
+        share = -(-len(tasks) // (2 * workers))
+        sizes: dict[tuple[int, bool, int, str], list[int]] = {}
+        for t, (i, _, solver_name) in enumerate(tasks):
+            p = problems[i]
+            sizes.setdefault((p.intervals, p.response, p.max_iter, solver_name), []).append(t)
+        units = [group[start : start + share] for _, group in sorted(sizes.items(), key=lambda kv: -kv[0][0])
+                 for start in range(0, len(group), share)]  # fmt: skip
+        futures = [_threads(workers).submit(lambda unit: [solve(tasks[t]) for t in unit], unit) for unit in units]
         try:
-            outcomes = {t: future.result() for t, future in futures.items()}
-        except BaseException:  # Ctrl-C: the threads finish the solves they are in, no other
-            for future in futures.values():
+            outcomes = {t: outcome for unit, future in zip(units, futures, strict=True)
+                        for t, outcome in zip(unit, future.result(), strict=True)}  # fmt: skip
+        except BaseException:  # Ctrl-C: the threads finish the units they are in, no other
+            for future in futures:
                 future.cancel()
             raise
     else:
-        outcomes = {t: solve(tasks[t]) for t in order}
+        outcomes = {t: solve(task) for t, task in enumerate(tasks)}
     for t, (i, index, _) in enumerate(tasks):
         plan, iterations, status, seconds = outcomes[t]
         search = searches[i]
