@@ -233,9 +233,9 @@ def solve_plans(jobs: list[dict[str, Any]], workers: int = 1) -> list[Plan | Exc
     grid k times coarser first (each command held k times as long, ``pad_to`` divided by k), every guess there; the
     cheapest coarse plan, each command repeated k times, is then the fine search's warm start, its cold guesses only
     the fallback. The coarse plan is a feasible point of the fine problem (k exact steps of one command are its
-    exact step over k dt), so the fine search converges in some 6 iterations instead of 15-40 from each of 2-4
-    guesses: on the default episodes the optimum's energies equal the whole fine search's to 1e-7
-    (``dwr-gym optimum verify``), some 5x sooner."""
+    exact step over k dt), so the fine search converges in a few iterations instead of a search from each of 2-4
+    guesses; the energies equal the whole fine search's to 1e-6 (``dwr-gym optimum verify`` checks the shipped
+    optima)."""
     results: list[Plan | Exception | None] = [None] * len(jobs)
     problems: dict[int, MinimumEnergyProblem] = {}
     jobs = _refined(jobs, workers)
