@@ -5,22 +5,19 @@ observed pose to the goal by T_con (read from the observation, like the other pr
 then plays the plan open loop and re-plans every ``replan_every`` control periods from the pose it
 observes, warm-started from its previous plan, with T_con as the terminal time (NMPC with a
 shrinking horizon). So it also works under the env's observation and actuation noise. A batch of
-robots is planned in parallel processes.
+robots is planned at once: every robot's search of a control step, all their guesses on a few threads
+(:func:`baselines.optimal.solve_plans`).
 
 Needs CasADi: ``pip install "dwr-gym[optimal]"``.
 """
 
 from __future__ import annotations
 
-import atexit
 import hashlib
 import math
-import multiprocessing
 import os
 import pickle
-import sys
 from collections import OrderedDict
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from typing import Any
 
@@ -34,13 +31,11 @@ from baselines.optimal import (
     Plan,
     least_arrival_time,
     require_casadi,
-    solve_minimum_energy,
+    solve_plans,
 )
 from dwr_gym.model import FloatArray, wrap_angle
 from dwr_gym.params import check_range
 
-#: Batches with fewer plans to solve than this are solved in this process.
-PARALLEL_THRESHOLD = 8
 #: A re-plan on the episode's grid needs at least this many intervals left (fewer: the plan is kept).
 MIN_REPLAN_INTERVALS = 4
 #: Plans (or their errors) kept by :class:`PlanPool`, by job, least recently used out: some 10 kB each.
@@ -79,7 +74,7 @@ class OptimalParams(ControllerParams):
     replan_tolerance: float = 1e-3  # [m, rad]
     """Skip a scheduled re-plan when the observed pose is within this of the plan's (0: always re-plan)."""
     workers: int = 0
-    """Processes that solve a batch of plans in parallel; 0 uses every core (at most 8), 1 none."""
+    """Threads that solve a batch of plans in parallel; 0 uses every core (at most 8), 1 none."""
 
     def validate(self) -> None:
         for name in ("T_con", "dt", "u_max", "omega_max"):
@@ -99,46 +94,6 @@ class OptimalParams(ControllerParams):
         check_range("replan_tolerance", self.replan_tolerance, 0.0, 1e6)
 
 
-def _solve(job: dict[str, Any]) -> Plan | Exception:
-    """Solve one plan (its winning guess alone where :mod:`baselines.plan_hints` names it, or its error: the same
-    result); errors are returned, not raised, so that one failure cannot stop a batch."""
-    from baselines import plan_hints
-
-    exact = job_key(job)
-    hint = plan_hints.hint(job, exact)
-    if isinstance(hint, str):  # a search in which no guess converges: its error, unsolved
-        return OptimalControlError(hint)
-    try:
-        result: Plan | Exception = solve_minimum_energy(**job, only=hint)
-    except (OptimalControlError, InfeasibleArrivalTimeError) as error:
-        result = error
-    plan_hints.record(job, exact, result)
-    return result
-
-
-#: The worker processes of every :class:`PlanPool`, by (workers, start method): kept from one controller to the next,
-#: so that the solvers each process built (one per problem size, :func:`baselines.optimal.minimum_energy_solver`) are
-#: built once per command, not once per scenario set; stopped at exit.
-_EXECUTORS: dict[tuple[int, str], ProcessPoolExecutor] = {}
-
-
-def _shared_executor(workers: int, method: str) -> ProcessPoolExecutor:
-    executor = _EXECUTORS.get((workers, method))
-    if executor is None or getattr(executor, "_broken", False):  # a broken pool (a worker killed) is replaced
-        if not _EXECUTORS:
-            atexit.register(_stop_executors)
-        executor = _EXECUTORS[(workers, method)] = ProcessPoolExecutor(
-            workers, mp_context=multiprocessing.get_context(method)
-        )
-    return executor
-
-
-def _stop_executors() -> None:
-    for executor in _EXECUTORS.values():
-        executor.shutdown(cancel_futures=True)
-    _EXECUTORS.clear()
-
-
 #: The plans solved in this process, by :func:`job_key`: a planner that meets a problem again takes the plan solved
 #: before. A solve is a pure function of its job (the same plan to the last bit in any process, whatever was solved
 #: before it), so this changes no result: it saves the plans that ``dwr-gym compare`` meets on several scenario sets
@@ -153,24 +108,14 @@ def job_key(job: dict[str, Any]) -> bytes:
     return hashlib.sha256(pickle.dumps(sorted(job.items()), protocol=5)).digest()
 
 
-def problem_size(job: dict[str, Any]) -> int:
-    """The number of intervals of the problem a job solves (its solver's size, :func:`minimum_energy_solver`)."""
-    intervals = job.get("intervals")
-    if intervals is None:
-        intervals = max(1, math.floor(job["arrival_time"] / (job["dt"] * job.get("hold_steps", 1)) + 1e-9))
-    pad_to = job.get("pad_to", 1)
-    return int(-(-intervals // pad_to) * pad_to)
-
-
 def clear_memo() -> None:
     """Forget the plans solved so far (:data:`_MEMO`)."""
     _MEMO.clear()
 
 
 class PlanPool:
-    """Solves batches of plans, in worker processes when a batch is large enough; errors are returned, not raised.
-    The processes are shared by every pool of the same size in this process and outlive it (see ``_EXECUTORS``);
-    a plan solved before in this process is not solved again (:data:`_MEMO`), nor one stored on disk by an earlier
+    """Solves batches of plans at once, every guess of every search on ``workers`` threads
+    (:func:`baselines.optimal.solve_plans`); errors are returned, not raised. A plan solved before in this process is not solved again (:data:`_MEMO`), nor one stored on disk by an earlier
     command while a :mod:`baselines.plan_store` is open."""
 
     def __init__(self, workers: int = 0) -> None:
@@ -190,8 +135,7 @@ class PlanPool:
                 _MEMO[key] = stored
             else:
                 todo[key] = job
-        # the largest problems first, neighbours together: a worker process builds fewer solvers (one per size)
-        order = sorted(todo, key=lambda key: -problem_size(todo[key]))
+        order = list(todo)
         solved = dict(zip(order, self._solve([todo[key] for key in order]), strict=True))
         results = [solved[key] if key in solved else _MEMO[key] for key in keys]
         for key, result in solved.items():
@@ -203,16 +147,10 @@ class PlanPool:
         return results
 
     def _solve(self, jobs: list[dict[str, Any]]) -> list[Plan | Exception]:
-        if self.workers <= 1 or len(jobs) < PARALLEL_THRESHOLD:
-            return [_solve(job) for job in jobs]
-        # fork on Linux: works from any script (spawn re-imports __main__, which needs an `if __name__` guard)
-        # fork is fast, but forking a process that runs JAX's threads can deadlock the child: spawn then
-        method = "fork" if sys.platform.startswith("linux") and "jax" not in sys.modules else "spawn"
-        chunk = max(1, len(jobs) // (4 * self.workers))
-        return list(_shared_executor(self.workers, method).map(_solve, jobs, chunksize=chunk))
+        return solve_plans(jobs, self.workers)
 
     def close(self) -> None:
-        """Nothing to stop: the processes are shared (stopped at exit)."""
+        """Nothing to stop: the threads are shared (:func:`baselines.optimal.solve_plans`)."""
 
 
 class OptimalController(Controller):
@@ -358,7 +296,7 @@ class OptimalController(Controller):
                 retry = dict(job, intervals=None, frozen=0, warm_start=None)
                 retry["arrival_time"] = 1.5 * least_arrival_time(job["start"], job["u_max"], job["omega_max"],
                                                                  job["heading"]) + job["dt"] * job["hold_steps"]  # fmt: skip
-                late = _solve(retry)
+                (late,) = self._map([retry])
                 if isinstance(late, Plan):
                     self._plans[i], self._origin[i] = late, step[i]
                     self._next_replan[i] = step[i] + max(self.params.replan_every, 1)
@@ -379,7 +317,7 @@ class OptimalController(Controller):
         return self._pool.map(jobs)
 
     def close(self) -> None:
-        """Stop the worker processes."""
+        """Nothing to stop: the solving threads are shared."""
         pool = getattr(self, "_pool", None)  # absent if __init__ failed (no CasADi)
         if pool is not None:
             pool.close()
@@ -388,4 +326,4 @@ class OptimalController(Controller):
         self.close()
 
 
-__all__ = ["OptimalController", "OptimalParams", "PlanPool", "clear_memo", "job_key", "problem_size"]
+__all__ = ["OptimalController", "OptimalParams", "PlanPool", "clear_memo", "job_key"]

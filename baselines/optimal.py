@@ -4,128 +4,50 @@ Over commands held constant for ``dt`` (the env's zero-order hold, integrated ex
 :func:`dwr_gym.model.unicycle_step_exact` does), within the actuator limits, the plan minimises the
 env's ``energy`` = sum of (u^2 + omega^2) dt subject to reaching the goal position, and the goal
 heading unless ``heading=False`` (the paper's position-only task), at the arrival time (T_con by
-default). Direct multiple shooting: the states and commands of every interval are the unknowns, the
-exact step of eq. (1) links them. The problem is built once per number of intervals as a CasADi
-``nlpsol`` Function and called per start with a warm start; the start, the limits and the frozen intervals are
-bounds, the interval length a parameter. Two solvers of the same problem: IPOPT (the default) and fatrop, an
-interior-point method that exploits the stages of an optimal control problem (a Riccati recursion instead of a
-sparse factorisation of the whole KKT system); on the optimum cache's plans fatrop is some 3x faster and finds the
-same energies to 1e-10 (``python -m benchmarks run optimum-speed``). fatrop sees the unknowns in stage order (x_0, u_0, x_1,
-..., x_N); the caller's decision vector stays the states then the commands, permuted on the way in and out.
+default). The problem, its solvers (IPOPT, fatrop) and why they run on threads: :mod:`baselines.minimum_energy_nlp`.
+
+The problem is not convex: each search solves it from a few guesses and keeps the cheapest plan. :func:`solve_plans`
+solves many searches at once (every episode's plan of a control step, every optimum of a batch), all their guesses on
+a few threads; :func:`solve_minimum_energy` is one search.
 
 CasADi is an optional dependency: ``pip install "dwr-gym[optimal]"``.
 """
 
 from __future__ import annotations
 
+import functools
 import math
+import os
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, replace
-from functools import lru_cache
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from baselines.minimum_energy_nlp import (
+    SMALL_HALF_TURN,
+    SOLVERS,
+    casadi_step_exact,
+    default_solver,
+    minimum_energy_solver,
+    require_casadi,
+    stage_order,
+    thread_solver,
+)
 from dwr_gym import model
 
-#: Below |omega dt / 2| of this, sin(h)/h is its Taylor polynomial: smooth derivatives for IPOPT, same value to 1e-24.
-SMALL_HALF_TURN = 1e-6
 #: Relative margin on the feasibility bound below which a plan is not attempted.
 FEASIBILITY_MARGIN = 1e-9
-#: The nonlinear programming solvers of :func:`minimum_energy_solver`.
-SOLVERS = ("ipopt", "fatrop")
 
 
 class OptimalControlError(RuntimeError):
-    """IPOPT did not find a plan (reported as a failure of that scenario, never a crash of an evaluation)."""
+    """The solver did not find a plan (reported as a failure of that scenario, never a crash of an evaluation)."""
 
 
 class InfeasibleArrivalTimeError(ValueError):
     """The arrival time is shorter than the least time in which the robot can reach the goal."""
-
-
-def require_casadi() -> Any:
-    """The casadi module, or an ImportError naming the extra that installs it."""
-    try:
-        import casadi
-    except ImportError as error:
-        raise ImportError('the optimal controller needs CasADi: pip install "dwr-gym[optimal]"') from error
-    return casadi
-
-
-def casadi_step_exact(state: Any, command: Any, h: Any) -> Any:
-    """The exact zero-order-hold step of eq. (1) on CasADi symbols, the same arc as
-    :func:`dwr_gym.model.unicycle_step_exact` (a test holds the two together to 1e-12), without wrapping psi."""
-    ca = require_casadi()
-    half_turn = 0.5 * h * command[1]
-    small = ca.fabs(half_turn) < SMALL_HALF_TURN
-    safe = ca.if_else(small, 1.0, half_turn)
-    # Guard: sin(h)/h is 0/0 at omega = 0; its Taylor polynomial keeps the derivatives smooth there.
-    sinc = ca.if_else(small, 1.0 - half_turn * half_turn / 6.0, ca.sin(safe) / safe)
-    chord = command[0] * h * sinc
-    mid_heading = state[2] + half_turn
-    return ca.vertcat(
-        state[0] + chord * ca.cos(mid_heading), state[1] + chord * ca.sin(mid_heading), state[2] + 2.0 * half_turn
-    )
-
-
-@lru_cache(maxsize=64)
-def minimum_energy_solver(
-    intervals: int, max_iter: int = 1000, tol: float = 1e-10, response: bool = False, solver: str = "ipopt"
-) -> Any:
-    """The ``solver`` (IPOPT or fatrop) of the multiple-shooting problem with ``intervals`` held commands (built once,
-    cached).
-
-    Decision vector: the states (3, intervals + 1) then the commands (2, intervals), column-major (for fatrop in stage
-    order instead: :func:`stage_order`); parameter: the interval length h [s]; constraints: the exact steps. With
-    ``response`` the parameter is (h, b_u, b_omega, a, g) and the robot moves with (a u + b_u, a omega + g u + b_omega)
-    for the command (u, omega) (:func:`baselines.estimation.robot_velocities`; a disturbance, a failing wheel), whose
-    energy is minimised.
-    """
-    ca = require_casadi()
-    if solver not in SOLVERS:
-        raise ValueError(f"solver={solver!r} is invalid: expected one of {', '.join(SOLVERS)}")
-    s, c, h_sym = ca.SX.sym("s", 3), ca.SX.sym("c", 2), ca.SX.sym("h")
-    step = ca.Function("step", [s, c, h_sym], [casadi_step_exact(s, c, h_sym)])
-    if solver == "fatrop":  # stage order: (x_k, u_k) for each interval, then x_N
-        unknowns = ca.MX.sym("x", 5 * intervals + 3)
-        stages = ca.reshape(unknowns[: 5 * intervals], 5, intervals)
-        states, commands = ca.horzcat(stages[:3, :], unknowns[5 * intervals :]), stages[3:, :]
-    else:
-        states, commands = ca.MX.sym("X", 3, intervals + 1), ca.MX.sym("U", 2, intervals)
-        unknowns = ca.veccat(states, commands)
-    h = ca.MX.sym("h")
-    parameters, velocities = h, commands
-    if response:
-        b_u, b_w, a, g = (ca.MX.sym(name) for name in ("b_u", "b_omega", "a", "g"))
-        parameters = ca.vertcat(h, b_u, b_w, a, g)
-        velocities = ca.vertcat(a * commands[0, :] + b_u, a * commands[1, :] + g * commands[0, :] + b_w)
-    defects = states[:, 1:] - step.map(intervals)(states[:, :-1], velocities, h)
-    problem = {"x": unknowns, "f": h * ca.sumsqr(velocities), "g": ca.vec(defects), "p": parameters}
-    options: dict[str, Any] = {"print_time": False, "expand": True}
-    if solver == "fatrop":
-        options.update({"structure_detection": "manual", "N": intervals, "nx": [3] * (intervals + 1),
-                        "nu": [2] * intervals + [0], "ng": [0] * (intervals + 1), "equality": [True] * (3 * intervals),
-                        "fatrop.print_level": 0, "fatrop.max_iter": max_iter, "fatrop.tol": tol})  # fmt: skip
-    else:
-        options.update({"ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.max_iter": max_iter, "ipopt.tol": tol})
-    return ca.nlpsol("minimum_energy", solver, problem, options)
-
-
-@lru_cache(maxsize=64)
-def stage_order(intervals: int) -> NDArray[np.intp]:
-    """The indices of the decision vector (states, then commands) in fatrop's stage order (x_0, u_0, ..., x_N):
-    ``vector[stage_order(n)]`` is the stage-ordered vector."""
-    n_states = 3 * (intervals + 1)
-    states = np.arange(n_states).reshape(intervals + 1, 3)
-    commands = np.arange(n_states, n_states + 2 * intervals).reshape(intervals, 2)
-    return np.concatenate([np.hstack([states[:-1], commands]).ravel(), states[-1]])
-
-
-def default_solver() -> str:
-    """fatrop where this CasADi ships it (3.6.6 on), else IPOPT."""
-    return "fatrop" if require_casadi().has_nlpsol("fatrop") else "ipopt"
 
 
 def least_arrival_time(start: tuple[float, float, float], u_max: float, omega_max: float, heading: bool) -> float:
@@ -172,7 +94,25 @@ def initial_guess(
     return np.concatenate([states.T.ravel(), commands.T.ravel()])
 
 
-def solve_minimum_energy(
+@dataclass(frozen=True)
+class MinimumEnergyProblem:
+    """One search of :func:`solve_minimum_energy`: the bounds and parameters of its NLP and the guesses it solves."""
+
+    intervals: int  # the solver's size (padded)
+    planned: int  # the plan's intervals, the padding cut off
+    h: float  # [s]
+    lower: NDArray[np.float64]
+    upper: NDArray[np.float64]
+    parameters: Any
+    candidates: tuple[tuple[NDArray[np.float64], float | None], ...]  # each guess with its final heading (None: free)
+    warm: bool  # candidate 0 is the warm start: the cold guesses are only its fallback
+    response: bool
+    max_iter: int
+    solver: str
+    start: tuple[float, float, float]
+
+
+def minimum_energy_problem(
     start: tuple[float, float, float],
     arrival_time: float,
     dt: float,
@@ -188,30 +128,10 @@ def solve_minimum_energy(
     response: tuple[float, float, float, float] | None = None,
     pad_to: int = 1,
     max_iter: int = 1000,
-    solver: str = "ipopt",
-    only: int | None = None,
-) -> Plan:
-    """The minimum-energy plan from ``start`` (goal frame: goal at the origin, heading 0) to the goal.
-
-    The plan has ``intervals`` commands (default: as many whole periods of ``hold_steps * dt`` as fit
-    in ``arrival_time``), each held for ``hold_steps`` control periods; the first ``frozen`` are held
-    at zero (the time already spent when re-planning over a shrinking horizon), so the robot arrives
-    at the end of the last interval. Raises :class:`InfeasibleArrivalTimeError` when the time left is below
-    :func:`least_arrival_time`, and :class:`OptimalControlError` when IPOPT fails.
-
-    The problem is not convex: it is solved from ``guesses`` cold starts (driving forward, then in
-    reverse; both ways round for the heading when the robot starts facing away) and the cheapest
-    converged plan is kept; with ``warm_start`` (a previous plan's solution) that one is tried first.
-
-    With ``response`` (b_u, b_omega, a, g) the robot does (a u + b_u, a omega + g u + b_omega) with the planned
-    commands (u, omega), which stay within the limits; the plan's energy is that of the robot's velocities.
-    ``pad_to`` solves a problem of the next multiple of ``pad_to`` intervals whose last ones hold the robot still
-    at the goal, and returns the plan without them: the same plan from fewer solvers to build and cache.
-    ``max_iter`` bounds the solver's iterations per guess (a re-plan in a control loop must not take seconds).
-    ``solver`` is "ipopt" or "fatrop" (:data:`SOLVERS`); where fatrop converges from no guess, IPOPT tries them too.
-    ``only`` solves that guess of the search alone (the one the whole search keeps, :mod:`baselines.plan_hints`): the
-    same plan to the last bit, the search's other solves saved; the whole search where it does not converge.
-    """
+    solver: str | None = None,
+) -> MinimumEnergyProblem:
+    """The search of :func:`solve_minimum_energy` (same keywords), unsolved; raises
+    :class:`InfeasibleArrivalTimeError` where the time left is too short."""
     h = dt * hold_steps
     if intervals is None:
         intervals = math.floor(arrival_time / h + 1e-9)
@@ -260,75 +180,226 @@ def solve_minimum_energy(
                 goal = np.tile(states[-3:], intervals - planned)
                 guess = np.concatenate([states, goal, commands, padding_command])
             candidates.append((guess, target if heading else None))
-    began = time.perf_counter()
-    best, iterations, status = None, 0, ""
-    if only is not None and 0 <= only < len(candidates):
-        best, iterations, status = _cheapest([candidates[only]], lower, upper, parameters, intervals, h, max_iter,
-                                             response is not None, solver, False)  # fmt: skip
-        best = None if best is None else replace(best, candidate=only)
-    if best is None:
-        best, more, status = _cheapest(candidates, lower, upper, parameters, intervals, h, max_iter,
-                                       response is not None, solver, warm_start is not None)  # fmt: skip
-        iterations += more
-    if best is None and solver != "ipopt":  # fatrop's failures are rare: IPOPT from the same guesses
-        best, more, status = _cheapest(candidates, lower, upper, parameters, intervals, h, max_iter,
-                                       response is not None, "ipopt", warm_start is not None)  # fmt: skip
-        iterations += more
-    if best is None:
-        raise OptimalControlError(
-            f"{solver} found no plan from start={tuple(round(v, 4) for v in start)} in {intervals * h:g} s "
-            f"(last status: {status})"
-        )
-    elapsed = time.perf_counter() - began
-    return Plan(
-        best.commands[:planned],
-        best.states[: planned + 1],
-        h,
-        best.energy,
-        iterations,
-        elapsed,
-        best.solution,
-        best.candidate,
-        best.tried,
-    )
+    return MinimumEnergyProblem(intervals, planned, h, lower, upper, parameters, tuple(candidates),
+                                warm_start is not None, response is not None, max_iter, solver or default_solver(),
+                                tuple(start))  # fmt: skip
 
 
-def _cheapest(
-    candidates: list[tuple[NDArray[np.float64], float | None]],
-    lower: NDArray[np.float64],
-    upper: NDArray[np.float64],
-    parameters: Any,
-    intervals: int,
-    h: float,
-    max_iter: int,
-    response: bool,
-    solver_name: str,
-    warm: bool,
-) -> tuple[Plan | None, int, str]:
-    """The cheapest converged plan of the candidate guesses (each with its final heading; the first is the warm start
-    where ``warm``), the iterations spent and the solver's last status."""
-    solver = minimum_energy_solver(intervals, max_iter=max_iter, response=response, solver=solver_name)
-    order = stage_order(intervals) if solver_name == "fatrop" else slice(None)
-    lower, upper = lower.copy(), upper.copy()
+def solve_minimum_energy(
+    start: tuple[float, float, float],
+    arrival_time: float,
+    dt: float,
+    u_max: float,
+    omega_max: float,
+    **options: Any,
+) -> Plan:
+    """The minimum-energy plan from ``start`` (goal frame: goal at the origin, heading 0) to the goal.
+
+    The plan has ``intervals`` commands (default: as many whole periods of ``hold_steps * dt`` as fit
+    in ``arrival_time``), each held for ``hold_steps`` control periods; the first ``frozen`` are held
+    at zero (the time already spent when re-planning over a shrinking horizon), so the robot arrives
+    at the end of the last interval. Raises :class:`InfeasibleArrivalTimeError` when the time left is below
+    :func:`least_arrival_time`, and :class:`OptimalControlError` when the solver fails.
+
+    The problem is not convex: it is solved from ``guesses`` cold starts (driving forward, then in
+    reverse; both ways round for the heading when the robot starts facing away) and the cheapest
+    converged plan is kept; with ``warm_start`` (a previous plan's solution) that one is tried first.
+
+    With ``response`` (b_u, b_omega, a, g) the robot does (a u + b_u, a omega + g u + b_omega) with the planned
+    commands (u, omega), which stay within the limits; the plan's energy is that of the robot's velocities.
+    ``pad_to`` solves a problem of the next multiple of ``pad_to`` intervals whose last ones hold the robot still
+    at the goal, and returns the plan without them: the same plan from fewer solvers to build and cache.
+    ``max_iter`` bounds the solver's iterations per guess (a re-plan in a control loop must not take seconds).
+    ``solver`` is "ipopt" or "fatrop" (:data:`SOLVERS`; default :func:`default_solver`); where fatrop converges
+    from no guess, IPOPT tries them too. The keywords are those of :func:`minimum_energy_problem`; many searches at
+    once: :func:`solve_plans`, the same plans to the last bit.
+    """
+    (result,) = solve_plans([{"start": start, "arrival_time": arrival_time, "dt": dt, "u_max": u_max,
+                              "omega_max": omega_max, **options}])  # fmt: skip
+    if isinstance(result, Exception):
+        raise result
+    return result
+
+
+def solve_plans(jobs: list[dict[str, Any]], workers: int = 1) -> list[Plan | Exception]:
+    """:func:`solve_minimum_energy` of each job's keywords, in order, its error returned (one failure leaves the other
+    plans intact): every guess of every search at once, on ``workers`` threads (the solver releases the GIL; each
+    thread keeps its own solvers, :func:`thread_solver`), in rounds: the warm starts and every guess of the cold
+    searches; the cold guesses of the searches whose warm start failed; then, with IPOPT, the searches fatrop found no
+    plan in. Each solve is a pure function of its guess, so the plans are the one-by-one
+    search's to the last bit, whatever the threads and the batch.
+
+    A job with ``coarse`` = k > 1 (a long horizon on a fine grid: the optimum's 400-1,200 intervals) is searched on a
+    grid k times coarser first (each command held k times as long, ``pad_to`` divided by k), every guess there; the
+    cheapest coarse plan, each command repeated k times, is then the fine search's warm start, its cold guesses only
+    the fallback. The coarse plan is a feasible point of the fine problem (k exact steps of one command are its
+    exact step over k dt), so the fine search converges in a few iterations instead of a search from each of 2-4
+    guesses; the energies equal the whole fine search's to 1e-6 (``dwr-gym optimum verify`` checks the shipped
+    optima)."""
+    results: list[Plan | Exception | None] = [None] * len(jobs)
+    problems: dict[int, MinimumEnergyProblem] = {}
+    jobs = _refined(jobs, workers)
+    for i, job in enumerate(jobs):
+        try:
+            problems[i] = minimum_energy_problem(**job)
+        except InfeasibleArrivalTimeError as error:
+            results[i] = error
+    searches = {i: _Search() for i in problems}
+    _search(sorted(problems), problems, searches, workers)
+    fallback = [i for i, s in searches.items() if s.best is None and problems[i].solver != "ipopt"]
+    for i in fallback:  # fatrop's failures are rare: IPOPT from the same guesses, a search of its own
+        searches[i] = _Search(iterations=searches[i].iterations, seconds=searches[i].seconds)
+    _search(fallback, problems, searches, workers, "ipopt")
+    for i, problem in problems.items():
+        search = searches[i]
+        if search.best is None:
+            solver = problem.solver
+            results[i] = OptimalControlError(
+                f"{solver} found no plan from start={tuple(round(v, 4) for v in problem.start)} in "
+                f"{problem.intervals * problem.h:g} s (last status: {search.status})"
+            )
+            continue
+        best, planned = search.best, problem.planned
+        results[i] = Plan(best.commands[:planned], best.states[: planned + 1], problem.h, best.energy,
+                          search.iterations, search.seconds, best.solution, best.candidate, search.tried)  # fmt: skip
+    return results  # type: ignore[return-value]
+
+
+def _refined(jobs: list[dict[str, Any]], workers: int) -> list[dict[str, Any]]:
+    """The jobs with their ``coarse`` stage solved: each such job warm-started from its coarse plan (see
+    :func:`solve_plans`); the job unchanged where the coarse search found no plan."""
+    refined = [{k: v for k, v in job.items() if k != "coarse"} for job in jobs]
+    staged = {i: job for i, job in enumerate(jobs) if job.get("coarse", 1) != 1}
+    coarse_jobs = []
+    for i, job in staged.items():
+        k, pad_to = job["coarse"], job.get("pad_to", 1)
+        if isinstance(k, bool) or not isinstance(k, int) or k < 1 or pad_to % k:
+            raise ValueError(f"coarse={k!r} is invalid: expected an integer >= 1 that divides pad_to={pad_to}")
+        coarse_jobs.append({**refined[i], "hold_steps": job.get("hold_steps", 1) * k, "pad_to": pad_to // k})
+    if not staged:
+        return refined
+    for (i, job), plan in zip(staged.items(), solve_plans(coarse_jobs, workers), strict=True):
+        if isinstance(plan, Plan):
+            refined[i] = {**refined[i], **_fine_warm_start(plan, job)}
+    return refined
+
+
+def _fine_warm_start(plan: Plan, job: dict[str, Any]) -> dict[str, Any]:
+    """The keywords that make ``job`` (fine) start from the coarse ``plan``: each coarse command held over k fine
+    intervals, the states between by the exact step, then the robot still at the goal up to the fine problem's end."""
+    k, dt = job["coarse"], job["dt"] * job.get("hold_steps", 1)
+    padded_coarse = (plan.solution.size - 3) // 5
+    coarse = plan_from_solution(plan.solution, padded_coarse, plan.interval, plan.energy)
+    planned = math.floor(job["arrival_time"] / dt + 1e-9)
+    pad_to = job.get("pad_to", 1)
+    padded = -(-planned // pad_to) * pad_to
+    commands = np.repeat(coarse.commands, k, axis=0)
+    origins = np.repeat(coarse.states[:-1], k, axis=0)
+    into = np.tile(np.arange(k), padded_coarse) * dt  # the time into each coarse interval [s]
+    x, y, psi = model.unicycle_step_exact(origins[:, 0], origins[:, 1], origins[:, 2], commands[:, 0],
+                                          commands[:, 1], into)  # fmt: skip
+    still = padded - commands.shape[0]  # the fine problem's intervals past the coarse one's: at the goal
+    states = np.concatenate([np.stack([x, y, psi], axis=1), np.tile(coarse.states[-1], (still + 1, 1))])
+    commands = np.concatenate([commands, np.zeros((still, 2))])
+    return {"intervals": planned, "warm_start": np.concatenate([states.ravel(), commands.ravel()])}
+
+
+@dataclass
+class _Search:
+    """One search's state over the rounds of :func:`solve_plans`: the cheapest plan so far, as the guesses come in
+    their order."""
+
     best: Plan | None = None
-    iterations = 0
-    status = ""
-    for index, (guess, target) in enumerate(candidates):
-        if target is not None:
-            lower[3 * intervals + 2] = upper[3 * intervals + 2] = target
-        solution = solver(x0=guess[order], lbx=lower[order], ubx=upper[order], lbg=0.0, ubg=0.0, p=parameters)
-        stats = solver.stats()
-        iterations += int(stats.get("iter_count", 0))
-        status = str(stats.get("return_status", ""))
-        if stats["success"]:
-            unknowns = np.empty(lower.shape)
-            unknowns[order] = np.asarray(solution["x"]).ravel()
-            plan = plan_from_solution(unknowns, intervals, h, float(solution["f"]))
-            if best is None or plan.energy < best.energy - 1e-12:
-                best = replace(plan, candidate=index)
-        if index == 0 and warm and best is not None:
-            break  # a converged warm start is the re-plan; the cold guesses are only its fallback
-    return (None if best is None else replace(best, tried=index + 1)), iterations, status
+    iterations: int = 0
+    status: str = ""
+    tried: int = 0
+    seconds: float = 0.0
+
+
+def _search(ids: list[int], problems: dict[int, MinimumEnergyProblem], searches: dict[int, _Search], workers: int,
+            solver: str | None = None) -> None:  # fmt: skip
+    """The searches ``ids`` with their own solver (or ``solver``): the warm starts and the cold searches' guesses,
+    then the cold guesses of the searches whose warm start did not converge (it is the re-plan where it does)."""
+    name = {i: solver or problems[i].solver for i in ids}
+    _run_round([(i, c, name[i]) for i in ids for c in range(1 if problems[i].warm else len(problems[i].candidates))],
+               problems, searches, workers)  # fmt: skip
+    _run_round([(i, c, name[i]) for i in ids if searches[i].best is None and problems[i].warm
+                for c in range(1, len(problems[i].candidates))], problems, searches, workers)  # fmt: skip
+
+
+def _run_round(tasks: list[tuple[int, int, str]], problems: dict[int, MinimumEnergyProblem],
+               searches: dict[int, _Search], workers: int) -> None:  # fmt: skip
+    """Solve every (search, guess, solver) of ``tasks`` and fold each result into its search in the guesses' order:
+    the cheapest wins, the first of equals. The threads take the tasks in units of one problem size (and solver), the
+    largest first, so that a size is built by one thread where it can be (a solver of 1,000 intervals takes longer to
+    build than a few solves with it); a size with more tasks than a fair share of one thread is split."""
+    if not tasks:
+        return
+    solve = functools.partial(_solve_guess, problems)
+    if workers > 1 and len(tasks) > 1:
+        share = -(-len(tasks) // (2 * workers))
+        sizes: dict[tuple[int, bool, int, str], list[int]] = {}
+        for t, (i, _, solver_name) in enumerate(tasks):
+            p = problems[i]
+            sizes.setdefault((p.intervals, p.response, p.max_iter, solver_name), []).append(t)
+        units = [group[start : start + share] for _, group in sorted(sizes.items(), key=lambda kv: -kv[0][0])
+                 for start in range(0, len(group), share)]  # fmt: skip
+        futures = [_threads(workers).submit(lambda unit: [solve(tasks[t]) for t in unit], unit) for unit in units]
+        try:
+            outcomes = {t: outcome for unit, future in zip(units, futures, strict=True)
+                        for t, outcome in zip(unit, future.result(), strict=True)}  # fmt: skip
+        except BaseException:  # Ctrl-C: the threads finish the units they are in, no other
+            for future in futures:
+                future.cancel()
+            raise
+    else:
+        outcomes = {t: solve(task) for t, task in enumerate(tasks)}
+    for t, (i, index, _) in enumerate(tasks):
+        plan, iterations, status, seconds = outcomes[t]
+        search = searches[i]
+        search.seconds += seconds
+        search.iterations += iterations
+        search.status = status
+        search.tried = max(search.tried, index + 1)
+        if plan is not None and (search.best is None or plan.energy < search.best.energy - 1e-12):
+            search.best = replace(plan, candidate=index)
+
+
+def _solve_guess(problems: dict[int, MinimumEnergyProblem], task: tuple[int, int, str]
+                 ) -> tuple[Plan | None, int, str, float]:  # fmt: skip
+    """The plan of one guess of one search (None where the solver did not converge), its iterations, its status, the
+    seconds it took."""
+    began = time.perf_counter()
+    i, index, solver_name = task
+    problem = problems[i]
+    intervals = problem.intervals
+    guess, target = problem.candidates[index]
+    lower, upper = problem.lower, problem.upper
+    if target is not None:
+        lower, upper = lower.copy(), upper.copy()
+        lower[3 * intervals + 2] = upper[3 * intervals + 2] = target
+    solver = thread_solver(intervals, problem.max_iter, problem.response, solver_name)
+    order = stage_order(intervals) if solver_name == "fatrop" else slice(None)
+    solution = solver(x0=guess[order], lbx=lower[order], ubx=upper[order], lbg=0.0, ubg=0.0, p=problem.parameters)
+    stats = solver.stats()
+    plan = None
+    if stats["success"]:
+        unknowns = np.empty(lower.shape)
+        unknowns[order] = np.asarray(solution["x"]).ravel()
+        plan = plan_from_solution(unknowns, intervals, problem.h, float(solution["f"]))
+    return plan, int(stats.get("iter_count", 0)), str(stats.get("return_status", "")), time.perf_counter() - began
+
+
+_THREADS: dict[int, ThreadPoolExecutor] = {}
+# A forked child has none of its parent's threads: it starts its own (an executor that believes it has some would hang).
+os.register_at_fork(after_in_child=_THREADS.clear)
+
+
+def _threads(workers: int) -> ThreadPoolExecutor:
+    """The solving threads, kept for the process (their solvers with them)."""
+    if workers not in _THREADS:
+        _THREADS[workers] = ThreadPoolExecutor(workers, thread_name_prefix="minimum-energy")
+    return _THREADS[workers]
 
 
 def frozen_guess(
@@ -351,14 +422,20 @@ def plan_from_solution(solution: NDArray[np.float64], intervals: int, h: float, 
 
 
 __all__ = [
+    "SMALL_HALF_TURN",
     "SOLVERS",
     "InfeasibleArrivalTimeError",
+    "MinimumEnergyProblem",
     "OptimalControlError",
     "Plan",
     "casadi_step_exact",
     "default_solver",
     "least_arrival_time",
+    "minimum_energy_problem",
     "minimum_energy_solver",
     "require_casadi",
     "solve_minimum_energy",
+    "solve_plans",
+    "stage_order",
+    "thread_solver",
 ]

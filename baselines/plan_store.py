@@ -8,8 +8,9 @@ instead of solving it: the same rollouts to the last digit, in a fraction of the
 controllers, the same command run again).
 
 :class:`PlanStore` keeps the plans by :func:`baselines.nmpc.job_key` in ``$DWR_GYM_CACHE/plans-<solver>/`` (default
-``~/.cache/dwr-gym``), where ``<solver>`` is a digest of :mod:`baselines.optimal`'s source, CasADi's version and
-:data:`STORE_VERSION`: a changed solver never reads another's plans. Each process writes its new plans to files of its
+``~/.cache/dwr-gym``), where ``<solver>`` is a digest of :mod:`baselines.optimal`'s and
+:mod:`baselines.minimum_energy_nlp`'s source, CasADi's version and :data:`STORE_VERSION`: a changed solver never reads
+another's plans. Each process writes its new plans to files of its
 own (``<pid>-<n>.npz``, an atomic replace), every :data:`FLUSH_EVERY` plans and when the store closes, so an
 interrupted command keeps what it solved and two commands may write at once. ``DWR_GYM_PLAN_CACHE=0`` turns it off;
 delete the directory to solve afresh (some 3 kB a plan: 56 MB for ``compare``'s defaults, 20,209 plans).
@@ -39,12 +40,14 @@ ERRORS = {cls.__name__: cls for cls in (OptimalControlError, InfeasibleArrivalTi
 
 
 def solver_digest() -> str:
-    """What a stored plan depends on: the solver's source, CasADi's version and the store's format (16 hex digits)."""
+    """What a stored plan depends on: the search's and the NLP's source, CasADi's version and the store's format (16
+    hex digits)."""
     import casadi
 
+    import baselines.minimum_energy_nlp
     import baselines.optimal
 
-    source = Path(baselines.optimal.__file__).read_bytes()
+    source = b"".join(Path(m.__file__).read_bytes() for m in (baselines.optimal, baselines.minimum_energy_nlp))
     return hashlib.sha256(source + f"{casadi.__version__}/{STORE_VERSION}".encode()).hexdigest()[:16]
 
 

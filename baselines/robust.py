@@ -108,7 +108,7 @@ class RobustPTParams(ControllerParams):
     cancel_disturbance: bool = True
     """Correct the command by the robot's estimated response (a disturbance observer; needs ``estimator``)."""
     workers: int = 0
-    """Processes that solve a batch of plans in parallel; 0 uses every core (at most 8), 1 none."""
+    """Threads that solve a batch of plans in parallel; 0 uses every core (at most 8), 1 none."""
     k: float = K_MAX
     """The env's arcsine gain of eq. (6), for the observation a learned cruise reads."""
     handover_time: float = 0.7
@@ -399,7 +399,7 @@ class RobustPTController(Controller):
         return u * rate, omega * rate
 
     def close(self) -> None:
-        """Stop the planner's worker processes."""
+        """Nothing to stop: the solving threads are shared."""
         if self._pool is not None:
             self._pool.close()
 

@@ -17,6 +17,8 @@ SUITE: dict[str, str] = {
     "memory": "benchmarks.speed.memory",
     "jax-env-step": "benchmarks.speed.jax_env_step",
     "compare-time": "benchmarks.speed.compare_time",
+    "compare-cpu-paths": "benchmarks.quality.cpu_paths",
+    "optimum-speed": "benchmarks.speed.optimum_speed",
     "env-versions": "benchmarks.speed.env_versions",
     # training: how fast `dwr-gym train` and the JAX learners run, and what a run costs
     "training-speed": "benchmarks.training.training_speed",
@@ -43,7 +45,6 @@ SUITE: dict[str, str] = {
     "reproduce": "benchmarks.quality.reproduce",
     "optimal": "benchmarks.quality.optimal",
     "ship-optima": "benchmarks.quality.ship_optima",
-    "ship-plan-hints": "benchmarks.quality.ship_plan_hints",
     # testing: how good the tests are
     "fuzz": "benchmarks.testing.fuzz",
     "reliability": "benchmarks.testing.reliability",

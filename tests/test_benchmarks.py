@@ -91,7 +91,7 @@ def test_compare_time_says_where_the_time_went_and_keeps_a_run_per_cache_state()
     ]
     assert stage_seconds(rows) == {"optimal": 70.0, "optimum": 30.0, "ptc": 5.0}
     assert list(stage_seconds(rows)) == ["optimal", "optimum", "ptc"]  # slowest first
-    run = {"machine": "m", "busy_processes": 0, "wall_seconds": 600.0, "cpu_seconds": 900.0,
+    run = {"machine": "m", "cpu": "Intel Xeon", "busy_processes": 0, "wall_seconds": 600.0, "cpu_seconds": 900.0,
            "load_average_1min_at_end": 1.5, "cache": "cold", "optima_solved": 0, "stages": stage_seconds(rows)}  # fmt: skip
     unshipped = {**run, "shipped_optima": False, "optima_solved": 1009}
     runs = merged(merged(merged(None, unshipped), {**run, "shipped_optima": True}), {**run, "shipped_optima": True})
@@ -99,12 +99,11 @@ def test_compare_time_says_where_the_time_went_and_keeps_a_run_per_cache_state()
     table = render(runs)
     assert "no shipped optima (1,009 optima solved)" in table and "the shipped optima read (0 solved)" in table
     assert "optimal 1.2, optimum 0.5, ptc 0.1" in table
-    hinted = merged(runs, {**run, "shipped_optima": True, "plan_hints": True})
-    assert len(hinted["runs"]) == 3  # the plan hints' run beside the one before them
-    assert "the shipped optima and plan hints read (0 solved)" in render(hinted)
-    elsewhere = merged(hinted, {**run, "shipped_optima": True, "plan_hints": True, "cpu": "AMD EPYC"})
-    assert len(elsewhere["runs"]) == 4  # another CPU's run replaces none of the earlier machine's
-    assert render(elsewhere).count("| AMD EPYC |") == 1 and "| earlier machine (model not recorded) |" in table
+    elsewhere = merged(runs, {**run, "shipped_optima": True, "cpu": "AMD EPYC", "wall_seconds": 120.0})
+    assert len(elsewhere["runs"]) == 2  # another CPU's run of a case replaces it: one row per case, not per machine
+    assert render(elsewhere).count("| AMD EPYC |") == 1 and "| AMD EPYC | a fresh clone" in render(elsewhere)
+    busy = merged(elsewhere, {**run, "shipped_optima": True, "busy_processes": 2})
+    assert len(busy["runs"]) == 3  # the busy case beside the quiet one
 
 
 def test_compare_time_reads_the_bars_time_left_from_a_redirected_log() -> None:
@@ -124,3 +123,17 @@ def test_apg_speed_refuses_a_count_below_one_naming_it(capsys: pytest.CaptureFix
         with pytest.raises(SystemExit) as exit_:
             registry.load("apg-speed").main(argv)
         assert exit_.value.code == 2 and named in capsys.readouterr().err
+
+
+def test_compare_cpu_paths_names_the_cells_that_differ_as_printed() -> None:
+    """Two runs differ where a cell differs as the docs print it: 99 % against 98.9 % does, an energy that differs
+    in the 5th decimal does not; a row only one run has is named too."""
+    from benchmarks.quality.cpu_paths import differences
+
+    row = {"scenario": "fault", "T_con": None, "policy": "robust", "success_rate": 0.99, "energy_mean": 1.00001,
+           "final_heading_error_mean": 0.3912, "energy_ratio_mean": 1.234, "energy_ratio_max": 2.04}  # fmt: skip
+    other = {**row, "success_rate": 0.989, "energy_mean": 1.00002}
+    assert differences([row], [other]) == {"fault / None / robust / success_rate": ["99 %", "98.9 %"]}
+    assert differences([row], [row]) == {}
+    extra = {**row, "policy": "ptc"}
+    assert differences([row], [row, extra])["fault / None / ptc / energy_mean"] == ["absent", "1.000"]

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pytest
 
+from tests.solving import energies_one_by_one
 from train.learning.config import TrainConfig
 from train.learning.hyperparams import resolve_hyperparams
 from train.learning.runs import saved_best, task_score
@@ -106,14 +107,15 @@ def test_the_optimum_cache_keeps_what_an_interrupted_command_solved(
         solved.append(job)
         return float(len(solved))
 
-    monkeypatch.setattr(optimum, "_solve_energy", interrupted_after_three)
+    monkeypatch.setattr(optimum, "_solve_energies", energies_one_by_one(interrupted_after_three))
+    monkeypatch.setattr(optimum, "BATCH_PER_WORKER", 3)  # the second batch is interrupted: the first one is kept
     with pytest.raises(KeyboardInterrupt):
         optimum.optimal_energies(params, scenario.starts, scenario.goals, workers=1)
     (cache_file,) = tmp_path.glob("optimal-energy-*.json")
     assert sorted(json.loads(cache_file.read_text()).values()) == [1.0, 2.0, 3.0]
 
     again: list[object] = []
-    monkeypatch.setattr(optimum, "_solve_energy", lambda job: again.append(job) or 7.0)
+    monkeypatch.setattr(optimum, "_solve_energies", energies_one_by_one(lambda job: again.append(job) or 7.0))
     energies, _ = optimum.optimal_energies(params, scenario.starts, scenario.goals, workers=1)
     assert len(again) == 3 and sorted(energies) == [1.0, 2.0, 3.0, 7.0, 7.0, 7.0]
 
@@ -134,7 +136,7 @@ def test_two_commands_caching_at_once_keep_each_others_optima(monkeypatch: pytes
         optimum._merge_into_cache(path, {written[-1]: 0.5})
         return 2.0
 
-    monkeypatch.setattr(optimum, "_solve_energy", solved_while_another_writes)
+    monkeypatch.setattr(optimum, "_solve_energies", energies_one_by_one(solved_while_another_writes))
     optimum.optimal_energies(params, scenario.starts, scenario.goals, workers=1)
     cache = json.loads(path.read_text())
     assert set(written) < set(cache) and len(written) == 4 and list(cache.values()).count(2.0) == 4
@@ -203,7 +205,7 @@ def test_two_commands_solving_the_same_episodes_share_the_work(monkeypatch: pyte
             optimum._merge_into_cache(path, {keys[0]: 10.0, keys[1]: 11.0})
         return 1.0
 
-    monkeypatch.setattr(optimum, "_solve_energy", solve)
+    monkeypatch.setattr(optimum, "_solve_energies", energies_one_by_one(solve))
     energies, _ = optimum.optimal_energies(params, scenario.starts, scenario.goals, workers=1)
     assert len(solved) == 4  # the dead process's claim is taken over, the running one's left to it
     assert list(energies) == [10.0, 11.0, 1.0, 1.0, 1.0, 1.0]

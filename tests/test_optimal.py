@@ -23,6 +23,7 @@ from baselines.optimal import (
     solve_minimum_energy,
 )
 from dwr_gym import model
+from tests.solving import energies_one_by_one, plans_one_by_one
 from train.evaluation import optimum as optimum_module
 from train.evaluation.evaluate import evaluate
 from train.evaluation.scenarios import Scenario, make_scenario
@@ -105,14 +106,14 @@ def test_an_infeasible_T_con_names_T_con_and_the_smallest_feasible_value() -> No
 def test_a_failed_scenario_is_a_failure_in_the_table_not_a_crash(monkeypatch: pytest.MonkeyPatch) -> None:
     import baselines.nmpc as nmpc
 
-    real = nmpc.solve_minimum_energy
+    real = solve_minimum_energy
 
     def failing_for_robot_one(**job: object) -> object:
         if abs(job["start"][1] + 0.3) < 1e-6:  # type: ignore[index]
             raise OptimalControlError("IPOPT found no plan (injected)")
         return real(**job)  # type: ignore[arg-type]
 
-    monkeypatch.setattr(nmpc, "solve_minimum_energy", failing_for_robot_one)
+    monkeypatch.setattr(nmpc, "solve_plans", plans_one_by_one(failing_for_robot_one))
     monkeypatch.setattr(nmpc, "_MEMO", OrderedDict())  # no plan solved before, none injected kept after
     starts = np.array([[-0.8, 0.0, 0.0], [-0.5, -0.3, 0.0], [-4.0, 0.0, 0.0]])  # the third is infeasible in 5 s
     scenario = Scenario("mixed", starts, np.zeros((3, 3)), {"T_con": 5.0})
@@ -127,17 +128,16 @@ def test_a_failed_scenario_is_a_failure_in_the_table_not_a_crash(monkeypatch: py
 def test_a_failed_replan_keeps_the_previous_plan(monkeypatch: pytest.MonkeyPatch) -> None:
     import baselines.nmpc as nmpc
 
-    real = nmpc.solve_minimum_energy
+    real = solve_minimum_energy
 
     def cold_only(**job: object) -> object:
         if job.get("warm_start") is not None:
             raise OptimalControlError("IPOPT found no plan (injected)")
         return real(**job)  # type: ignore[arg-type]
 
-    monkeypatch.setattr(nmpc, "solve_minimum_energy", cold_only)
+    monkeypatch.setattr(nmpc, "solve_plans", plans_one_by_one(cold_only))
     monkeypatch.setattr(nmpc, "_MEMO", OrderedDict())
     scenario = make_scenario("paper-fig5", env_kwargs={"actuation_noise": 0.02})  # noise: re-plans are attempted
-    # solved in this process: the shared worker processes of PlanPool were forked before the monkeypatch
     policy = ExpertPolicy(make_controller("optimal", workers=1), 0.5, 2.0)
     result = evaluate({"optimal": policy}, scenario)["optimal"]
     assert result.planner_failures == 0
@@ -151,8 +151,8 @@ def test_a_plan_met_again_is_the_plan_solved_before_and_the_rollout_the_same(mon
 
     monkeypatch.setattr(nmpc, "_MEMO", OrderedDict())
     solved: list[dict[str, object]] = []
-    real = nmpc.solve_minimum_energy
-    monkeypatch.setattr(nmpc, "solve_minimum_energy", lambda **job: solved.append(job) or real(**job))  # type: ignore[func-returns-value]
+    real = solve_minimum_energy
+    monkeypatch.setattr(nmpc, "solve_plans", plans_one_by_one(lambda **job: solved.append(job) or real(**job)))  # type: ignore[func-returns-value]
     scenario = Scenario("two", np.array([[-0.8, 0.2, 0.5], [-1.5, -0.4, 3.0]]), np.zeros((2, 3)), {"T_con": 10.0,
                         "actuation_noise": 0.05})  # fmt: skip
     runs = []
@@ -168,7 +168,7 @@ def test_a_plan_met_again_is_the_plan_solved_before_and_the_rollout_the_same(mon
     job = {"start": (-0.8, 0.0, 0.0), "arrival_time": 5.0, "dt": 0.05, "u_max": 0.5, "omega_max": 2.0, "hold_steps": 5}
     short = {**job, "arrival_time": 2.5}
     plans = pool.map([short, job, short])
-    assert [j["arrival_time"] for j in solved] == [5.0, 2.5]  # each once, the largest first
+    assert [j["arrival_time"] for j in solved] == [2.5, 5.0]  # each once
     assert plans[0] is plans[2] and plans[0].intervals == 10 and plans[1].intervals == 20  # type: ignore[union-attr]
     pool.map([{**job, "start": (-0.8, -0.0, 0.0)}])
     assert len(solved) == 3
@@ -201,7 +201,7 @@ def test_optimal_energies_are_cached_per_episode(monkeypatch: pytest.MonkeyPatch
     def no_solving(job: object) -> float:
         raise AssertionError("solved again despite the cache")
 
-    monkeypatch.setattr(optimum_module, "_solve_energy", no_solving)
+    monkeypatch.setattr(optimum_module, "_solve_energies", energies_one_by_one(no_solving))
     again, _ = optimum_module.optimal_energies(params, scenario.starts[::-1], scenario.goals[::-1], workers=1)
     np.testing.assert_array_equal(again, first[::-1])
 
@@ -218,19 +218,6 @@ def test_bad_parameters_and_a_missing_casadi_give_clear_errors(monkeypatch: pyte
     with pytest.raises(ImportError, match=r'the optimal controller needs CasADi: pip install "dwr-gym\[optimal\]"'):
         make_controller("optimal")
     assert not optimum_module.casadi_available()
-
-
-def test_a_solver_process_leaves_the_interrupt_to_the_command_that_started_it() -> None:
-    """The optima's worker processes ignore SIGINT (Ctrl-C reaches the whole process group): the command itself
-    stops them and keeps what they solved."""
-    import signal
-
-    before = signal.getsignal(signal.SIGINT)
-    try:
-        optimum_module._ignore_interrupts()
-        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
-    finally:
-        signal.signal(signal.SIGINT, before)
 
 
 @pytest.mark.parametrize(

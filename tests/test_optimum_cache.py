@@ -4,7 +4,6 @@ sets' optima, what is missing, and where the cache lives."""
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -14,6 +13,7 @@ import dwr_gym
 from baselines.optimal import (
     solve_minimum_energy,
 )
+from tests.solving import energies_one_by_one
 from train.evaluation import optimum as optimum_module
 from train.evaluation.scenarios import make_scenario
 
@@ -31,11 +31,28 @@ def test_the_cache_solves_padded_problems_to_the_same_energy_to_1e_6(start: tupl
     assert padded.energy == pytest.approx(plain.energy, rel=1e-6)
 
 
+@pytest.mark.parametrize("start", [(-1.2, 0.7, 2.5), (2.0, 1.0, -3.0), (-0.3, -2.1, 0.4)])
+def test_the_coarse_then_fine_search_finds_the_whole_fine_searchs_optimum(start: tuple[float, float, float]) -> None:
+    """The optimum is searched on a grid COARSE times coarser, then refined from the cheapest coarse plan alone: the
+    energy of IPOPT's whole fine search (every guess) to 1e-6 relative, from one fine solve of a few iterations; the
+    plan stays on the fine grid, starts at the start and ends at the goal."""
+    plain = solve_minimum_energy(start, 12.0, **LIMITS, pad_to=optimum_module.PAD_TO, solver="ipopt")  # type: ignore[arg-type]
+    staged = solve_minimum_energy(start, 12.0, **LIMITS, pad_to=optimum_module.PAD_TO,  # type: ignore[arg-type]
+                                  coarse=optimum_module.COARSE)  # fmt: skip
+    assert staged.energy == pytest.approx(plain.energy, rel=1e-6)
+    assert staged.intervals == plain.intervals == 240 and staged.interval == 0.05
+    assert staged.tried == 1 and staged.iterations < plain.iterations / 2  # the warm start converged, no cold guess
+    np.testing.assert_allclose(staged.states[0], start, atol=1e-12)
+    np.testing.assert_allclose(staged.states[-1][:2], 0.0, atol=1e-8)
+    with pytest.raises(ValueError, match=r"^coarse=3 is invalid: expected an integer >= 1 that divides pad_to=20$"):
+        solve_minimum_energy(start, 12.0, **LIMITS, pad_to=20, coarse=3)  # type: ignore[arg-type]
+
+
 @pytest.mark.skipif(not ca.has_nlpsol("fatrop"), reason="this CasADi ships no fatrop")
 def test_fatrop_finds_ipopts_plan_in_the_callers_layout() -> None:
     """fatrop sees the unknowns in stage order; the plan it returns is IPOPT's, in the states-then-commands layout."""
     start = (-1.2, 0.7, 2.5)
-    ipopt = solve_minimum_energy(start, 10.0, **LIMITS)  # type: ignore[arg-type]
+    ipopt = solve_minimum_energy(start, 10.0, **LIMITS, solver="ipopt")  # type: ignore[arg-type]
     fatrop = solve_minimum_energy(start, 10.0, **LIMITS, solver="fatrop")  # type: ignore[arg-type]
     assert fatrop.energy == pytest.approx(ipopt.energy, rel=1e-8)
     np.testing.assert_allclose(fatrop.states, ipopt.states, atol=1e-5)
@@ -69,7 +86,7 @@ def test_missing_optima_are_what_optimal_energies_solves_and_nothing_once_cached
     """A command sums the optima its sets will solve from ``missing_optima``: before solving, every episode (once per
     start and T_con, pose and position apart); after, none; starts given in float32 are the same episodes."""
     monkeypatch.setenv("DWR_GYM_CACHE", str(tmp_path))
-    monkeypatch.setattr(optimum_module, "_solve_energy", lambda job: 1.0)
+    monkeypatch.setattr(optimum_module, "_solve_energies", energies_one_by_one(lambda job: 1.0))
     scenario = make_scenario("random", n=4, seed=8)
     params = dwr_gym.EnvParams(**scenario.env_kwargs)
     goals = np.array([[0.3, -0.7, 1.1], [-1.2, 0.4, -2.5], [0.0, 0.0, 0.0], [2.0, 1.0, 0.3]])
@@ -84,14 +101,11 @@ def test_missing_optima_are_what_optimal_energies_solves_and_nothing_once_cached
     assert optimum_module.missing_optima(params, starts32, goals32) == set()
 
 
-def test_optima_are_solved_by_the_pool_asked_for_with_a_bar_counting_the_plans(
+def test_optima_are_solved_as_batches_on_the_threads_asked_for_with_a_bar_counting_the_plans(
     monkeypatch: pytest.MonkeyPatch, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """``workers`` processes (forked; spawned once jax is loaded, whose threads a fork can deadlock), each given an
-    even share of the batch; with ``address`` the Ray cluster's workers instead; the progress bar names the work and
-    counts its plans."""
-    import types
-
+    """Locally a batch of optima is solved at once on ``workers`` threads; with ``address`` on the Ray cluster's
+    workers instead, each an even share; the progress bar names the work and counts its plans."""
     from train.evaluation import ray_pool
 
     made: list[tuple[object, ...]] = []
@@ -100,8 +114,7 @@ def test_optima_are_solved_by_the_pool_asked_for_with_a_bar_counting_the_plans(
         workers = 3
 
         def __init__(self, *args: object, **kwargs: object) -> None:
-            context = kwargs.get("mp_context")
-            made.append((*args, context.get_start_method() if context else None, kwargs.get("initializer")))
+            made.append(args)
 
         def map(self, function: object, jobs: object, chunksize: int = 1) -> object:
             made.append(("chunksize", chunksize))
@@ -110,25 +123,25 @@ def test_optima_are_solved_by_the_pool_asked_for_with_a_bar_counting_the_plans(
         def shutdown(self, **kwargs: object) -> None:
             pass
 
-    monkeypatch.setattr(optimum_module, "ProcessPoolExecutor", Pool)
+    def batch(jobs: list[object], workers: int) -> list[float | str]:
+        made.append(("batch", len(jobs), workers))
+        return [1.0] * len(jobs)
+
     monkeypatch.setattr(ray_pool, "RayPool", Pool)
-    monkeypatch.setattr(optimum_module, "_solve_energy", lambda job: 1.0)
-    scenario = make_scenario("random", n=4, seed=9)  # 4 plans: the fewest a pool is made for
+    monkeypatch.setattr(optimum_module, "_solve_energies", batch)
+    scenario = make_scenario("random", n=4, seed=9)
     params = dwr_gym.EnvParams(**scenario.env_kwargs)
-    monkeypatch.delitem(sys.modules, "jax", raising=False)
-    for case, jax_loaded, kwargs in (("fork", False, {"workers": 2}), ("spawn", True, {"workers": 2}),
-                                     ("ray", False, {"address": "auto"})):  # fmt: skip
-        if jax_loaded:
-            monkeypatch.setitem(sys.modules, "jax", types.ModuleType("jax"))
+    for case, kwargs in (("threads", {"workers": 2}), ("ray", {"address": "auto"})):
         monkeypatch.setenv("DWR_GYM_CACHE", str(tmp_path / case))
         made.clear()
         energies, _ = optimum_module.optimal_energies(params, scenario.starts, scenario.goals, progress=True,
                                                       description=f"optimum ({case})", **kwargs)  # fmt: skip
         assert energies.tolist() == [1.0] * 4
-        if case == "ray":
-            assert made == [("auto", None, None), ("chunksize", 2)]  # 4 plans on its 3 workers: 2, 2
+        if case == "ray":  # 4 plans on its 3 workers: 2, 2, each a batch of one
+            assert made == [("auto",), ("chunksize", 2), ("batch", 1, 1), ("batch", 1, 1), ("batch", 1, 1),
+                            ("batch", 1, 1)]  # fmt: skip
         else:
-            assert made == [(2, case, optimum_module._ignore_interrupts), ("chunksize", 2)]
+            assert made == [("batch", 4, 2)]
         err = capsys.readouterr().err
         assert f"optimum ({case})" in err and "/4" in err and "plan" in err
 

@@ -10,6 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.solving import plans_one_by_one
+
 pytest.importorskip("casadi")
 
 from baselines import nmpc, plan_store
@@ -54,8 +56,8 @@ def rollout_with_store(directory: Path, monkeypatch: pytest.MonkeyPatch) -> tupl
     """robust-pt on two noisy episodes with the store at ``directory``: its result and the plans it solved."""
     monkeypatch.setattr(nmpc, "_MEMO", OrderedDict())  # nothing solved before in this process
     solved = []
-    real = nmpc.solve_minimum_energy
-    monkeypatch.setattr(nmpc, "solve_minimum_energy", lambda **job: solved.append(job) or real(**job))  # type: ignore[func-returns-value]
+    real = solve_minimum_energy
+    monkeypatch.setattr(nmpc, "solve_plans", plans_one_by_one(lambda **job: solved.append(job) or real(**job)))  # type: ignore[func-returns-value]
     scenario = Scenario("two", np.array([[-0.8, 0.2, 0.5], [-1.2, -0.4, 3.0]]), np.zeros((2, 3)),
                         {"T_con": 10.0, "observation_noise": 0.01})  # fmt: skip
     policy = ExpertPolicy(make_controller("robust-pt", T_con=10.0, workers=1), 0.5, 2.0)

@@ -1,14 +1,14 @@
 """The minimum-energy planner's edges (baselines.optimal, baselines.nmpc): what a failed or infeasible solve reports,
-the fallbacks (fatrop to IPOPT, an infeasible re-plan to a late plan), the re-plan tolerance and the worker processes."""
+the fallbacks (fatrop to IPOPT, an infeasible re-plan to a late plan), the re-plan tolerance and the batch of searches."""
 
 from __future__ import annotations
 
 import sys
-import types
 from collections import OrderedDict
 from typing import Any
 
 import gymnasium as gym
+import numpy as np
 import pytest
 
 from baselines import ExpertPolicy, make_controller
@@ -20,6 +20,7 @@ from baselines.optimal import (
     least_arrival_time,
     solve_minimum_energy,
 )
+from tests.solving import plans_one_by_one
 
 ca = pytest.importorskip("casadi")
 LIMITS = {"dt": 0.05, "u_max": 0.5, "omega_max": 2.0}
@@ -72,7 +73,7 @@ def test_a_replan_found_infeasible_becomes_a_late_plan_from_where_the_robot_is(m
     whose planner failed stands still)."""
     import baselines.nmpc as nmpc
 
-    real = nmpc.solve_minimum_energy
+    real = solve_minimum_energy
     late: list[dict[str, Any]] = []
 
     def infeasible_replans(**job: Any) -> Plan:
@@ -82,7 +83,7 @@ def test_a_replan_found_infeasible_becomes_a_late_plan_from_where_the_robot_is(m
             late.append(job)
         return real(**job)
 
-    monkeypatch.setattr(nmpc, "solve_minimum_energy", infeasible_replans)
+    monkeypatch.setattr(nmpc, "solve_plans", plans_one_by_one(infeasible_replans))
     monkeypatch.setattr(nmpc, "_MEMO", OrderedDict())
     controller = make_controller("optimal", workers=1)
     distance = drive(controller, (-1.0, 0.3, 0.0), 60, actuation_noise=0.05)
@@ -105,42 +106,52 @@ def test_a_zero_replan_tolerance_replans_on_schedule_and_the_default_spares_an_e
     assert always.solves == 3  # the first plan, then at steps 20 and 40
 
 
-def test_planners_of_one_size_share_their_worker_processes(monkeypatch: pytest.MonkeyPatch) -> None:
-    """The worker processes (and the solvers each one built) are kept from one planner to the next of the same size and
-    start method, and a broken pool (a worker killed) is replaced. No process starts until a batch is submitted."""
-    import baselines.nmpc as nmpc
+def test_a_batch_solves_the_plans_of_the_searches_one_by_one_and_a_failure_is_its_own(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Every episode's search of a step solved at once on two threads (warm starts and cold guesses together) gives
+    each the plan of its search alone, to the last bit; a search that fails (here: its guesses cut to one iteration)
+    or is infeasible is named by its error and leaves the others' plans intact; no NaN in a plan."""
+    from baselines.optimal import solve_plans
 
-    monkeypatch.setattr(nmpc, "_EXECUTORS", {})
-    first = nmpc._shared_executor(2, "spawn")
-    assert nmpc._shared_executor(2, "spawn") is first
-    assert nmpc._shared_executor(3, "spawn") is not first
-    first._broken = True  # type: ignore[attr-defined]
-    assert nmpc._shared_executor(2, "spawn") is not first
+    jobs: list[dict[str, Any]] = [{"start": (-0.4 - 0.2 * k, 0.1 * k, 2.5 * (-1) ** k), "arrival_time": 4.0,
+                                   "hold_steps": 5, **LIMITS} for k in range(6)]  # fmt: skip
+    first = solve_minimum_energy(**jobs[0])
+    jobs.append({**jobs[0], "frozen": 2, "intervals": first.intervals, "warm_start": first.solution})  # a re-plan
+    jobs.append({**jobs[1], "max_iter": 1})  # fails from every guess, with both solvers
+    jobs.append({**jobs[2], "arrival_time": 0.5})  # infeasible
+    alone: list[Any] = []
+    for job in jobs:
+        try:
+            alone.append(solve_minimum_energy(**job))
+        except (OptimalControlError, InfeasibleArrivalTimeError) as error:
+            alone.append(error)
+    batch = solve_plans(jobs, workers=2)
+    assert isinstance(batch[-2], OptimalControlError) and "found no plan" in str(batch[-2])
+    assert isinstance(batch[-1], InfeasibleArrivalTimeError) and "T_con=0.5 s is infeasible" in str(batch[-1])
+    for one, many in zip(alone[:-2], batch[:-2], strict=True):
+        assert isinstance(many, Plan) and isinstance(one, Plan)
+        assert np.array_equal(one.solution, many.solution) and np.isfinite(many.solution).all()
+        assert (one.energy, one.candidate, one.tried, one.iterations) == (many.energy, many.candidate, many.tried,
+                                                                          many.iterations)  # fmt: skip
+    assert batch[6].tried == 1  # the re-plan converged from its warm start: no cold guess solved
+    assert {one.tried for one in batch[:6]} == {4}  # each facing away: both ways round, forward and reverse
 
 
-def test_a_batch_is_solved_in_forked_processes_unless_jax_runs_here(monkeypatch: pytest.MonkeyPatch) -> None:
-    """Forking a process that runs JAX's threads can deadlock the child: once JAX is imported the batch's processes
-    are spawned; otherwise forked (fast, and no `if __name__` guard needed). The plans come back in the jobs' order."""
-    import baselines.nmpc as nmpc
+def _energies_in_a_batch(jobs: list[dict[str, Any]]) -> list[float]:
+    from baselines.optimal import solve_plans
 
-    methods: list[str] = []
+    return [plan.energy for plan in solve_plans(jobs, workers=2)]  # type: ignore[union-attr]
 
-    class InProcess:
-        def map(self, function: Any, jobs: list[dict[str, Any]], chunksize: int) -> Any:
-            return map(function, jobs)
 
-    def executor(workers: int, method: str) -> InProcess:
-        methods.append(method)
-        return InProcess()
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="fork is Linux's start method here")
+def test_a_forked_process_solves_on_threads_of_its_own() -> None:
+    """A process forked after this one solved on threads (the command's second process is forked) has none of them:
+    its batch starts threads of its own and returns the parent's plans, instead of waiting on threads that are gone."""
+    import multiprocessing
 
-    monkeypatch.setattr(nmpc, "_shared_executor", executor)
-    jobs = [{"start": (-0.2 - 0.05 * k, 0.1, 0.0), "arrival_time": 2.0, "hold_steps": 5, **LIMITS} for k in range(8)]
-    for jax in (None, types.ModuleType("jax")):
-        monkeypatch.setattr(nmpc, "_MEMO", OrderedDict())
-        if jax is None:
-            monkeypatch.delitem(sys.modules, "jax", raising=False)
-        else:
-            monkeypatch.setitem(sys.modules, "jax", jax)
-        plans = nmpc.PlanPool(workers=2).map(jobs)
-        assert [plan.states[0].tolist() for plan in plans] == [list(job["start"]) for job in jobs]  # type: ignore[union-attr]
-    assert methods == ["fork", "spawn"]
+    jobs = [{"start": (-0.5 - 0.1 * k, 0.2, 0.0), "arrival_time": 3.0, "hold_steps": 5, **LIMITS} for k in range(4)]
+    here = _energies_in_a_batch(jobs)
+    with multiprocessing.get_context("fork").Pool(1) as pool:
+        there = pool.apply_async(_energies_in_a_batch, (jobs,)).get(timeout=120)
+    assert there == here

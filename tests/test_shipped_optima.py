@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.solving import energies_one_by_one
 from train.cli import main as cli
 from train.evaluation import optimum as optimum_module
 from train.evaluation import shipped_optima
@@ -54,7 +55,7 @@ def test_a_fresh_clone_reads_the_default_random_sets_optima_without_solving(
 ) -> None:
     from benchmarks.quality.ship_optima import default_scenarios
 
-    monkeypatch.setattr(optimum_module, "_solve_energy", lambda job: pytest.fail("solved a shipped optimum"))
+    monkeypatch.setattr(optimum_module, "_solve_energies", energies_one_by_one(lambda job: pytest.fail("solved a shipped optimum")))
     scenario, params, optimum = next(s for s in default_scenarios() if s[0].name == "random")
     energies, failures = optimal_energies(params, scenario.starts, scenario.goals, scenario.T_cons,
                                           heading=optimum == "pose")  # fmt: skip
@@ -75,7 +76,7 @@ def test_the_users_cache_wins_and_other_episodes_are_solved(shipped_on: Path, mo
     shipped_on.mkdir(parents=True)
     (shipped_on / name).write_text(json.dumps({keys[0]: 123.0}))
     solved: list[object] = []
-    monkeypatch.setattr(optimum_module, "_solve_energy", lambda job: solved.append(job) or 7.0)
+    monkeypatch.setattr(optimum_module, "_solve_energies", energies_one_by_one(lambda job: solved.append(job) or 7.0))
     starts = np.vstack([scenario.starts[:2], [[2.0, 1.0, 0.5]]])  # an episode of no default set
     goals = np.vstack([scenario.goals[:2], [[0.0, 0.0, 0.0]]])
     T_cons = np.append(scenario.T_cons[:2], 17.0)

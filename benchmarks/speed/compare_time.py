@@ -6,12 +6,11 @@
 
 A fresh clone's user cache is empty, but dwr-gym ships the optima of the default sets (train/optima/, read where the
 user's cache has none): ``--no-shipped`` turns them off (``DWR_GYM_SHIPPED_OPTIMA=0``), so that every optimum is solved.
-It also ships which guess wins each planner plan (baselines/plan_hints.npz): ``--no-hints`` turns them off
-(``DWR_GYM_PLAN_HINTS=0``), so that every plan searches all its guesses. A warm run meets them only where a plan is not
-stored.
+The planners solve every plan they meet (a second run reads the plans the first stored, :mod:`baselines.plan_store`).
 
-Each run adds (or replaces) its measurement, keyed by the cache's state, the shipped optima, the plan hints and the
-busy processes, in docs/compare/timing.json; the block renders every measurement there, one row each.
+Each run replaces the measurement of its case (the cache's state, the shipped optima, the busy processes) in
+docs/compare/timing.json, whatever machine measured it before: the block is one row per case on the current code,
+each with the CPU model it was measured on.
 
 A page shows the block where it holds the pair ``<!-- generated: compare-time by compare-time (python -m benchmarks
 run compare-time --docs) -->`` and ``<!-- /generated -->`` (on one line each).
@@ -41,8 +40,6 @@ from benchmarks.core.timing import background_load
 
 ROOT = Path(__file__).resolve().parents[2]
 JSON_PATH = ROOT / "docs" / "compare" / "timing.json"
-#: The CPU column of the runs recorded before the model was: all on one machine of the sessions before.
-EARLIER_CPU = "earlier machine (model not recorded)"
 
 
 def cached_optima(env: dict[str, str]) -> int:
@@ -57,11 +54,10 @@ def cached_optima(env: dict[str, str]) -> int:
     return total
 
 
-def measure(busy: int, cache: str, shipped: bool = True, hints: bool = True, out: Path | None = None) -> dict[str, Any]:
+def measure(busy: int, cache: str, shipped: bool = True, out: Path | None = None) -> dict[str, Any]:
     with background_load(busy, 6 * 3600.0), tempfile.TemporaryDirectory() as tmp:
         env = checkout_env(DWR_GYM_CACHE=f"{tmp}/cache") if cache == "cold" else checkout_env()
         env["DWR_GYM_SHIPPED_OPTIMA"] = "1" if shipped else "0"
-        env["DWR_GYM_PLAN_HINTS"] = "1" if hints else "0"
         before_cache = cached_optima(env)
         before = resource.getrusage(resource.RUSAGE_CHILDREN)
         began = time.perf_counter()
@@ -82,7 +78,6 @@ def measure(busy: int, cache: str, shipped: bool = True, hints: bool = True, out
         "load_average_1min_at_end": load,
         "cache": cache,
         "shipped_optima": shipped,
-        "plan_hints": hints,
         "optima_cached_before": before_cache,
         "optima_solved": solved,
         "stages": stage_seconds(rows),
@@ -131,17 +126,16 @@ def stage_seconds(rows: list[dict[str, Any]]) -> dict[str, float]:
 
 
 def render_one(result: dict[str, Any]) -> str:
-    shipped = result.get("shipped_optima", False)  # the runs before the optima were shipped: none read
-    hints = " and plan hints" if result.get("plan_hints", False) else ""  # the runs before the hints were shipped
     if result["cache"] == "cold":
-        cache = (f"a fresh clone: an empty cache, the shipped optima{hints} read ({result['optima_solved']:,} solved)"
-                 if shipped else f"an empty cache, no shipped optima ({result['optima_solved']:,} optima solved)")  # fmt: skip
+        cache = (f"a fresh clone: an empty cache, the shipped optima read ({result['optima_solved']:,} solved)"
+                 if result["shipped_optima"] else
+                 f"an empty cache, no shipped optima ({result['optima_solved']:,} optima solved)")  # fmt: skip
     else:
         cache = f"a second run: the optima and the planners' plans of an earlier one cached ({result['optima_solved']:,} optima solved)"
     stages = result.get("stages")
     slowest = ", ".join(f"{k} {v / 60:.1f}" for k, v in list(stages.items())[:4]) if stages else "-"
     return (
-        f"| {result.get('cpu', EARLIER_CPU)} | {cache} | {result['busy_processes']} | {result['wall_seconds'] / 60:.1f} | "
+        f"| {result['cpu']} | {cache} | {result['busy_processes']} | {result['wall_seconds'] / 60:.1f} | "
         f"{result['cpu_seconds'] / 60:.1f} | {result['load_average_1min_at_end']:g} | {slowest} | "
         f"{said_left(result)} |"
     )
@@ -158,8 +152,7 @@ def said_left(result: dict[str, Any], at: tuple[int, ...] = (20, 50, 80)) -> str
 
 
 def render(results: dict[str, Any]) -> str:
-    runs = sorted(results["runs"], key=lambda r: (r.get("cpu", EARLIER_CPU) != EARLIER_CPU, r["cache"] != "cold", r.get("shipped_optima", False),
-                                                  r["busy_processes"], r.get("plan_hints", False)))  # fmt: skip
+    runs = sorted(results["runs"], key=lambda r: (r["cache"] != "cold", r["shipped_optima"], r["busy_processes"]))
     machine = runs[0]["machine"] if runs else "no run"
     return "\n".join([
         "",
@@ -167,7 +160,7 @@ def render(results: dict[str, Any]) -> str:
         "|---|---|---:|---:|---:|---:|---|---|",
         *(render_one(r) for r in runs),
         "",
-        f"*{machine}; `python -m benchmarks run compare-time --cache cold|warm [--no-shipped] [--no-hints] --busy N "
+        f"*{machine}; `python -m benchmarks run compare-time --cache cold|warm [--no-shipped] --busy N "
         "--docs`, "
         "`docs/compare/timing.json`.*",
         "",
@@ -175,17 +168,11 @@ def render(results: dict[str, Any]) -> str:
 
 
 def merged(previous: dict[str, Any] | None, result: dict[str, Any]) -> dict[str, Any]:
-    """``previous``'s runs with ``result`` added, replacing the run of the same CPU, cache state, shipped optima, plan
-    hints and busy processes."""
+    """``previous``'s runs with ``result`` added, replacing the run of the same case (cache state, shipped optima, busy
+    processes) on whatever CPU it was measured: one row per case, on the code that measured it last."""
 
     def key(run: dict[str, Any]) -> tuple[Any, ...]:
-        return (
-            run.get("cpu", EARLIER_CPU),
-            run.get("cache"),
-            run.get("shipped_optima", False),
-            run.get("busy_processes"),
-            run.get("plan_hints", False),
-        )
+        return (run["cache"], run["shipped_optima"], run["busy_processes"])
 
     runs = [r for r in (previous or {}).get("runs", []) if key(r) != key(result)]
     return {"runs": [*runs, result]}
@@ -199,15 +186,13 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--no-shipped", action="store_true",
                         help="do not read the optima shipped for the default sets (every missing one is solved)")  # fmt: skip
     parser.add_argument("--out", type=Path, help="keep compare's output there (default: a temporary directory)")
-    parser.add_argument("--no-hints", action="store_true",
-                        help="do not read the shipped plan hints (every plan searches all its guesses)")  # fmt: skip
     parser.add_argument(
         "--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} (and render the block)"
     )
     args = parser.parse_args(argv)
     if args.busy < 0:
         parser.error(f"--busy={args.busy} is invalid: expected an integer >= 0")
-    result = measure(args.busy, args.cache, shipped=not args.no_shipped, hints=not args.no_hints, out=args.out)
+    result = measure(args.busy, args.cache, shipped=not args.no_shipped, out=args.out)
     previous = json.loads(JSON_PATH.read_text()) if JSON_PATH.exists() else None
     results = merged(previous if previous and "runs" in previous else None, result)
     print(render({"runs": [result]}))

@@ -16,12 +16,10 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import multiprocessing
 import os
 import sys
 import time
 from collections.abc import Callable, Iterator
-from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
@@ -44,9 +42,12 @@ CACHE_VERSION = 2
 #: at the goal (:func:`baselines.optimal.solve_minimum_energy`'s ``pad_to``): the same energy to 1e-9 (the solver's
 #: tolerance), from some 50 solvers to build for the default sets instead of one per episode.
 PAD_TO = 20
+#: Each optimum is searched on a grid this many times coarser first, then refined from the cheapest coarse plan
+#: (:func:`baselines.optimal.solve_plans`): the same energies to 1e-6 (``dwr-gym optimum verify``), fewer solves.
+COARSE = 10
 OPTIMA = ("pose", "position", "none")
 BATCH_PER_WORKER = 8
-"""Plans per solver process between two writes of the cache: a few seconds of work, so an interruption loses little."""
+"""Plans per solving thread between two writes of the cache: a few seconds of work, so an interruption loses little."""
 CLAIM_WAIT = 1.0  # [s]
 """How often a process waiting for optima that another process is solving looks at the cache again."""
 
@@ -86,15 +87,24 @@ def _start_key(start: NDArray[np.float64], T_con: float) -> str:
     return ",".join(f"{v:.12e}" for v in (*start, T_con))
 
 
-def _solve_energy(job: tuple[tuple[float, float, float], float, float, float, float, bool]) -> float | str:
-    """The optimal energy of one start, or the error message (returned, so one failure cannot stop a batch)."""
-    from baselines.optimal import InfeasibleArrivalTimeError, OptimalControlError, solve_minimum_energy
+#: An optimum's problem: the start in the goal's frame, T_con [s], dt [s], u_max [m/s], omega_max [rad/s], heading.
+EnergyJob = tuple[tuple[float, float, float], float, float, float, float, bool]
 
-    start, T_con, dt, u_max, omega_max, heading = job
-    try:
-        return solve_minimum_energy(start, T_con, dt, u_max, omega_max, heading=heading, pad_to=PAD_TO).energy
-    except (OptimalControlError, InfeasibleArrivalTimeError) as error:
-        return str(error)
+
+def _solve_energies(jobs: list[EnergyJob], workers: int) -> list[float | str]:
+    """The optimal energy of each job, or its error message (returned: one failure leaves the others intact), solved
+    as one batch on ``workers`` threads (:func:`baselines.optimal.solve_plans`)."""
+    from baselines.optimal import Plan, solve_plans
+
+    plans = solve_plans([{"start": start, "arrival_time": T_con, "dt": dt, "u_max": u_max, "omega_max": omega_max,
+                          "heading": heading, "pad_to": PAD_TO, "coarse": COARSE}
+                         for start, T_con, dt, u_max, omega_max, heading in jobs], workers)  # fmt: skip
+    return [plan.energy if isinstance(plan, Plan) else str(plan) for plan in plans]
+
+
+def _solve_energy(job: EnergyJob) -> float | str:
+    """One optimum (a Ray task's work: each task one job)."""
+    return _solve_energies([job], 1)[0]
 
 
 def goal_frame_starts(starts: NDArray[np.float64], goals: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -313,9 +323,6 @@ def _solve_and_cache(
 
             pool = RayPool(address)
             workers = pool.workers
-        elif workers > 1 and len(jobs) >= 4:
-            pool = ProcessPoolExecutor(workers, mp_context=_pool_context(),
-                                       initializer=_ignore_interrupts)  # fmt: skip
         while todo:
             size, batch, others = BATCH_PER_WORKER * workers, [], set()
             if shared:
@@ -336,8 +343,7 @@ def _solve_and_cache(
                 continue
             for key in batch:
                 todo.remove(key)
-            # each process a run of neighbours (the same padded problem size): it builds their solver once
-            solved = map(_solve_energy, (jobs[k] for k in batch)) if pool is None else pool.map(
+            solved = _solve_energies([jobs[k] for k in batch], workers) if pool is None else pool.map(
                 _solve_energy, (jobs[k] for k in batch), chunksize=-(-len(batch) // workers))  # fmt: skip
             for key, result in zip(batch, solved, strict=True):
                 pending[key] = result
@@ -353,37 +359,21 @@ def _solve_and_cache(
 
 
 def solve_uncached(
-    jobs: list[tuple[tuple[float, float, float], float, float, float, float, bool]],
+    jobs: list[EnergyJob],
     workers: int = 0,
     on_solved: Callable[[int], None] | None = None,
 ) -> list[float | str]:
-    """Solve each job (start in the goal's frame, T_con, dt, u_max, omega_max, heading) afresh in ``workers``
-    processes (0: every core, at most 8), reading and writing no cache: the energy, or why there is none.
+    """Solve each job (start in the goal's frame, T_con, dt, u_max, omega_max, heading) afresh on ``workers``
+    threads (0: every core, at most 8), reading and writing no cache: the energy, or why there is none.
     ``on_solved`` receives the number solved so far (what ``dwr-gym optimum verify`` re-solves)."""
     workers = workers or min(os.cpu_count() or 1, 8)
     results: list[float | str] = []
-    with ProcessPoolExecutor(workers, mp_context=_pool_context(), initializer=_ignore_interrupts) as pool:
-        # in order, a few per task: neighbours share their padded problem's solver
-        for result in pool.map(_solve_energy, jobs, chunksize=max(1, min(BATCH_PER_WORKER, len(jobs) // workers))):
-            results.append(result)
-            if on_solved is not None:
-                on_solved(len(results))
+    size = BATCH_PER_WORKER * workers
+    for first in range(0, len(jobs), size):  # a batch of a few seconds' work between two reports
+        results.extend(_solve_energies(jobs[first : first + size], workers))
+        if on_solved is not None:
+            on_solved(len(results))
     return results
-
-
-def _pool_context() -> Any:
-    """Fork where it is safe (Linux, and no JAX threads in this process, which a forked child can deadlock on),
-    else spawn."""
-    return multiprocessing.get_context(
-        "fork" if sys.platform.startswith("linux") and "jax" not in sys.modules else "spawn"
-    )
-
-
-def _ignore_interrupts() -> None:
-    """Solver processes leave Ctrl-C to the parent, which keeps what they solved and stops them."""
-    import signal
-
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 __all__ = [

@@ -1,0 +1,143 @@
+"""The minimum-energy problem as a CasADi NLP: the exact step of eq. (1) on symbols, the solver built once per size.
+
+Direct multiple shooting: the states and commands of every interval are the unknowns, the exact step of eq. (1) links
+them. The problem is built once per number of intervals as a CasADi ``nlpsol`` Function and called per start; the
+start, the limits and the frozen intervals are bounds, the interval length a parameter. Two solvers of the same
+problem: IPOPT and fatrop (the default where CasADi ships it), an interior-point method that exploits the stages of an
+optimal control problem (a Riccati recursion instead of a sparse factorisation of the whole KKT system): on the
+optimum's and the planners' problems some 3x faster, the same energies to 1e-10 (``python -m benchmarks run
+optimum-speed``). fatrop sees the unknowns in stage order (x_0, u_0, x_1, ..., x_N); the caller's decision vector
+stays the states then the commands, permuted on the way in and out.
+
+A solver's buffers serve one call at a time: each solving thread keeps its own (:func:`thread_solver`), and the calls
+release the GIL, so threads solve in parallel (:func:`baselines.optimal.solve_plans`).
+
+CasADi is an optional dependency: ``pip install "dwr-gym[optimal]"``.
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+#: Below |omega dt / 2| of this, sin(h)/h is its Taylor polynomial: smooth derivatives for IPOPT, same value to 1e-24.
+SMALL_HALF_TURN = 1e-6
+#: The nonlinear programming solvers of :func:`minimum_energy_solver`.
+SOLVERS = ("ipopt", "fatrop")
+
+
+def require_casadi() -> Any:
+    """The casadi module, or an ImportError naming the extra that installs it."""
+    try:
+        import casadi
+    except ImportError as error:
+        raise ImportError('the optimal controller needs CasADi: pip install "dwr-gym[optimal]"') from error
+    return casadi
+
+
+def default_solver() -> str:
+    """fatrop where this CasADi ships it (3.6.6 on), else IPOPT."""
+    return "fatrop" if require_casadi().has_nlpsol("fatrop") else "ipopt"
+
+
+def casadi_step_exact(state: Any, command: Any, h: Any) -> Any:
+    """The exact zero-order-hold step of eq. (1) on CasADi symbols, the same arc as
+    :func:`dwr_gym.model.unicycle_step_exact` (a test holds the two together to 1e-12), without wrapping psi."""
+    ca = require_casadi()
+    half_turn = 0.5 * h * command[1]
+    small = ca.fabs(half_turn) < SMALL_HALF_TURN
+    safe = ca.if_else(small, 1.0, half_turn)
+    # Guard: sin(h)/h is 0/0 at omega = 0; its Taylor polynomial keeps the derivatives smooth there.
+    sinc = ca.if_else(small, 1.0 - half_turn * half_turn / 6.0, ca.sin(safe) / safe)
+    chord = command[0] * h * sinc
+    mid_heading = state[2] + half_turn
+    return ca.vertcat(
+        state[0] + chord * ca.cos(mid_heading), state[1] + chord * ca.sin(mid_heading), state[2] + 2.0 * half_turn
+    )
+
+
+@lru_cache(maxsize=64)
+def minimum_energy_solver(
+    intervals: int, max_iter: int = 1000, tol: float = 1e-10, response: bool = False, solver: str = "ipopt"
+) -> Any:
+    """The ``solver`` (IPOPT or fatrop) of the multiple-shooting problem with ``intervals`` held commands (built once,
+    cached).
+
+    Decision vector: the states (3, intervals + 1) then the commands (2, intervals), column-major (for fatrop in stage
+    order instead: :func:`stage_order`); parameter: the interval length h [s]; constraints: the exact steps. With
+    ``response`` the parameter is (h, b_u, b_omega, a, g) and the robot moves with (a u + b_u, a omega + g u + b_omega)
+    for the command (u, omega) (:func:`baselines.estimation.robot_velocities`; a disturbance, a failing wheel), whose
+    energy is minimised.
+    """
+    ca = require_casadi()
+    if solver not in SOLVERS:
+        raise ValueError(f"solver={solver!r} is invalid: expected one of {', '.join(SOLVERS)}")
+    s, c, h_sym = ca.SX.sym("s", 3), ca.SX.sym("c", 2), ca.SX.sym("h")
+    step = ca.Function("step", [s, c, h_sym], [casadi_step_exact(s, c, h_sym)])
+    if solver == "fatrop":  # stage order: (x_k, u_k) for each interval, then x_N
+        unknowns = ca.MX.sym("x", 5 * intervals + 3)
+        stages = ca.reshape(unknowns[: 5 * intervals], 5, intervals)
+        states, commands = ca.horzcat(stages[:3, :], unknowns[5 * intervals :]), stages[3:, :]
+    else:
+        states, commands = ca.MX.sym("X", 3, intervals + 1), ca.MX.sym("U", 2, intervals)
+        unknowns = ca.veccat(states, commands)
+    h = ca.MX.sym("h")
+    parameters, velocities = h, commands
+    if response:
+        b_u, b_w, a, g = (ca.MX.sym(name) for name in ("b_u", "b_omega", "a", "g"))
+        parameters = ca.vertcat(h, b_u, b_w, a, g)
+        velocities = ca.vertcat(a * commands[0, :] + b_u, a * commands[1, :] + g * commands[0, :] + b_w)
+    defects = states[:, 1:] - step.map(intervals)(states[:, :-1], velocities, h)
+    problem = {"x": unknowns, "f": h * ca.sumsqr(velocities), "g": ca.vec(defects), "p": parameters}
+    options: dict[str, Any] = {"print_time": False, "expand": True}
+    if solver == "fatrop":
+        options.update({"structure_detection": "manual", "N": intervals, "nx": [3] * (intervals + 1),
+                        "nu": [2] * intervals + [0], "ng": [0] * (intervals + 1), "equality": [True] * (3 * intervals),
+                        "fatrop.print_level": 0, "fatrop.max_iter": max_iter, "fatrop.tol": tol})  # fmt: skip
+    else:
+        options.update({"ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.max_iter": max_iter, "ipopt.tol": tol})
+    return ca.nlpsol("minimum_energy", solver, problem, options)
+
+
+@lru_cache(maxsize=64)
+def stage_order(intervals: int) -> NDArray[np.intp]:
+    """The indices of the decision vector (states, then commands) in fatrop's stage order (x_0, u_0, ..., x_N):
+    ``vector[stage_order(n)]`` is the stage-ordered vector."""
+    n_states = 3 * (intervals + 1)
+    states = np.arange(n_states).reshape(intervals + 1, 3)
+    commands = np.arange(n_states, n_states + 2 * intervals).reshape(intervals, 2)
+    return np.concatenate([np.hstack([states[:-1], commands]).ravel(), states[-1]])
+
+
+_LOCAL = threading.local()
+#: CasADi's symbolic graphs are not thread-safe: one thread builds a solver at a time (solving runs in parallel).
+_BUILDING = threading.Lock()
+
+
+def _new_lock_in_child() -> None:
+    """A forked child gets a free lock: the thread that held its parent's is not in the child to release it."""
+    global _BUILDING
+    _BUILDING = threading.Lock()
+
+
+os.register_at_fork(after_in_child=_new_lock_in_child)
+
+
+def thread_solver(intervals: int, max_iter: int, response: bool, solver: str) -> Any:
+    """This thread's own :func:`minimum_energy_solver` (a solver's buffers serve one call at a time), built once."""
+    solvers = _LOCAL.__dict__.setdefault("solvers", {})
+    key = (intervals, max_iter, response, solver)
+    if key not in solvers:
+        with _BUILDING:
+            solvers[key] = minimum_energy_solver.__wrapped__(intervals, max_iter=max_iter, response=response,
+                                                             solver=solver)  # fmt: skip
+    return solvers[key]
+
+
+__all__ = ["SMALL_HALF_TURN", "SOLVERS", "casadi_step_exact", "default_solver", "minimum_energy_solver",
+           "require_casadi", "stage_order", "thread_solver"]  # fmt: skip
