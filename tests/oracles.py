@@ -31,7 +31,7 @@ from typing import Any
 import gymnasium
 import numpy as np
 
-import dwr_gym  # noqa: F401  (registers the ids)
+import dwr_gym
 
 HELD = "DWRPointStabilization-v2"
 #: Relative tolerance of a float compared with the pipeline's: the single env computes one robot in Python floats,
@@ -117,8 +117,10 @@ def play(
         if terminated or truncated:
             env.close()
             return episode
-    raise AssertionError(f"{env_id} from {start3} by T_con {T_con}: the pipeline's rollout gave {len(actions)} "
-                         "actions, and the env's episode had not ended after them")
+    raise AssertionError(
+        f"{env_id} from {start3} by T_con {T_con}: the pipeline's rollout gave {len(actions)} "
+        "actions, and the env's episode had not ended after them"
+    )
 
 
 def wrap(angle: float) -> float:
@@ -366,9 +368,9 @@ def cell(interval: dict[str, Any], digits: int) -> str:
 
 def same(expected: Any, got: Any) -> bool:
     """Equal, or both floats equal to RTOL (None and NaN alike)."""
-    if expected is None or got is None or isinstance(expected, float) and math.isnan(expected):
-        return (expected is None or isinstance(expected, float) and math.isnan(expected)) and (
-            got is None or isinstance(got, float) and math.isnan(got))  # fmt: skip
+    if expected is None or got is None or (isinstance(expected, float) and math.isnan(expected)):
+        return (expected is None or (isinstance(expected, float) and math.isnan(expected))) and (
+            got is None or (isinstance(got, float) and math.isnan(got)))  # fmt: skip
     if isinstance(expected, bool) or isinstance(got, bool | np.bool_):
         return bool(expected) == bool(got)
     if isinstance(expected, float | int):

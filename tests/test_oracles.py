@@ -153,7 +153,7 @@ def test_the_iqm_and_its_interval_are_the_oracles() -> None:
     rng = np.random.default_rng(5)
     rows = []
     for n in range(1, 10):
-        values: list[Any] = rng.lognormal(0.0, 1.0, n).tolist() + [None, math.nan]
+        values: list[Any] = [*rng.lognormal(0.0, 1.0, n).tolist(), None, math.nan]
         got, expected = iqm_interval(values, reps=300), oracles.iqm_interval(values, reps=300)
         rows += [(f"{n} seeds", key, expected[key], got[key]) for key in ("iqm", "low", "high", "n")]
     oracles.assert_same(rows)
