@@ -213,3 +213,76 @@ def test_the_results_json_aggregate_and_tables_are_the_oracles(tmp_path: Path, m
         want = f"{oracles.cell(cells[name, 'in_time'], 2)}, {oracles.cell(cells[name, 'energy_ratio'], 2)}"
         rows.append(("per-T_con table", name, want, got_cell))
     oracles.assert_same(rows)
+
+
+def test_a_trained_entry_is_evaluated_on_its_own_env_id_and_its_json_holds_the_oracles_metrics(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """An entry of ``dwr-gym train`` options on v2 (its training stood in for, its agent a recorded scripted policy):
+    its result JSON says v2 and holds the oracle's metrics of v2's episodes on the nominal set and at each T_con."""
+    import train.learning.agents as agents
+    import train.learning.training as training
+    from train.evaluation.benchmark import EVAL_SEED, PER_T_CON
+    from train.learning.benchmark import parse_entry, run_benchmark
+
+    oracles.use_stand_in_optimum(monkeypatch)
+    recorder = oracles.Recorder(Scripted())
+    monkeypatch.setattr(training, "train", lambda config, command=None: None)
+    monkeypatch.setattr(agents, "load_agent", lambda path, part="whole": ("agent", recorder))
+    n = 4
+    budget = {"eval_episodes": n, "disturbed_episodes": 1, "optimum_episodes": n}
+    run_benchmark([parse_entry(f"held:algo=ppo,env_id={V2}")], [0], tmp_path, budget)
+    result = json.loads((tmp_path / "results" / "held-seed0.json").read_text())
+    assert result["env_id"] == V2
+    expected = oracle_sets(V2, recorder, n, EVAL_SEED, n, PER_T_CON)
+    assert set(result["sets"]) >= set(expected)
+    oracles.assert_same([row for name, metrics in expected.items()
+                         for row in oracles.metric_rows(f"held {name}", metrics, result["sets"][name])])  # fmt: skip
+
+
+@pytest.mark.slow  # trains four tiny runs: ~1 min on a free core, 3 on a busy one
+def test_a_tiny_benchmark_of_a_v1_and_a_v2_entry_prints_the_oracles_per_T_con_table(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``dwr-gym benchmark`` with a v1 and a v2 entry (residual PPO on PTC, two seeds, a few env steps): each entry is
+    evaluated on its own env id, and the per-T_con table it prints is, cell by cell, the oracle's IQM and interval
+    over the seeds of the in-time rate and E/opt of each seed's agent on each T_con set of that env."""
+    import train.learning.agents as agents
+    from train.cli import main
+    from train.evaluation.benchmark import EVAL_SEED, PER_T_CON
+
+    pytest.importorskip("rliable")
+    oracles.use_stand_in_optimum(monkeypatch)
+    recorded: dict[str, oracles.Recorder] = {}
+    load_agent = agents.load_agent
+
+    def recording(path: Any, part: str = "whole") -> tuple[str, Any]:  # the agent each run is evaluated with
+        label, policy = load_agent(path, part)
+        recorded[Path(path).name] = oracles.Recorder(policy)
+        return label, recorded[Path(path).name]
+
+    monkeypatch.setattr(agents, "load_agent", recording)
+    tiny = "algo=ppo,residual=true,expert=ptc,num_envs=2,hyperparams={n_steps: 32, batch_size: 32}"
+    entries = {"res-v1": V1, "res-v2": V2}
+    n, seeds = 3, (0, 1)
+    argv = ["benchmark", "--agents", f"res-v1:{tiny}", f"res-v2:{tiny},env_id={V2}", "--seeds", str(len(seeds)),
+            "--env-steps", "64", "--eval-freq", "64", "--eval-episodes", str(n), "--disturbed-episodes", "1",
+            "--optimum-episodes", str(n), "--references", "--out", str(tmp_path)]  # fmt: skip
+    assert main(argv) == 0
+    printed = capsys.readouterr().out.splitlines()
+    head = next(i for i, line in enumerate(printed) if line.startswith("| agent | env |"))
+    rows = {line.split(" | ")[0].strip("| "): line.strip(" |").split(" | ") for line in printed[head + 2 :]
+            if line.startswith("| res-")}  # fmt: skip
+    saved = json.loads((tmp_path / "benchmark.json").read_text())["summary"]
+    checks = []
+    for entry, env_id in entries.items():
+        assert saved[entry]["env_id"] == env_id
+        per_seed = [oracle_sets(env_id, recorded[f"{entry}-seed{s}"], n, EVAL_SEED, n, PER_T_CON) for s in seeds]
+        checks.append((entry, "env", env_id.rsplit("-", 1)[-1], rows[entry][1]))
+        for T_con, got in zip(PER_T_CON, rows[entry][2:], strict=True):
+            name = f"T_con={T_con:g}"
+            in_time = oracles.iqm_interval([metrics[name]["in_time"] for metrics in per_seed])
+            ratio = oracles.iqm_interval([metrics[name]["energy_ratio"] for metrics in per_seed])
+            checks.append((entry, name, f"{oracles.cell(in_time, 2)}, {oracles.cell(ratio, 2)}", got))
+    oracles.assert_same(checks)
+    assert rows["res-v1"][2:] != rows["res-v2"][2:]  # v1's and v2's episode ends measure differently
