@@ -43,7 +43,7 @@ def window_penalty(apg: Any, params: Any, stats: Any, key: Any, term: Any, hold:
         _, after, _, done, _ = apg.env.step_env(jax.random.fold_in(key_steps, t), state, action, apg.env_params)
         in_window = after.step_count > after.prescribed_steps - hold
         total = total + jnp.where(alive & in_window, term(after) / hold, 0.0)
-        state = jax.tree.map(lambda new, old: jnp.where(alive, new, old), after, state)
+        state = jax.tree.map(lambda new, old, alive=alive: jnp.where(alive, new, old), after, state)
         alive = alive & ~done
     return total
 
