@@ -64,9 +64,10 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
                    "tests/test_dagger.py", "tests/test_parameter_ranges.py"]),
     "estimation": (["baselines/estimation.py"], ["tests/test_estimation.py", "tests/test_parameter_ranges.py"]),
     "robust": (["baselines/robust.py"], ["tests/test_robust.py", "tests/test_parameter_ranges.py"]),
+    # the measures' modules, with the oracles of every published measure (tests/oracles.py)
     "evaluation": (["train/evaluation/rollout.py", "train/evaluation/scenarios.py", "train/evaluation/evaluate.py"],
-                   ["tests/test_controllers.py", "tests/test_optimal.py", "tests/test_prescribed_time.py",
-                    "tests/test_robustness.py"]),
+                   ["tests/test_oracles.py", "tests/test_controllers.py", "tests/test_optimal.py",
+                    "tests/test_prescribed_time.py", "tests/test_robustness.py"]),
     "learning": (["train/learning/imitation/dagger.py", "train/learning/imitation/robust_dagger.py",
                   "train/learning/residual.py"],
                  ["tests/test_dagger.py", "tests/test_robust_dagger.py", "tests/test_residual.py",
@@ -79,7 +80,7 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
     "jax_ppo": (["train/learning/jitted/ppo.py", "train/learning/jitted/policy.py", "train/learning/jitted/export.py"],
                 ["tests/test_jax_training.py"]),
     "protocol": (["train/learning/benchmark.py", "train/evaluation/benchmark.py", "train/reporting/rl_benchmark.py"],
-                 ["tests/test_rl_protocol.py", "tests/test_rl_benchmark.py",
+                 ["tests/test_oracles.py", "tests/test_rl_protocol.py", "tests/test_rl_benchmark.py",
                   "tests/test_docs.py::test_every_generated_block_names_its_producer_and_is_what_its_json_renders"]),
     "datasets": (["train/datasets/*"], ["tests/test_datasets.py"]),
     # the first-hour tests of the optimum's cache only (the others train agents, minutes per mutant)
