@@ -3,6 +3,7 @@
     python -m benchmarks run planted-bugs              # every bug, one suite run each (~5 min each on 2 cores)
     python -m benchmarks run planted-bugs --bugs sinc_1_over_24
     python -m benchmarks run planted-bugs --bugs truncated_is_terminated --tests tests/test_sb3.py  # only these tests
+    python -m benchmarks run planted-bugs --targeted   # each slip of TARGETED with its own tests (a minute each)
 
 A golden or pinned record (tests/test_golden.py, the pinned v0 returns and trajectories) detects a change,
 not a bug that was there when it was recorded; so each bug must also fail another test. The source tree
@@ -161,6 +162,38 @@ BUGS: dict[str, tuple[str, str, str, str]] = {
 }  # fmt: skip
 
 
+ORACLES, LEARNERS = "tests/test_oracles.py::test_", "tests/test_oracles_learners.py::test_"
+SETS = f"{ORACLES}the_benchmarks_sets_are_the_oracles_on_the_nominal_set_and_each_T_con"
+EPISODES = f"{ORACLES}each_episodes_measures_are_the_oracles"
+TABLES = f"{ORACLES}the_results_json_aggregate_and_tables_are_the_oracles"
+#: bug -> the tests that name its module and catch it in a minute (``--targeted``; the default suite otherwise)
+TARGETED: dict[str, list[str]] = {
+    "v2_in_time_reached_and_left": [f"{EPISODES}[DWRPointStabilization-v2-None]"],
+    "late_arrival_in_time": [f"{EPISODES}[DWRPointStabilization-v1-None]"],
+    "heading_from_orientation_error": [f"{EPISODES}[DWRPointStabilization-v1-None]"],
+    "return_after_the_end": [f"{EPISODES}[DWRPointStabilization-v1-None]"],
+    "energy_ratio_over_arrivals": [f"{SETS}[DWRPointStabilization-v1]", TABLES],
+    "energy_mean_of_successes": [f"{SETS}[DWRPointStabilization-v1]"],
+    "optimum_of_the_position": [f"{SETS}[DWRPointStabilization-v1]"],
+    "optimum_ignores_episode_T_con": [f"{SETS}[DWRPointStabilization-v1]"],
+    "evaluated_on_v1_whatever_the_env": [f"{SETS}[DWRPointStabilization-v2]"],
+    "nominal_e_opt_from_the_whole_set": [f"{SETS}[DWRPointStabilization-v1]"],
+    "run_evaluated_on_v1": [f"{ORACLES}a_trained_entry_is_evaluated_on_its_own_env_id_and_its_json_holds_the_oracles_metrics"],
+    "per_T_con_e_opt_from_nominal": [TABLES],
+    "aggregate_reads_nominal": [TABLES],
+    "interval_of_90_percent": [f"{ORACLES}the_iqm_and_its_interval_are_the_oracles"],
+    "iqm_cut_rounded": [f"{ORACLES}the_iqm_and_its_interval_are_the_oracles"],
+    "cell_bounds_swapped": [TABLES],
+    "v2_miss_only_outside_tolerance": [f"{ORACLES}v2s_reward_is_its_definition_term_by_term"],
+    "apg_hold_bonus_sign": [f"{LEARNERS}each_apg_option_adds_the_gradient_of_its_documented_charge[hold_bonus]"],
+    "apg_hold_heading_sign": [f"{LEARNERS}each_apg_option_adds_the_gradient_of_its_documented_charge[hold_heading_weight]"],
+    "apg_hold_miss_sign": [f"{LEARNERS}each_apg_option_adds_the_gradient_of_its_documented_charge[hold_steps]"],
+    "residual_head_1e-2": [f"{LEARNERS}the_jax_residual_starts_at_sb3s_scale_of_its_fresh_head"],
+    "autoreset_wrong_fresh_episode": [f"{LEARNERS}the_autoreset_hands_the_kth_ended_robot_fresh_episode_k"],
+    "es_return_after_the_end": [f"{LEARNERS}es_return_of_a_candidate_is_the_envs_own_episode_return"],
+}
+
+
 def plant(bug: str, work: Path) -> Path:
     """A copy of HEAD with ``bug`` planted."""
     _, path, old, new = BUGS[bug]
@@ -201,14 +234,17 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--bugs", nargs="+", choices=list(BUGS), default=list(BUGS))
     parser.add_argument("--work", type=Path, default=Path("/tmp/dwr-gym-planted"))
     parser.add_argument("--tests", nargs="+", help="run only these tests (files or node ids) instead of the suite")
+    parser.add_argument("--targeted", action="store_true",
+                        help="run each bug of TARGETED with its own tests (a minute each) instead of the suite")  # fmt: skip
     parser.add_argument("--docs", action="store_true", help="(the JSON is always written; renders its table)")
     args = parser.parse_args(argv)
     results = json.loads(RESULTS.read_text()) if RESULTS.is_file() else {}
     for bug in args.bugs:
-        failed, last = run_suite(plant(bug, args.work), args.tests)
+        tests = TARGETED.get(bug, args.tests) if args.targeted else args.tests
+        failed, last = run_suite(plant(bug, args.work), tests)
         independent = [test for test in failed if not PINNED.search(test)]
         results[bug] = {"description": BUGS[bug][0], "file": BUGS[bug][1], "failed": failed,
-                        "failed_not_pinned": independent, "summary": last, "tests": args.tests or "the default suite"}  # fmt: skip
+                        "failed_not_pinned": independent, "summary": last, "tests": tests or "the default suite"}  # fmt: skip
         print(f"{bug}: {len(failed)} failed, {len(independent)} of them not a golden/pinned record ({last})")
         RESULTS.parent.mkdir(parents=True, exist_ok=True)
         RESULTS.write_text(json.dumps(results, indent=1) + "\n")
