@@ -178,7 +178,9 @@ TARGETED: dict[str, list[str]] = {
     "optimum_ignores_episode_T_con": [f"{SETS}[DWRPointStabilization-v1]"],
     "evaluated_on_v1_whatever_the_env": [f"{SETS}[DWRPointStabilization-v2]"],
     "nominal_e_opt_from_the_whole_set": [f"{SETS}[DWRPointStabilization-v1]"],
-    "run_evaluated_on_v1": [f"{ORACLES}a_trained_entry_is_evaluated_on_its_own_env_id_and_its_json_holds_the_oracles_metrics"],
+    "run_evaluated_on_v1": [
+        f"{ORACLES}a_trained_entry_is_evaluated_on_its_own_env_id_and_its_json_holds_the_oracles_metrics"
+    ],
     "per_T_con_e_opt_from_nominal": [TABLES],
     "aggregate_reads_nominal": [TABLES],
     "interval_of_90_percent": [f"{ORACLES}the_iqm_and_its_interval_are_the_oracles"],
@@ -186,7 +188,9 @@ TARGETED: dict[str, list[str]] = {
     "cell_bounds_swapped": [TABLES],
     "v2_miss_only_outside_tolerance": [f"{ORACLES}v2s_reward_is_its_definition_term_by_term"],
     "apg_hold_bonus_sign": [f"{LEARNERS}each_apg_option_adds_the_gradient_of_its_documented_charge[hold_bonus]"],
-    "apg_hold_heading_sign": [f"{LEARNERS}each_apg_option_adds_the_gradient_of_its_documented_charge[hold_heading_weight]"],
+    "apg_hold_heading_sign": [
+        f"{LEARNERS}each_apg_option_adds_the_gradient_of_its_documented_charge[hold_heading_weight]"
+    ],
     "apg_hold_miss_sign": [f"{LEARNERS}each_apg_option_adds_the_gradient_of_its_documented_charge[hold_steps]"],
     "residual_head_1e-2": [f"{LEARNERS}the_jax_residual_starts_at_sb3s_scale_of_its_fresh_head"],
     "autoreset_wrong_fresh_episode": [f"{LEARNERS}the_autoreset_hands_the_kth_ended_robot_fresh_episode_k"],
