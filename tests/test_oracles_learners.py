@@ -21,11 +21,11 @@ from train.learning.jitted.apg_settings import APGSettings  # noqa: E402
 
 
 def apg_of(**kwargs: Any) -> Any:
-    """APG on v2 at T_con 1-1.1 s (22 steps at most), a network of 8 units, the state's gradient unclipped (so that
+    """APG on v2 at T_con 2-2.2 s (44 steps at most), a network of 8 units, the state's gradient unclipped (so that
     each term's gradient adds to the others' exactly)."""
     from train.learning.jitted.apg import JaxAPG
 
-    env, params = make_gymnax_env("DWRPointStabilization-v2", T_con_range=[1.0, 1.1])
+    env, params = make_gymnax_env("DWRPointStabilization-v2", T_con_range=[2.0, 2.2])
     return JaxAPG(APGSettings(episodes=2, net_arch=(8,), state_grad_clip=0.0, **kwargs), env, params)
 
 
@@ -82,7 +82,7 @@ def test_each_apg_option_adds_the_gradient_of_its_documented_charge(option: str)
     (value, grad), (plain_value, plain_grad) = episode_return(apg), episode_return(plain)
     assert float(value) == pytest.approx(float(plain_value), rel=1e-6)
     added = flat(grad) - flat(plain_grad)
-    expected = -flat(jax.jit(jax.grad(lambda p: window_penalty(apg, p, state.obs_stats, key, term, hold)))(params))
+    expected = -flat(jax.grad(lambda p: window_penalty(apg, p, state.obs_stats, key, term, hold))(params))
     assert np.linalg.norm(expected) > 1e-3 * np.linalg.norm(flat(plain_grad))  # the term is there to be seen
     cosine = float(added @ expected / (np.linalg.norm(added) * np.linalg.norm(expected)))
     size = float(np.linalg.norm(added) / np.linalg.norm(expected))
@@ -157,7 +157,7 @@ def test_the_autoreset_hands_the_kth_ended_robot_fresh_episode_k() -> None:
     initial = jax.jit(jax.vmap(env.func_env.initial, in_axes=(0, None)))
     _, state = batched.reset(jax.random.PRNGKey(0), params)
     counts = set()
-    for t in range(30):
+    for t in range(40):
         key = jax.random.PRNGKey(100 + t)
         action = jax.random.uniform(jax.random.PRNGKey(t), (n, 2), minval=-1.0, maxval=1.0)
         _, after, _, done, _ = step(key, state, action, params)
