@@ -250,6 +250,8 @@ def main(argv: list[str] | None = None) -> None:
         results[bug] = {"description": BUGS[bug][0], "file": BUGS[bug][1], "failed": failed,
                         "failed_not_pinned": independent, "summary": last, "tests": tests or "the default suite"}  # fmt: skip
         print(f"{bug}: {len(failed)} failed, {len(independent)} of them not a golden/pinned record ({last})")
+        # read again just before writing: two runs (of other bugs) may write the JSON at the same time
+        results = {**(json.loads(RESULTS.read_text()) if RESULTS.is_file() else {}), bug: results[bug]}
         RESULTS.parent.mkdir(parents=True, exist_ok=True)
         RESULTS.write_text(json.dumps(results, indent=1) + "\n")
 
