@@ -87,7 +87,8 @@ def test_each_apg_option_adds_the_gradient_of_its_documented_charge(option: str)
     cosine = float(added @ expected / (np.linalg.norm(added) * np.linalg.norm(expected)))
     size = float(np.linalg.norm(added) / np.linalg.norm(expected))
     assert cosine > 0.999 and size == pytest.approx(1.0, rel=1e-2), (
-        f"{option}: the gradient it adds has cosine {cosine:.4f} with the oracle's and {size:.4f} times its norm")
+        f"{option}: the gradient it adds has cosine {cosine:.4f} with the oracle's and {size:.4f} times its norm"
+    )
 
 
 def test_the_jax_residual_starts_at_sb3s_scale_of_its_fresh_head() -> None:
