@@ -31,12 +31,10 @@ def apg_of(**kwargs: Any) -> Any:
 
 def window_penalty(apg: Any, params: Any, stats: Any, key: Any, term: Any, hold: float | None) -> Any:
     """The surrogate an option documents, in a plain loop over the env's steps: the mean over the last ``hold``
-    steps up to T_con (``hold`` None: ``hold_fraction`` of the episode's own steps) of ``term(state after the step)``,
+    steps up to T_con of ``term(state after the step)``,
     of the episode APG plays from ``key``."""
     key_reset, key_steps = jax.random.split(key)
     _, state = apg.env.reset_env(key_reset, apg.env_params)
-    if hold is None:
-        hold = jnp.maximum(1.0, jnp.ceil(apg.settings.hold_fraction * state.prescribed_steps))
     alive, total = jnp.asarray(True), 0.0
     for t in range(apg.max_steps):
         action = apg.act(params, state.observation, stats)
@@ -52,16 +50,11 @@ def flat(tree: Any) -> np.ndarray:
     return np.concatenate([np.ravel(np.asarray(leaf, np.float64)) for leaf in jax.tree.leaves(tree)])
 
 
-TOLERANCE, WIDTH = 0.01, 1.0
 TERMS: dict[str, tuple[dict[str, Any], dict[str, Any], Any, float | None]] = {
     # option: (the settings with it, without it, the per-step term it charges (the return loses it), its window)
     "hold_steps": ({"hold_steps": 10, "hold_weight": 1000.0}, {}, lambda s: 1000.0 * s.distance, 10.0),
-    "hold_fraction": ({"hold_fraction": 0.25, "hold_weight": 1000.0}, {}, lambda s: 1000.0 * s.distance, None),
     "hold_heading_weight": ({"hold_steps": 10, "hold_heading_weight": 1000.0}, {"hold_steps": 10},
                             lambda s: 1000.0 * 2.0 * jnp.abs(jnp.sin(0.5 * s.psi)), 10.0),
-    # the bonus is paid, a charge of minus it: a wide sigmoid, so that its slope reaches a fresh policy's robots
-    "hold_bonus": ({"hold_steps": 10, "hold_bonus": 1000.0, "hold_bonus_width": WIDTH}, {"hold_steps": 10},
-                   lambda s: -1000.0 * jax.nn.sigmoid((TOLERANCE - s.distance) / WIDTH), 10.0),
 }  # fmt: skip
 
 

@@ -137,10 +137,10 @@ BUGS: dict[str, tuple[str, str, str, str]] = {
         "late = xp.where(terminated, -params.terminal_distance_weight * d, 0.0) if hold",
         "late = xp.where(terminated & (d > params.goal_tolerance), -params.terminal_distance_weight * d, 0.0) if hold"),
     # the learners' conventions
-    "apg_hold_bonus_sign": (
-        "APG's hold bonus with its sign flipped", "train/learning/jitted/apg.py",
-        "miss = miss - self.settings.hold_bonus * jax.nn.sigmoid(edge)",
-        "miss = miss + self.settings.hold_bonus * jax.nn.sigmoid(edge)"),
+    "apg_deadline_multiplier_sign": (
+        "APG's deadline multiplier rewarding the distance instead of charging it", "train/learning/jitted/apg.py",
+        "miss = weights[0] * after.distance + weights[1]",
+        "miss = -weights[0] * after.distance + weights[1]"),
     "apg_hold_heading_sign": (
         "APG's hold heading term with its sign flipped", "train/learning/jitted/apg.py",
         "miss = miss + self.settings.hold_heading_weight * 2.0 * jnp.abs(jnp.sin(0.5 * after.psi))",
@@ -187,7 +187,9 @@ TARGETED: dict[str, list[str]] = {
     "iqm_cut_rounded": [f"{ORACLES}the_iqm_and_its_interval_are_the_oracles"],
     "cell_bounds_swapped": [TABLES],
     "v2_miss_only_outside_tolerance": [f"{ORACLES}v2s_reward_is_its_definition_term_by_term"],
-    "apg_hold_bonus_sign": [f"{LEARNERS}each_apg_option_adds_the_gradient_of_its_documented_charge[hold_bonus]"],
+    "apg_deadline_multiplier_sign": [
+        "tests/test_lagrangian.py::test_the_multipliers_weigh_the_distance_and_heading_at_T_con_in_the_gradient"
+    ],
     "apg_hold_heading_sign": [
         f"{LEARNERS}each_apg_option_adds_the_gradient_of_its_documented_charge[hold_heading_weight]"
     ],
