@@ -55,7 +55,9 @@ def test_a_fresh_clone_reads_the_default_random_sets_optima_without_solving(
 ) -> None:
     from benchmarks.quality.ship_optima import default_scenarios
 
-    monkeypatch.setattr(optimum_module, "_solve_energies", energies_one_by_one(lambda job: pytest.fail("solved a shipped optimum")))
+    monkeypatch.setattr(
+        optimum_module, "_solve_energies", energies_one_by_one(lambda job: pytest.fail("solved a shipped optimum"))
+    )
     scenario, params, optimum = next(s for s in default_scenarios() if s[0].name == "random")
     energies, failures = optimal_energies(params, scenario.starts, scenario.goals, scenario.T_cons,
                                           heading=optimum == "pose")  # fmt: skip
