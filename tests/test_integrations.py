@@ -337,7 +337,9 @@ def test_dwr_gym_train_env_logs_episode_statistics_without_vec_monitor(tmp_path:
     from train.learning.hyperparams import resolve_hyperparams
     from train.learning.training_env import make_training_env
 
-    config = TrainConfig(residual=True, num_envs=4, run_dir=str(tmp_path), env_kwargs=dict(SHORT))
+    config = TrainConfig(
+        env_id="DWRPointStabilization-v1", residual=True, num_envs=4, run_dir=str(tmp_path), env_kwargs=dict(SHORT)
+    )  # (v1: its short episodes end on arrival, within the 128 steps)
     resolve_hyperparams(config, set())
     venv = make_training_env(config)
     assert venv.env_is_wrapped(Monitor) == [True] * 4
