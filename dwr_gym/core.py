@@ -300,6 +300,8 @@ def infos(
                                              coords.distance, heading, params.goal_tolerance,
                                              params.heading_tolerance or 0.0, model.SCALAR_MATH))
             if ended else (0.0, 0.0, 0.0))  # fmt: skip
+    elif not (result.terminated.any() or result.truncated.any()):  # most steps of a batch: no episode ends
+        cost, distance_violation, heading_violation = np.zeros((3, coords.distance.shape[0]), coords.distance.dtype)
     else:
         cost, distance_violation, heading_violation = deadline_cost(
             result.terminated | result.truncated,
