@@ -23,13 +23,10 @@ SUITE: dict[str, str] = {
     "env-versions": "benchmarks.speed.env_versions",
     # training: how fast `dwr-gym train` and the JAX learners run, and what a run costs
     "training-speed": "benchmarks.training.training_speed",
-    "training-threads": "benchmarks.training.training_threads",
     "readme-training": "benchmarks.training.readme_training",
     "retrain-pretrained": "benchmarks.training.retrain_pretrained",
     "jax-training": "benchmarks.training.jax_training",
-    "es-speed": "benchmarks.training.es_speed",
     "apg-speed": "benchmarks.training.apg_speed",
-    "sbx-speed": "benchmarks.training.sbx_speed",
     # learning: what the learned agents reach, and the archived record of what was tried (archive)
     "archive": "benchmarks.learning.archive",
     "constraint-log": "benchmarks.learning.constraint_log",
