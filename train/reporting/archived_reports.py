@@ -1,10 +1,11 @@
 """The reports of answered probes whose measuring code left the suite, rendered from their archived JSON (the
 benchmarks entry ``archive`` declares their blocks): ES on v1 within a budget, residual PPO on the analytic laws at
 the jitted trainer's speed, `dwr-gym train`'s old defaults against its new, two commits of the env timed against
-each other, `dwr-gym train`'s threads under load, and ES's speed. Each returns the block's lines."""
+each other, `dwr-gym train`'s threads under load, ES's speed, and the jitted PPO's time to the criteria. Each returns the block's lines."""
 
 from __future__ import annotations
 
+import math
 import statistics
 from typing import Any
 
@@ -214,4 +215,31 @@ def es_speed(data: dict[str, Any]) -> list[str]:
     if pinned:
         lines.append(f"2 devices over the one-core reference (*): {fps[f'es_{ES_DEVICES}_device'] / pinned['steps_per_s']:.2f}x "
                      "(* a child process pinned with sched_setaffinity, measured after the rounds above)")  # fmt: skip
+    return lines
+
+
+def time_to_criteria(data: dict[str, Any]) -> list[str]:
+    """Five seeds of the jitted PPO under vmap until each met the criteria (docs/jax-training.md): when each did."""
+    c = data["criteria"]
+    lines = [data["machine"], f"load average {data['load_average_1min_at_end']} (1 min, at the end); "
+             f"{data['seeds']} seeds under vmap; overrides {data['overrides'] or 'none'}",
+             f"criteria on {data['evaluation_set']}: in time >= {c['in_time']:.0%}, E/opt <= {c['energy_ratio']}, "
+             f"final heading <= {c['final_heading']} rad; evaluated every {data['eval_every_steps']:,} steps",
+             f"compilation and first chunk: {data['compile_and_first_chunk_s']:.0f} s", "",
+             f"{'seed':<6}{'reached at steps':>17}{'wall s':>9}{'CPU s':>9}{'in time':>9}{'E/opt':>7}{'heading':>9}"]  # fmt: skip
+    for seed, (row, curve) in enumerate(zip(data["reached"], data["curves"], strict=True)):
+        last = row or curve[-1]
+        steps = f"{row['steps']:,}" if row else f"not by {last['steps']:,}"
+        lines.append(f"{seed:<6}{steps:>17}{last['wall_s']:>9.0f}{last['cpu_s']:>9.0f}{last['in_time']:>9.0%}"
+                     f"{last['energy_ratio'] or math.nan:>7.2f}{last['final_heading']:>9.3f}")  # fmt: skip
+    first = [next((r for r in curve if r["in_time"] >= c["in_time"]), None) for curve in data["curves"]]
+    lines += ["", f"in time >= {c['in_time']:.0%} alone, first reached (steps, wall s): " + "; ".join(
+        f"seed {i}: {r['steps']:,}, {r['wall_s']:.0f} s" if r else f"seed {i}: not reached" for i, r in enumerate(first))]  # fmt: skip
+    last = [curve[-1] for curve in data["curves"]]
+    lines += ["", "at the last evaluation, median over seeds: energy "
+              f"{statistics.median(r['energy'] for r in last):.2f} (optimum {last[0]['optimal_energy']:.2f}), arrival at "
+              f"{statistics.median(r['arrival_fraction'] for r in last):.0%} of T_con, "
+              f"{statistics.median(r['turning_share'] for r in last):.0%} of the squared commands from turning"]  # fmt: skip
+    verdict = "met" if data["met"] else "NOT met"
+    lines += ["", f"goal <= {data['goal_s']:.0f} s each: median {data['median_time_s']:.0f} s, {verdict}"]
     return lines
