@@ -97,7 +97,6 @@ class _Levers(Block):
 
 
 LEVER_RUNS = Schema({name: dict for name in LEVERS})
-SUMMARY = Schema({"summary": dict})
 #: The lever table, then the answered diagnoses' tables, each from its archived JSON by its renderer in train.reporting.
 BLOCKS = (
     _Levers("what-was-tried", f"{RUNS}/{next(iter(LEVERS))}", levers_table, LEVER_RUNS),

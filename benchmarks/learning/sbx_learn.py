@@ -1,14 +1,12 @@
-"""What sbx's SAC, TQC and CrossQ learn in brief `dwr-gym benchmark` runs on v1 and v2, SB3's SAC beside them.
+"""What sbx's TQC learns on v2 at the goal's budget: five seeds of 30 minutes, `dwr-gym benchmark` with references.
 
-    nice -n 5 python -m benchmarks run sbx-learn --docs             # all three runs (about 50 minutes of training)
-    nice -n 5 python -m benchmarks run sbx-learn v2-long --docs     # one of them
+    nice -n 5 python -m benchmarks run sbx-learn v2-30min-tqc --docs     # about 2.5 hours on 2 cores
 
-The suite's name for the three ``dwr-gym benchmark`` commands behind docs/rl-libraries.md's tables ``sbx-v1``,
-``sbx-v2`` (one seed each, 300 s of training per run), ``sbx-v2-long`` (1200 s each, three jobs side by side) and
-``sbx-v2-seeds`` (five seeds of 300 s each, one job at a time), ``sbx-v2-30min`` (SAC, TQC and CrossQ, two seeds of
-1800 s each, two runs side by side) and ``sbx-v2-30min-tqc`` (TQC, five seeds of 1800 s each, two runs side by side).
-Each writes ``results/sbx-<run>/`` (a run already finished there is only aggregated again); ``--docs`` copies its
-benchmark.json to ``docs/rl_benchmark/sbx_<run>.json``, from which the tables are rendered.
+The suite's name for the ``dwr-gym benchmark`` command behind docs/rl-libraries.md's tables ``sbx-v2-30min-tqc``
+(TQC, five seeds of 1800 s each, two runs side by side). It writes ``results/sbx-<run>/`` (a run already finished
+there is only aggregated again); ``--docs`` copies its benchmark.json to ``docs/rl_benchmark/sbx_<run>.json``, from
+which the tables are rendered, and writes its seeds' curves beside keeping still. The briefer runs of SAC, TQC and
+CrossQ on v1 and v2 answered their question (none learns the task): their JSONs are rows of docs/what-was-tried.md.
 """
 
 from __future__ import annotations
@@ -24,27 +22,13 @@ from benchmarks.core.docs import Schema, fenced, table
 from benchmarks.core.record import write_json
 
 ROOT = Path(__file__).resolve().parents[2]
-V2 = "DWRPointStabilization-v2"
-BRIEF = ["--seeds", "1", "--time-limit", "300", "--eval-freq", "50000", "--eval-episodes", "200",
-         "--disturbed-episodes", "20", "--optimum-episodes", "50", "--references"]  # fmt: skip
-LONG = ["--seeds", "1", "--jobs", "3", "--time-limit", "1200", "--eval-freq", "200000", "--eval-episodes", "200",
-        "--disturbed-episodes", "20", "--optimum-episodes", "50", "--references"]  # fmt: skip
-
-SEEDS = ["--seeds", "5", "--jobs", "1", *BRIEF[2:]]
-#: The issue's budget, 30 min a seed (the time limit, not the env steps, ends it), two seeds of each, two runs side by
-#: side.
-HALF_HOUR = ["--seeds", "2", "--jobs", "2", "--time-limit", "1800", "--env-steps", "50000000", "--eval-freq", "1000000",
-             *LONG[8:]]  # fmt: skip
-
-#: run -> the agents of its ``dwr-gym benchmark`` and their options (its table is ``sbx-<run>``).
+#: run -> the agents of its ``dwr-gym benchmark`` and their options (its table is ``sbx-<run>``): the goal's budget,
+#: 30 min a seed (the time limit, not the env steps, ends it), two runs side by side.
 RUNS: dict[str, list[str]] = {
-    "v1": ["--agents", "sac", "sac-sbx", "tqc-sbx", "crossq-sbx", *BRIEF],
-    "v2": ["--agents", f"sac-v2:env_id={V2}", "sac-sbx-v2", "tqc-sbx-v2", "crossq-sbx-v2", *BRIEF],
-    "v2-long": ["--agents", "sac-sbx-v2", "tqc-sbx-v2", "crossq-sbx-v2", *LONG],
-    "v2-seeds": ["--agents", "sac-sbx-v2", "tqc-sbx-v2", "crossq-sbx-v2", *SEEDS],
-    "v2-30min": ["--agents", "sac-sbx-v2", "tqc-sbx-v2", "crossq-sbx-v2", *HALF_HOUR],
-    "v2-30min-tqc": ["--agents", "tqc-sbx-v2", "--seeds", "5", *HALF_HOUR[2:]],
-}
+    "v2-30min-tqc": ["--agents", "tqc-sbx-v2", "--seeds", "5", "--jobs", "2", "--time-limit", "1800", "--env-steps",
+                     "50000000", "--eval-freq", "1000000", "--eval-episodes", "200", "--disturbed-episodes", "20",
+                     "--optimum-episodes", "50", "--references"],
+}  # fmt: skip
 
 
 #: run -> the JSON of its seeds' curves in brief beside keeping still (:func:`curves`), written with ``--docs``.
