@@ -8,10 +8,7 @@ from pathlib import Path
 from types import SimpleNamespace
 
 from benchmarks.core.commands import recipe_main
-from benchmarks.core.docs import NUMBER, Block, Schema, table
-
-#: What ``dwr-gym benchmark`` writes, which every RL recipe copies under docs/rl_benchmark/.
-BENCHMARK = Schema({"budget": dict, "machine": str, "summary": dict, "references": dict, "best_seed": dict})
+from benchmarks.core.docs import BENCHMARK, NUMBER, Block, Schema, table
 
 
 def _tables(*names: str) -> tuple[Block, ...]:
