@@ -50,7 +50,7 @@ import numpy as np
 import dwr_gym  # noqa: F401
 from benchmarks.core.commands import parser_for
 from benchmarks.core.docs import Schema, fenced
-from benchmarks.core.record import cpu_model, write_json
+from benchmarks.core.record import cpu_model, report
 from benchmarks.core.timing import Stepper, background_load, interleaved, median_seconds, paired_ratio
 from benchmarks.speed.throughput_report import render
 from dwr_gym import model
@@ -335,7 +335,4 @@ def main(argv: list[str] | None = None) -> int:
         print(json.dumps({"torch_functions": sorted(model.TORCH_FUNCTIONS), "ratios": torch_crossover()}))
         return 0
     results = run(args.quick, args.load, args.load_seconds)
-    print("\n".join(render(results)))
-    if args.docs:
-        write_json(JSON_PATH, results)
-    return 0
+    return report(render(results), results, JSON_PATH if args.docs else None)

@@ -23,7 +23,7 @@ from typing import Any
 
 from benchmarks.core.commands import parser_for
 from benchmarks.core.docs import Schema, fenced
-from benchmarks.core.record import write_json
+from benchmarks.core.record import report
 
 
 def set_threads(threads: int) -> None:
@@ -187,7 +187,7 @@ BLOCKS = (fenced("jax-training-speed", "docs/jax/training_speed_1thread.json", r
           fenced("jax-training-speed-2threads", "docs/jax/training_speed_2thread.json", render_speed, SPEED))  # fmt: skip
 
 
-def main(argv: list[str] | None = None) -> None:
+def main(argv: list[str] | None = None) -> int:
     parser = parser_for("jax-training", __doc__)
     parser.add_argument("--threads", type=int, default=1, help="XLA and torch threads (default: 1)")
     parser.add_argument("--repeats", type=int, default=3, help="speed: alternating rounds (default: 3)")
@@ -202,6 +202,4 @@ def main(argv: list[str] | None = None) -> None:
             parser.error(f"--{name.replace('_', '-')}={getattr(args, name)} is invalid: expected a positive integer")
     set_threads(args.threads)  # before jax and torch are imported
     data = speed(args.threads, args.repeats, args.updates, args.seeds)
-    print("\n".join(render_speed(data)))
-    if args.docs:
-        write_json(OUT / f"training_speed_{args.threads}thread.json", data)
+    return report(render_speed(data), data, OUT / f"training_speed_{args.threads}thread.json" if args.docs else None)
