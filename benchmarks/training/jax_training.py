@@ -25,16 +25,6 @@ from benchmarks.core.commands import parser_for
 from benchmarks.core.docs import Schema, fenced
 from benchmarks.core.record import report
 
-
-def set_threads(threads: int) -> None:
-    """One thread budget for XLA and torch, before either is imported: one thread (XLA without its Eigen pool),
-    or XLA's default pool (every core: 2 here) beside torch on ``threads`` threads."""
-    os.environ["OMP_NUM_THREADS"] = str(threads)
-    if threads == 1:
-        flags = "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1"
-        os.environ["XLA_FLAGS"] = f"{os.environ.get('XLA_FLAGS', '')} {flags}".strip()
-
-
 ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "docs" / "jax"
 SPEED_GOALS = {"ratio_to_sb3": 10.0, "steps_per_second": 200_000.0, "vmap_ratio": 3.0}
@@ -200,6 +190,11 @@ def main(argv: list[str] | None = None) -> int:
     for name in ("threads", "repeats", "updates", "seeds"):
         if getattr(args, name) < 1:
             parser.error(f"--{name.replace('_', '-')}={getattr(args, name)} is invalid: expected a positive integer")
-    set_threads(args.threads)  # before jax and torch are imported
+    from train.learning.jitted.setup import configure_threads
+
+    # one thread budget for XLA and torch, before either is imported: one thread (XLA without its Eigen pool), or
+    # XLA's default pool (every core) beside torch on --threads threads
+    os.environ["OMP_NUM_THREADS"] = str(args.threads)
+    configure_threads(args.threads)
     data = speed(args.threads, args.repeats, args.updates, args.seeds)
     return report(render_speed(data), data, OUT / f"training_speed_{args.threads}thread.json" if args.docs else None)
