@@ -18,7 +18,6 @@ SUITE: dict[str, str] = {
     "memory": "benchmarks.speed.memory",
     "jax-env-step": "benchmarks.speed.jax_env_step",
     "compare-time": "benchmarks.speed.compare_time",
-    "compare-cpu-paths": "benchmarks.quality.cpu_paths",
     "optimum-speed": "benchmarks.speed.optimum_speed",
     "env-versions": "benchmarks.speed.env_versions",
     # training: how fast `dwr-gym train` and the JAX learners run, and what a run costs
@@ -39,6 +38,7 @@ SUITE: dict[str, str] = {
     "robust-goal": "benchmarks.robustness.robust_goal",
     # quality: the controllers and agents against the paper and the optimum
     "compare": "benchmarks.quality.compare",
+    "compare-cpu-paths": "benchmarks.quality.cpu_paths",
     "leaderboard": "benchmarks.quality.leaderboard",
     "reproduce": "benchmarks.quality.reproduce",
     "optimal": "benchmarks.quality.optimal",
