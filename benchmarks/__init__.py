@@ -4,8 +4,8 @@ of the docs it produces are rendered from that JSON). ``python -m benchmarks ren
 of the README and the docs from the JSON already written.
 
 Each benchmark is one module in the package of what it measures (speed/, training/, learning/, robustness/,
-quality/, testing/, datasets/, recipes/) with a ``main(argv)`` and, if it writes docs, ``BLOCKS``; ``registry.py``
-names them. What they share (timing against a reference in the same run, the record of the machine, the JSON, the
+quality/, testing/, datasets/) with a ``main(argv)`` and, if it writes docs, ``BLOCKS``; each recipe is a shell script
+in recipes/; ``registry.py`` names them. What they share (timing against a reference in the same run, the record of the machine, the JSON, the
 docs blocks, running commands as a user) lives in ``core/``. The suite sits on top: it imports ``train``,
 ``baselines`` and ``dwr_gym``; nothing imports it.
 """

@@ -1,12 +1,13 @@
-"""Every benchmark of the suite: its name -> its module. The group is the module's package (what it measures); the
-one-line summary is the first line of the module's docstring. Adding a benchmark is its module and one line here."""
+"""Every benchmark of the suite: its name -> its module, or the shell script of a recipe. The group is the package
+(what it measures); the one-line summary is the first line of the module's docstring or of the script's header.
+Adding a benchmark is its module (or script) and one line here."""
 
 from __future__ import annotations
 
 import ast
 import importlib
 from pathlib import Path
-from types import ModuleType
+from types import ModuleType, SimpleNamespace
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -17,18 +18,14 @@ SUITE: dict[str, str] = {
     "memory": "benchmarks.speed.memory",
     "jax-env-step": "benchmarks.speed.jax_env_step",
     "compare-time": "benchmarks.speed.compare_time",
-    "compare-cpu-paths": "benchmarks.quality.cpu_paths",
     "optimum-speed": "benchmarks.speed.optimum_speed",
     "env-versions": "benchmarks.speed.env_versions",
     # training: how fast `dwr-gym train` and the JAX learners run, and what a run costs
     "training-speed": "benchmarks.training.training_speed",
-    "training-threads": "benchmarks.training.training_threads",
     "readme-training": "benchmarks.training.readme_training",
     "retrain-pretrained": "benchmarks.training.retrain_pretrained",
     "jax-training": "benchmarks.training.jax_training",
-    "es-speed": "benchmarks.training.es_speed",
     "apg-speed": "benchmarks.training.apg_speed",
-    "sbx-speed": "benchmarks.training.sbx_speed",
     # learning: what the learned agents reach, and the archived record of what was tried (archive)
     "archive": "benchmarks.learning.archive",
     "constraint-log": "benchmarks.learning.constraint_log",
@@ -41,6 +38,7 @@ SUITE: dict[str, str] = {
     "robust-goal": "benchmarks.robustness.robust_goal",
     # quality: the controllers and agents against the paper and the optimum
     "compare": "benchmarks.quality.compare",
+    "compare-cpu-paths": "benchmarks.quality.cpu_paths",
     "leaderboard": "benchmarks.quality.leaderboard",
     "reproduce": "benchmarks.quality.reproduce",
     "optimal": "benchmarks.quality.optimal",
@@ -56,21 +54,21 @@ SUITE: dict[str, str] = {
     "dataset-speed": "benchmarks.datasets.speed",
     "offline-d3rlpy": "benchmarks.datasets.offline_d3rlpy",
     # recipes: the trainings behind the shipped agents and the docs' tables (long: hours)
-    "agents-v0": "benchmarks.recipes.agents_v0",
-    "dagger-agents": "benchmarks.recipes.dagger_agents",
-    "prescribed-time-agents": "benchmarks.recipes.prescribed_time_agents",
-    "rl-agents": "benchmarks.recipes.rl_agents",
-    "rl-v2": "benchmarks.recipes.rl_v2",
-    "rl-time-scale": "benchmarks.recipes.rl_time_scale",
-    "rl-apg": "benchmarks.recipes.rl_apg",
-    "rl-apg-scratch": "benchmarks.recipes.rl_apg_scratch",
-    "rl-apg-teacher": "benchmarks.recipes.rl_apg_teacher",
-    "rl-apg-teacher-30min": "benchmarks.recipes.rl_apg_teacher_30min",
-    "rl-apg-near-miss": "benchmarks.recipes.rl_apg_near_miss",
-    "rl-apg-hold": "benchmarks.recipes.rl_apg_hold",
-    "rl-apg-hold-heading10": "benchmarks.recipes.rl_apg_hold_heading10",
-    "rl-constrained": "benchmarks.recipes.rl_constrained",
-    "robust-rl": "benchmarks.recipes.robust_rl",
+    "agents-v0": "benchmarks/recipes/agents_v0.sh",
+    "dagger-agents": "benchmarks/recipes/dagger_agents.sh",
+    "prescribed-time-agents": "benchmarks/recipes/prescribed_time_agents.sh",
+    "rl-agents": "benchmarks/recipes/rl_agents.sh",
+    "rl-v2": "benchmarks/recipes/rl_v2.sh",
+    "rl-time-scale": "benchmarks/recipes/rl_time_scale.sh",
+    "rl-apg": "benchmarks/recipes/rl_apg.sh",
+    "rl-apg-scratch": "benchmarks/recipes/rl_apg_scratch.sh",
+    "rl-apg-teacher": "benchmarks/recipes/rl_apg_teacher.sh",
+    "rl-apg-teacher-30min": "benchmarks/recipes/rl_apg_teacher_30min.sh",
+    "rl-apg-near-miss": "benchmarks/recipes/rl_apg_near_miss.sh",
+    "rl-apg-hold": "benchmarks/recipes/rl_apg_hold.sh",
+    "rl-apg-hold-heading10": "benchmarks/recipes/rl_apg_hold_heading10.sh",
+    "rl-constrained": "benchmarks/recipes/rl_constrained.sh",
+    "robust-rl": "benchmarks/recipes/robust_rl.sh",
 }
 
 
@@ -83,22 +81,31 @@ def check(name: str) -> str:
     return name
 
 
-def load(name: str) -> ModuleType:
-    """The module of entry ``name``."""
-    return importlib.import_module(SUITE[check(name)])
+def load(name: str) -> ModuleType | SimpleNamespace:
+    """The module of entry ``name``; a recipe's ``main`` and ``BLOCKS`` (:func:`benchmarks.recipes.entry`)."""
+    target = SUITE[check(name)]
+    if target.endswith(".sh"):
+        from benchmarks import recipes
+
+        return recipes.entry(name, ROOT / target)
+    return importlib.import_module(target)
 
 
 def group(name: str) -> str:
-    """What entry ``name`` measures: its module's package."""
-    return SUITE[check(name)].split(".")[1]
+    """What entry ``name`` measures: its package."""
+    return SUITE[check(name)].replace("/", ".").split(".")[1]
 
 
 def source(name: str) -> Path:
-    """The file of entry ``name``'s module."""
-    return ROOT.joinpath(*SUITE[check(name)].split(".")).with_suffix(".py")
+    """The file of entry ``name``: its module, or a recipe's script."""
+    target = SUITE[check(name)]
+    return ROOT / target if target.endswith(".sh") else ROOT.joinpath(*target.split(".")).with_suffix(".py")
 
 
 def summary(name: str) -> str:
-    """The first line of entry ``name``'s docstring, read without importing the module (so listing is instant)."""
-    doc = ast.get_docstring(ast.parse(source(name).read_text())) or ""
+    """The first line of entry ``name``'s docstring or script header, read without importing (so listing is instant)."""
+    path = source(name)
+    if path.suffix == ".sh":
+        return path.read_text().splitlines()[1].removeprefix("# ")
+    doc = ast.get_docstring(ast.parse(path.read_text())) or ""
     return doc.splitlines()[0] if doc else ""

@@ -1,6 +1,6 @@
 """Where the energy goes (train/evaluation/energy_split.py): the split adds up to the env's energy, PTC spends its
 energy early and mostly turning, and the gain grid finds what its rows hold. Few episodes: the docs' tables have 100
-each, from ``python -m benchmarks run energy-split --docs``."""
+each, from the archived docs/rl_benchmark/energy_split.json (``python -m benchmarks run archive --docs``)."""
 
 from __future__ import annotations
 

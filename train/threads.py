@@ -5,7 +5,7 @@ products is microseconds of work. torch's intra-op pool (OpenMP) splits such an 
 on a busy machine a worker of the pool has often been set aside by the scheduler when the operation starts, so
 the join waits up to a time slice (milliseconds) for microseconds of work; idle workers also spin before they
 sleep, taking CPU time from the rest of the process. With two busy processes beside it on two cores, SAC ran
-at a fraction of its speed on one thread (``python -m benchmarks run training-threads``, docs/training.md). So ``train``,
+at a fraction of its speed on one thread (docs/training/threads.json, docs/training-speed.md). So ``train``,
 ``sweep``, ``imitate``, DAgger, ``evaluate``, ``compare`` and ``robustness`` run torch on ``threads`` threads
 (default 1, the ``--threads`` option), set on entry and restored on exit: a Python session that calls them
 gets its own setting back.

@@ -39,10 +39,9 @@ def command_main(args: list[str], docs: list[str]) -> Callable[[list[str] | None
     return main
 
 
-def recipe_main(module_file: str) -> Callable[[list[str] | None], int]:
-    """The ``main`` of a recipe entry: the shell script beside its module, of the same name, run in the repository
-    (``--docs`` is accepted and changes nothing: a recipe writes what it writes; other arguments go to bash)."""
-    script = Path(module_file).with_suffix(".sh")
+def recipe_main(script: Path) -> Callable[[list[str] | None], int]:
+    """The ``main`` of a recipe entry: its shell script, run in the repository (``--docs`` is accepted and changes
+    nothing: a recipe writes what it writes; other arguments go to bash)."""
 
     def main(argv: list[str] | None = None) -> int:
         args = [a for a in argv or [] if a != "--docs"]

@@ -55,6 +55,10 @@ class Schema:
         return found
 
 
+#: What ``dwr-gym benchmark`` writes (its benchmark.json), which the RL recipes and sbx-learn copy under docs/.
+BENCHMARK = Schema({"budget": dict, "machine": str, "summary": dict, "references": dict, "best_seed": dict})
+
+
 def _tuple(types: Types) -> tuple[type, ...]:
     return types if isinstance(types, tuple) else (types,)
 

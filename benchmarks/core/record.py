@@ -8,8 +8,6 @@ import platform
 from pathlib import Path
 from typing import Any
 
-ROOT = Path(__file__).resolve().parents[2]
-
 
 def torch_machine() -> str:
     """ "<arch>, <cores> cores, torch <version>": the machine line of the training benchmarks."""
@@ -43,13 +41,6 @@ def write_json(path: Path, data: Any, *, safe: bool = False) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(data, indent=1, allow_nan=not safe) + "\n")
     print(f"wrote {path}")
-
-
-def read_json(path: Path) -> Any:
-    """The JSON at ``path``, or an error naming the command that writes it."""
-    if not path.is_file():
-        raise SystemExit(f"{path} does not exist: run its benchmark with --docs first (python -m benchmarks list)")
-    return json.loads(path.read_text())
 
 
 def report(lines: list[str], data: Any, path: Path | None) -> int:

@@ -97,7 +97,6 @@ class _Levers(Block):
 
 
 LEVER_RUNS = Schema({name: dict for name in LEVERS})
-SUMMARY = Schema({"summary": dict})
 #: The lever table, then the answered diagnoses' tables, each from its archived JSON by its renderer in train.reporting.
 BLOCKS = (
     _Levers("what-was-tried", f"{RUNS}/{next(iter(LEVERS))}", levers_table, LEVER_RUNS),
@@ -126,6 +125,20 @@ BLOCKS = (
            Schema({"env_id": str, "episodes": int, "laws": dict})),
     fenced("old-vs-new", "docs/training/old_vs_new.json", reports.old_vs_new,
            Schema({"machine": str, "cap_seconds": NUMBER, "seeds": list, "env_id": str, "runs": dict})),
+    table("sbx-speed", Schema({"env_id": str, "steps_timed": int, "repeats": int, "rounds": list, "summary": dict,
+                               "machine": str, "load_average": NUMBER, "versions": dict})),
+    fenced("training-threads", "docs/training/threads.json", reports.training_threads,
+           Schema({"machine": str, "busy_processes": int, "load_average_1min_at_end": NUMBER, "steps": dict,
+                   "rounds": list, "median_fps": dict, "threads_cores_fps": dict, "reference_limit_seconds": NUMBER,
+                   "cores": int, "ratio_defaults_to_omp1": dict, "goal": NUMBER, "met": bool})),
+    fenced("jax-time-to-criteria", "docs/jax/time_to_criteria.json", reports.time_to_criteria,
+           Schema({"machine": str, "settings": dict, "seeds": int, "criteria": dict, "reached": list, "curves": list,
+                   "goal_s": NUMBER, "met": bool, "median_time_s": NUMBER})),
+    fenced("es-speed", "docs/jax/es_speed.json", reports.es_speed,
+           Schema({"machine": str, "load_average_1min_at_end": NUMBER, "es_settings": dict,
+                   "ppo_steps_per_round": int, "es_steps_per_generation": int, "compile_seconds": dict,
+                   "rounds": list, "median_steps_per_s": dict, "median_cpu_per_wall": dict, "ratios": dict,
+                   "goals": dict, "met": dict})),
     *(fenced(f"compare-commits-{kind}", f"docs/throughput/{path}.json", reports.compare_commits,
              Schema({"commits": list, "num_envs": int, "ratios": list, "median_ratios": list}))
       for kind, path in (("loaded", "compare_loaded"), ("quiet", "compare_quiet_one_thread"))),

@@ -16,7 +16,7 @@ from typing import Any
 
 from benchmarks.core.commands import parser_for
 from benchmarks.core.docs import Block, Schema
-from benchmarks.core.record import torch_machine, write_json
+from benchmarks.core.record import report, torch_machine
 
 ROOT = Path(__file__).resolve().parents[2]
 JSON_PATH = ROOT / "docs" / "rl_benchmark" / "per_T_con.json"
@@ -95,10 +95,7 @@ def main(argv: list[str] | None = None) -> int:
     agents = (shipped_agents(ROOT / "train" / "pretrained") if args.agents is None
               else {Path(p).name: Path(p) for p in args.agents})  # fmt: skip
     data = measure(agents, args.controllers, args.n)
-    print(render(data))
-    if args.docs:
-        write_json(JSON_PATH, data)
-    return 0
+    return report([render(data)], data, JSON_PATH if args.docs else None)
 
 
 BLOCKS = (Block("per-T_con-shipped", "docs/rl_benchmark/per_T_con.json", render,

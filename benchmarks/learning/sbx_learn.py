@@ -1,14 +1,12 @@
-"""What sbx's SAC, TQC and CrossQ learn in brief `dwr-gym benchmark` runs on v1 and v2, SB3's SAC beside them.
+"""What sbx's TQC learns on v2 at the goal's budget: five seeds of 30 minutes, `dwr-gym benchmark` with references.
 
-    nice -n 5 python -m benchmarks run sbx-learn --docs             # all three runs (about 50 minutes of training)
-    nice -n 5 python -m benchmarks run sbx-learn v2-long --docs     # one of them
+    nice -n 5 python -m benchmarks run sbx-learn v2-30min-tqc --docs     # about 2.5 hours on 2 cores
 
-The suite's name for the three ``dwr-gym benchmark`` commands behind docs/rl-libraries.md's tables ``sbx-v1``,
-``sbx-v2`` (one seed each, 300 s of training per run), ``sbx-v2-long`` (1200 s each, three jobs side by side) and
-``sbx-v2-seeds`` (five seeds of 300 s each, one job at a time), ``sbx-v2-30min`` (SAC, TQC and CrossQ, two seeds of
-1800 s each, two runs side by side) and ``sbx-v2-30min-tqc`` (TQC, five seeds of 1800 s each, two runs side by side).
-Each writes ``results/sbx-<run>/`` (a run already finished there is only aggregated again); ``--docs`` copies its
-benchmark.json to ``docs/rl_benchmark/sbx_<run>.json``, from which the tables are rendered.
+The suite's name for the ``dwr-gym benchmark`` command behind docs/rl-libraries.md's tables ``sbx-v2-30min-tqc``
+(TQC, five seeds of 1800 s each, two runs side by side). It writes ``results/sbx-<run>/`` (a run already finished
+there is only aggregated again); ``--docs`` copies its benchmark.json to ``docs/rl_benchmark/sbx_<run>.json``, from
+which the tables are rendered, and writes its seeds' curves beside keeping still. The briefer runs of SAC, TQC and
+CrossQ on v1 and v2 answered their question (none learns the task): their JSONs are rows of docs/what-was-tried.md.
 """
 
 from __future__ import annotations
@@ -20,43 +18,20 @@ from pathlib import Path
 from typing import Any
 
 from benchmarks.core.commands import dwr_gym, parser_for
-from benchmarks.core.docs import Schema, fenced, table
+from benchmarks.core.docs import BENCHMARK, Schema, fenced, table
 from benchmarks.core.record import write_json
 
 ROOT = Path(__file__).resolve().parents[2]
-V2 = "DWRPointStabilization-v2"
-BRIEF = ["--seeds", "1", "--time-limit", "300", "--eval-freq", "50000", "--eval-episodes", "200",
-         "--disturbed-episodes", "20", "--optimum-episodes", "50", "--references"]  # fmt: skip
-LONG = ["--seeds", "1", "--jobs", "3", "--time-limit", "1200", "--eval-freq", "200000", "--eval-episodes", "200",
-        "--disturbed-episodes", "20", "--optimum-episodes", "50", "--references"]  # fmt: skip
-
-SEEDS = ["--seeds", "5", "--jobs", "1", *BRIEF[2:]]
-#: The issue's budget, 30 min a seed (the time limit, not the env steps, ends it), two seeds of each, two runs side by
-#: side.
-HALF_HOUR = ["--seeds", "2", "--jobs", "2", "--time-limit", "1800", "--env-steps", "50000000", "--eval-freq", "1000000",
-             *LONG[8:]]  # fmt: skip
-
-#: run -> the agents of its ``dwr-gym benchmark`` and their options (its table is ``sbx-<run>``).
-RUNS: dict[str, list[str]] = {
-    "v1": ["--agents", "sac", "sac-sbx", "tqc-sbx", "crossq-sbx", *BRIEF],
-    "v2": ["--agents", f"sac-v2:env_id={V2}", "sac-sbx-v2", "tqc-sbx-v2", "crossq-sbx-v2", *BRIEF],
-    "v2-long": ["--agents", "sac-sbx-v2", "tqc-sbx-v2", "crossq-sbx-v2", *LONG],
-    "v2-seeds": ["--agents", "sac-sbx-v2", "tqc-sbx-v2", "crossq-sbx-v2", *SEEDS],
-    "v2-30min": ["--agents", "sac-sbx-v2", "tqc-sbx-v2", "crossq-sbx-v2", *HALF_HOUR],
-    "v2-30min-tqc": ["--agents", "tqc-sbx-v2", "--seeds", "5", *HALF_HOUR[2:]],
-}
-
-
-#: run -> the JSON of its seeds' curves in brief beside keeping still (:func:`curves`), written with ``--docs``.
-CURVES = {"v2-30min-tqc": "docs/rl_benchmark/sbx_v2_30min_tqc_curves.json"}
-
-
-def out_dir(run: str) -> Path:
-    return ROOT / "results" / f"sbx-{run}"
-
-
-def docs_json(run: str) -> str:
-    return f"docs/rl_benchmark/sbx_{run.replace('-', '_')}.json"
+RUN = "v2-30min-tqc"
+#: The agents of its ``dwr-gym benchmark`` and their options: the goal's budget, 30 min a seed (the time limit, not
+#: the env steps, ends it), two runs side by side.
+COMMAND = ["benchmark", "--agents", "tqc-sbx-v2", "--seeds", "5", "--jobs", "2", "--time-limit", "1800",
+           "--env-steps", "50000000", "--eval-freq", "1000000", "--eval-episodes", "200", "--disturbed-episodes",
+           "20", "--optimum-episodes", "50", "--references"]  # fmt: skip
+OUT = ROOT / "results" / f"sbx-{RUN}"
+DOCS_JSON = "docs/rl_benchmark/sbx_v2_30min_tqc.json"
+#: Its seeds' curves in brief beside keeping still (:func:`curves`), written with ``--docs``.
+CURVES_JSON = "docs/rl_benchmark/sbx_v2_30min_tqc_curves.json"
 
 
 def still_return(run_dir: Path, known: dict[str, float]) -> float:
@@ -85,12 +60,12 @@ def still_return(run_dir: Path, known: dict[str, float]) -> float:
     return known[key]
 
 
-def curves(run: str) -> dict[str, Any]:
+def curves() -> dict[str, Any]:
     """Each seed's learning curve of a run in brief (its evaluations.csv: the best in-time rate and where, the last
     evaluation) beside the return of keeping still on the same evaluation set."""
     seeds: dict[str, Any] = {}
     known: dict[str, float] = {}
-    for run_dir in sorted((out_dir(run) / "runs").glob("*-seed*")):
+    for run_dir in sorted((OUT / "runs").glob("*-seed*")):
         with (run_dir / "evaluations.csv").open() as handle:
             rows = [{k: float(v) if v else math.nan for k, v in row.items()} for row in csv.DictReader(handle)]
         peak = max(rows, key=lambda row: row["success_rate"])
@@ -101,7 +76,7 @@ def curves(run: str) -> dict[str, Any]:
             "last_return": last["return_mean"], "last_final_distance": last["final_distance_mean"],
             "last_energy": last["energy_mean"], "still_return": still_return(run_dir, known),
         }  # fmt: skip
-    return {"run": run, "seeds": seeds}
+    return {"run": RUN, "seeds": seeds}
 
 
 def render_curves(data: dict[str, Any]) -> list[str]:
@@ -116,27 +91,21 @@ def render_curves(data: dict[str, Any]) -> list[str]:
 
 def main(argv: list[str] | None = None) -> int:
     parser = parser_for("sbx-learn", __doc__)
-    parser.epilog = "; ".join(f"{run}: dwr-gym benchmark {' '.join(args)}" for run, args in RUNS.items())
-    parser.add_argument("runs", nargs="*", metavar="RUN", help=f"which of {', '.join(RUNS)} (default: all)")
-    parser.add_argument("--docs", action="store_true", help="copy each benchmark.json to docs/rl_benchmark/")
+    parser.epilog = f"{RUN}: dwr-gym {' '.join(COMMAND)}"
+    parser.add_argument("run", nargs="?", choices=(RUN,), help="the run (the only one)")
+    parser.add_argument("--docs", action="store_true", help=f"copy its benchmark.json to {DOCS_JSON}, write its curves")
     args = parser.parse_args(argv)
-    for run in args.runs:
-        if run not in RUNS:
-            parser.error(f"run {run!r} is unknown: expected one of {', '.join(RUNS)}")
-    for run in args.runs or RUNS:
-        dwr_gym(["benchmark", *RUNS[run], "--out", str(out_dir(run))])
-        if args.docs:
-            shutil.copyfile(out_dir(run) / "benchmark.json", ROOT / docs_json(run))
-            print(f"wrote {docs_json(run)}")
-        if args.docs and run in CURVES:
-            data = curves(run)
-            print("\n".join(render_curves(data)))
-            write_json(ROOT / CURVES[run], data)
+    dwr_gym([*COMMAND, "--out", str(OUT)])
+    if args.docs:
+        shutil.copyfile(OUT / "benchmark.json", ROOT / DOCS_JSON)
+        print(f"wrote {DOCS_JSON}")
+        data = curves()
+        print("\n".join(render_curves(data)))
+        write_json(ROOT / CURVES_JSON, data)
     return 0
 
 
-#: The tables of docs/rl-libraries.md, in the schema of every `dwr-gym benchmark` JSON (as rl-agents' tables).
-BENCHMARK = Schema({"budget": dict, "machine": str, "summary": dict, "references": dict, "best_seed": dict})
-BLOCKS = (*(table(f"sbx-{run}", BENCHMARK) for run in RUNS), table("sbx-v2-30min-tqc-per-T_con", BENCHMARK),
-          fenced("sbx-v2-30min-tqc-curves", CURVES["v2-30min-tqc"], render_curves,
+#: The tables of docs/rl-libraries.md.
+BLOCKS = (table("sbx-v2-30min-tqc", BENCHMARK), table("sbx-v2-30min-tqc-per-T_con", BENCHMARK),
+          fenced("sbx-v2-30min-tqc-curves", CURVES_JSON, render_curves,
                  Schema({"run": str, "seeds": dict})))  # fmt: skip

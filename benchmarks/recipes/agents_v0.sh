@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# The training runs behind the README's v0 agents: residual PPO on PTC and PPO, seeds 0-2, then compare.
 # The training runs behind the README's results: a residual PPO on the PTC expert and a from-scratch PPO,
 # the same budget (1.5 M env steps, 16 envs) and env (DWRPointStabilization-v0, heading_weight=5), seeds 0, 1, 2.
 # About 4 minutes per run on 2 cores. Seed 0 of each is what ships in train/pretrained/. OLD pins the defaults

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# The DAgger hand-over agents, three seeds, then their prescribed-time goal.
 # The hand-over agents of the README's "Prescribed-time agents": minimum-energy plans from random
 # starts (0.3-3 m, T_con in [10, 60] s, DWRPointStabilization-v1), four DAgger rounds in which the network
 # drives and plans are solved again from the states it reaches, then the choice of the hand-over to the

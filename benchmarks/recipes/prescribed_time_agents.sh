@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# The agents cloned from the optimal controller (`dwr-gym imitate`), three seeds, then their goal.
 # The prescribed-time agents behind the README's results (issue: one policy for any T_con).
 # `dwr-gym imitate` records the optimal controller on DWRPointStabilization-v1's task (T_con in [10, 60] s,
 # starts 0.3-3 m) with noise on the executed actions, and clones it into a PPO MlpPolicy.

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# The RL benchmark of v1's reward, five seeds of each learner, and the agents it ships.
 # The RL benchmark of v1's reward (docs/rl-benchmark.md) and the agents it ships: PPO from v1's reward, residual PPO on
 # PTC and on pt-astolfi, SAC and TQC, five seeds each, evaluated on the fixed sets and aggregated with IQM and 95 %
 # stratified-bootstrap intervals; then the best seed of ppo, residual-ppo and residual-ppo-astolfi is copied into

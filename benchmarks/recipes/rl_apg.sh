@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# Analytic policy gradients (APG) on the residual on PTC on DWRPointStabilization-v2, five seeds.
 # Analytic policy gradients on the residual on PTC (docs/rl-apg.md, 'Gradients through the env (APG)'):
 # `apg-residual-v2` (train/hyperparams/residual_apg.yml: a constant rate of 3e-4, the best policy on the run's own 256
 # validation episodes exported), five seeds of 30 M env steps, two runs side by side (about 20 minutes on 2 quiet

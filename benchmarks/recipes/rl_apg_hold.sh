@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# APG from the teacher, time-scaled, the near-miss changes and the miss before T_con in the gradient, v2, 30 min a seed.
 # APG from an open-loop teacher, time-scaled, with the near-miss entry's two changes (clone_steps 16000,
 # near_miss_clip 16) and the miss over the last 20 control periods before T_con in the gradient too (hold_steps 20)
 # on DWRPointStabilization-v2: apg-hold-time-scaled-30min-v2 (560 M env steps: the goal's 30 minutes of a core), and

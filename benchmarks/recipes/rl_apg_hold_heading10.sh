@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# APG holding the goal before T_con with the heading's error in that window at twice the weight, v2, 30 min a seed.
 # APG from an open-loop teacher, time-scaled, holding the goal over the last 20 control periods before T_con with the
 # heading's error in the same window at 10 per radian (hold_heading_weight 10, twice that of
 # apg-hold-heading-time-scaled-30min-v2) on DWRPointStabilization-v2: apg-hold-heading10-time-scaled-30min-v2 (560 M env

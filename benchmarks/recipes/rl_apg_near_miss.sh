@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# APG from the teacher, time-scaled, its lesson fitted longer and its near misses clipped wider, v2, 30 min a seed.
 # APG from an open-loop teacher, time-scaled, with the lesson fitted four times longer (clone_steps 16000) and the
 # episodes that end near the goal but outside its tolerance clipped at 16 (near_miss_clip) on DWRPointStabilization-v2:
 # apg-near-miss-time-scaled-30min-v2 (train/hyperparams/apg_teacher.yml with those two, --action-time-scale 10, 560 M env

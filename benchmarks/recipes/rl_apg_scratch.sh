@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# Analytic policy gradients (APG) from scratch on DWRPointStabilization-v2, five seeds.
 # Analytic policy gradients from scratch on DWRPointStabilization-v2 (the benchmark's goal from the reward alone;
 # docs/rl-apg.md, 'Gradients through the env (APG)'): `apg-v2` (train/hyperparams/apg.yml: 64 episodes an
 # update, a rate of 1e-3 decaying to 0, each episode's state gradient clipped to 4 per step, the best policy on the run's own 256

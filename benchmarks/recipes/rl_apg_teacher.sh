@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# Analytic policy gradients (APG) from an open-loop teacher on DWRPointStabilization-v2, five seeds.
 # APG from an open-loop teacher on DWRPointStabilization-v2 (the RL benchmark's goal from the reward alone; docs/rl-apg.md,
 # 'From an open-loop teacher'): `apg-teacher-v2` (train/hyperparams/apg_teacher.yml: apg.yml's v2 recipe, the policy
 # first cloned from the best command sequences of 512 fresh episodes) and `apg-teacher-time-scaled-v2` (the same with

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# APG from an open-loop teacher (one round or DAgger), time-scaled, on DWRPointStabilization-v2 at 30 minutes a seed.
 # APG from an open-loop teacher with time-scaled actions on DWRPointStabilization-v2, at the goal's budget of 30 minutes
 # a seed: apg-teacher-time-scaled-30min-v2 (train/hyperparams/apg_teacher.yml, --action-time-scale 10, 700 M env steps:
 # the 400 M runs took about 15 minutes of a core alone and were still climbing), SEEDS (2) seeds, two runs side by side

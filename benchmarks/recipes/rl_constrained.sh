@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# The deadline and the heading as constraints (Lagrangian APG; the residual on PTC) on v2, per T_con, with multipliers.
 # The deadline and the heading as constraints on DWRPointStabilization-v2: apg-lagrangian-v2 (APG from its open-loop
 # teacher, time-scaled, multipliers per T_con bin in PID form; 560 M env steps a seed) and apg-lagrangian-residual-ptc-v2
 # (the residual on PTC under the same constraints, 30 M env steps a seed), SEEDS seeds each, two runs side by side on

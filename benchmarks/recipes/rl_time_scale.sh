@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# ES from reward on DWRPointStabilization-v2 with and without time-scaled actions, five seeds each, then 4x the budget.
 # Time-scaled actions on DWRPointStabilization-v2 (docs/rl-v2.md, 'Time-scaled actions'): ES from
 # reward alone on v2 (train/hyperparams/es.yml, 100 M env steps a seed), as shipped and with --action-time-scale 10
 # (the action times min(1, 10 s / T_con), train.learning.time_scale), five seeds each, two runs side by side (about

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# The learners on DWRPointStabilization-v2, five seeds each, per T_con too, and the best seed of each shipped.
 # The learners on DWRPointStabilization-v2 (docs/rl-v2.md, 'Learning v2'), five seeds each on the
 # benchmark's sets and at T_con 10, 20, 40 and 60 s, the reference controllers evaluated on v2 too: ES on a residual
 # on PTC (train/hyperparams/residual_es.yml), the residual PPO on PTC inside the jitted loop, and the jitted PPO from

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# The `robust` agent's network fine-tuned by PPO under disturbances, five seeds, and its goal.
 # The RL benchmark's stretch goal (docs/rl-benchmark.md, 'Robust RL'): the `robust` agent's network, cloned by robust DAgger,
 # fine-tuned by PPO from v1's reward under randomised disturbances (the distribution it was cloned under), five
 # seeds; then the network alone before and after, on the nominal and the four disturbed sets at T_con 20 and 40 s.

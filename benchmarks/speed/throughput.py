@@ -26,8 +26,7 @@ machine's load hit both sides of a ratio):
 
 Then the env-speed and busy-machine goals, met or not, and the machine and library versions. ``--docs`` writes
 every figure into the JSON, from which the results block of docs/throughput.md is rendered
-(:mod:`benchmarks.speed.throughput_report`). Compare two versions of the code with ``compare-commits``
-(alternating runs) or ``instructions`` (counts).
+(:mod:`benchmarks.speed.throughput_report`). Compare two versions of the code with ``instructions`` (counts).
 """
 
 from __future__ import annotations
@@ -51,7 +50,7 @@ import numpy as np
 import dwr_gym  # noqa: F401
 from benchmarks.core.commands import parser_for
 from benchmarks.core.docs import Schema, fenced
-from benchmarks.core.record import write_json
+from benchmarks.core.record import cpu_model, report
 from benchmarks.core.timing import Stepper, background_load, interleaved, median_seconds, paired_ratio
 from benchmarks.speed.throughput_report import render
 from dwr_gym import model
@@ -282,15 +281,9 @@ def measure_quiet_only(quick: bool) -> dict[str, Any]:
 
 def machine() -> dict[str, Any]:
     """The machine and the libraries the numbers were measured with."""
-    cpu = platform.processor() or platform.machine()
-    try:
-        with open("/proc/cpuinfo") as info:
-            cpu = next(line.split(":", 1)[1].strip() for line in info if line.startswith("model name"))
-    except (OSError, StopIteration):
-        pass
     torch = model._torch_module()
     return {
-        "cpu": cpu,
+        "cpu": cpu_model(),
         "cores": os.cpu_count(),
         "python": platform.python_version(),
         "numpy": np.__version__,
@@ -342,7 +335,4 @@ def main(argv: list[str] | None = None) -> int:
         print(json.dumps({"torch_functions": sorted(model.TORCH_FUNCTIONS), "ratios": torch_crossover()}))
         return 0
     results = run(args.quick, args.load, args.load_seconds)
-    print("\n".join(render(results)))
-    if args.docs:
-        write_json(JSON_PATH, results)
-    return 0
+    return report(render(results), results, JSON_PATH if args.docs else None)

@@ -22,7 +22,7 @@ from typing import Any
 
 from benchmarks.core.commands import checkout_env, dwr_gym, parser_for
 from benchmarks.core.docs import NUMBER, Block, Schema
-from benchmarks.core.record import load_average, torch_machine, write_json
+from benchmarks.core.record import load_average, report, torch_machine
 
 ROOT = Path(__file__).resolve().parents[2]
 JSON_PATH = ROOT / "docs" / "training" / "readme_example.json"
@@ -96,14 +96,12 @@ def render(results: dict[str, Any]) -> str:
     )
 
 
-def main(argv: list[str] | None = None) -> None:
+def main(argv: list[str] | None = None) -> int:
     parser = parser_for("readme-training", __doc__)
     parser.add_argument("--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} and render its block")
     args = parser.parse_args(argv)
     results = measure()
-    print(render(results))
-    if args.docs:
-        write_json(JSON_PATH, results)
+    return report([render(results)], results, JSON_PATH if args.docs else None)
 
 
 #: The block of the README.

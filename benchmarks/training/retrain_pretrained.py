@@ -38,7 +38,7 @@ from typing import Any
 
 from benchmarks.core.commands import parser_for
 from benchmarks.core.docs import NUMBER, Schema, fenced
-from benchmarks.core.record import load_average, write_json
+from benchmarks.core.record import load_average, report
 
 ROOT = Path(__file__).resolve().parents[2]
 PRETRAINED = ROOT / "train" / "pretrained"
@@ -275,10 +275,7 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     results = run(shipped, seeds, Path(args.out).resolve(), budgets, args.n, args.jobs)
     results["all_agents"] = len(shipped) == everyone
-    print("\n".join(render(results)))
-    if args.docs:
-        write_json(JSON_PATH, results)
-    return 0
+    return report(render(results), results, JSON_PATH if args.docs else None)
 
 
 #: The block of docs/training.md.

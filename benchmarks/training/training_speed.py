@@ -25,7 +25,7 @@ from typing import Any
 
 from benchmarks.core.commands import parser_for
 from benchmarks.core.docs import NUMBER, Schema, fenced
-from benchmarks.core.record import load_average, write_json
+from benchmarks.core.record import load_average, report
 from benchmarks.core.timing import median_ratio, medians
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -116,7 +116,7 @@ def render(results: dict[str, Any]) -> list[str]:
     return lines
 
 
-def main(argv: list[str] | None = None) -> None:
+def main(argv: list[str] | None = None) -> int:
     parser = parser_for("training-speed", __doc__)
     parser.add_argument("--repeats", type=int, default=3, help="alternating rounds (default: 3)")
     parser.add_argument("--cartpole-steps", type=int, default=16_384, help="SB3 PPO on CartPole (default: 16384)")
@@ -129,9 +129,7 @@ def main(argv: list[str] | None = None) -> None:
         if getattr(args, name) < 1:
             parser.error(f"--{name.replace('_', '-')}={getattr(args, name)} is invalid: expected a positive integer")
     results = run(args.repeats, args.cartpole_steps, args.steps, args.old_steps)
-    print("\n".join(render(results)))
-    if args.docs:
-        write_json(JSON_PATH, results)
+    return report(render(results), results, JSON_PATH if args.docs else None)
 
 
 #: The block of docs/training.md.

@@ -1,14 +1,16 @@
 """The reports of answered probes whose measuring code left the suite, rendered from their archived JSON (the
 benchmarks entry ``archive`` declares their blocks): ES on v1 within a budget, residual PPO on the analytic laws at
-the jitted trainer's speed, `dwr-gym train`'s old defaults against its new, and two commits of the env timed
-against each other. Each returns the block's lines."""
+the jitted trainer's speed, `dwr-gym train`'s old defaults against its new, two commits of the env timed against
+each other, `dwr-gym train`'s threads under load, ES's speed, and the jitted PPO's time to the criteria. Each returns the block's lines."""
 
 from __future__ import annotations
 
+import math
 import statistics
 from typing import Any
 
 T_CONS = (10.0, 20.0, 40.0, 60.0)
+ES_DEVICES = 2  # the XLA CPU devices es_speed split the candidates over
 
 
 def es_learn(data: dict[str, Any]) -> list[str]:
@@ -149,4 +151,95 @@ def compare_commits(record: dict[str, Any]) -> list[str]:
     lines.append(
         f"median: {old} {old_median:.3f}x, {new} {new_median:.3f}x ({new_median / old_median:.1f} times as fast)"
     )
+    return lines
+
+
+def training_threads(results: dict[str, Any]) -> list[str]:
+    """`dwr-gym train` beside busy processes, its defaults against OMP_NUM_THREADS=1 (docs/training-speed.md): rates
+    per setting, the ratios and the goal."""
+    fps, cores = results["median_fps"], results["cores"]
+    lines = [f"{results['machine']}; {results['busy_processes']} busy processes beside each run; load average "
+             f"{results['load_average_1min_at_end']} (1 min, at the end)",
+             f"{len(results['rounds'])} rounds, the settings alternating; medians; each run a fresh `dwr-gym train` "
+             "process, start to exit", "",
+             f"{'algo':<6}{'env steps':>10}{'defaults':>11}{'OMP_NUM_THREADS=1':>19}{'ratio':>8}"
+             f"{f'--threads {cores}':>14}"]  # fmt: skip
+    for algo, steps in results["steps"].items():
+        collapse = results["threads_cores_fps"].get(algo)
+        if collapse is not None and collapse <= steps / results["reference_limit_seconds"] * 1.0001:
+            collapse_text = f"< {collapse:,.1f}"  # stopped at the limit: a bound
+        else:
+            collapse_text = "" if collapse is None else f"{collapse:,.0f}"
+        lines.append(f"{algo:<6}{steps:>10,}{fps[f'{algo} defaults']:>11,.0f}{fps[f'{algo} OMP_NUM_THREADS=1']:>19,.0f}"
+                     f"{results['ratio_defaults_to_omp1'][algo]:>7.2f}x"
+                     f"{collapse_text:>14}")  # fmt: skip
+    return [*lines, "", *_threads_footer(results)]
+
+
+def _threads_footer(results: dict[str, Any]) -> list[str]:
+    """The block's last lines: what the columns are, and the goal with its verdict."""
+    worst = min(results["ratio_defaults_to_omp1"].values())
+    return [f"steps/s; ratio: defaults / OMP_NUM_THREADS=1, median of the per-round ratios; --threads {results['cores']}: "
+            "torch's own default (before --threads), one run, stopped after "
+            f"{results['reference_limit_seconds']:.0f} s "
+            "('<': a bound)",
+        f"the threads goal, defaults >= {results['goal']}x OMP_NUM_THREADS=1 under the same load for "
+            f"PPO and SAC: {worst:.2f}x at worst, {'met' if results['met'] else 'NOT met'}"]  # fmt: skip
+
+
+def es_speed(data: dict[str, Any]) -> list[str]:
+    """An ES generation against the jitted PPO's updates, and on two devices against one (docs/evolution.md)."""
+    s, fps, cores, ratios = data["es_settings"], data["median_steps_per_s"], data["median_cpu_per_wall"], data["ratios"]
+    names = {f"es_{ES_DEVICES}_device": f"ES generation, candidates on {ES_DEVICES} devices",
+             "es_1_device": "ES generation, one device",
+             "jax_ppo": "jitted PPO (--backend jax), updates included"}  # fmt: skip
+    lines = [data["machine"], f"load average {data['load_average_1min_at_end']} (1 min, at the end); "
+             f"{len(data['rounds'])} alternating rounds; medians",
+             f"ES: {s['strategy']}, {s['population_size']} candidates x {s['episodes']} episodes = "
+             f"{data['es_steps_per_generation']:,} env steps per generation; PPO: {data['ppo_steps_per_round']:,} per round",
+             "", f"{'run':<50}{'env steps/s':>12}{'CPU/wall':>10}"]  # fmt: skip
+    for key, name in names.items():
+        lines.append(f"{name:<50}{fps[key]:>12,.0f}{cores[key]:>10.2f}")
+    pinned = data.get("one_core")
+    if pinned:
+        lines.append(f"{'ES generation, one device pinned to one core (*)':<50}{pinned['steps_per_s']:>12,.0f}"
+                     f"{pinned['cpu_per_wall']:>10.2f}")  # fmt: skip
+    met = {k: "met" if v else "NOT met" for k, v in data["met"].items()}
+    compile_s = ", ".join(f"{k} {v:.0f} s" for k, v in data["compile_seconds"].items())
+    lines += ["", f"compilation (apart from the rates): {compile_s}",
+              f"goal ES generation >= {data['goals']['es_over_ppo']:g}x the jitted PPO: {ratios['es_over_ppo']:.1f}x, "
+              f"{met['es_over_ppo']} (one device: {ratios['es_one_device_over_ppo']:.1f}x)",
+              f"goal {ES_DEVICES} cores >= {data['goals']['two_cores_over_one']:g}x one: "
+              f"{ratios['two_cores_over_one']:.2f}x, {met['two_cores_over_one']} (one device runs XLA's threads on both "
+              "cores: its CPU/wall)"]  # fmt: skip
+    if pinned:
+        lines.append(f"2 devices over the one-core reference (*): {fps[f'es_{ES_DEVICES}_device'] / pinned['steps_per_s']:.2f}x "
+                     "(* a child process pinned with sched_setaffinity, measured after the rounds above)")  # fmt: skip
+    return lines
+
+
+def time_to_criteria(data: dict[str, Any]) -> list[str]:
+    """Five seeds of the jitted PPO under vmap until each met the criteria (docs/jax-training.md): when each did."""
+    c = data["criteria"]
+    lines = [data["machine"], f"load average {data['load_average_1min_at_end']} (1 min, at the end); "
+             f"{data['seeds']} seeds under vmap; overrides {data['overrides'] or 'none'}",
+             f"criteria on {data['evaluation_set']}: in time >= {c['in_time']:.0%}, E/opt <= {c['energy_ratio']}, "
+             f"final heading <= {c['final_heading']} rad; evaluated every {data['eval_every_steps']:,} steps",
+             f"compilation and first chunk: {data['compile_and_first_chunk_s']:.0f} s", "",
+             f"{'seed':<6}{'reached at steps':>17}{'wall s':>9}{'CPU s':>9}{'in time':>9}{'E/opt':>7}{'heading':>9}"]  # fmt: skip
+    for seed, (row, curve) in enumerate(zip(data["reached"], data["curves"], strict=True)):
+        last = row or curve[-1]
+        steps = f"{row['steps']:,}" if row else f"not by {last['steps']:,}"
+        lines.append(f"{seed:<6}{steps:>17}{last['wall_s']:>9.0f}{last['cpu_s']:>9.0f}{last['in_time']:>9.0%}"
+                     f"{last['energy_ratio'] or math.nan:>7.2f}{last['final_heading']:>9.3f}")  # fmt: skip
+    first = [next((r for r in curve if r["in_time"] >= c["in_time"]), None) for curve in data["curves"]]
+    lines += ["", f"in time >= {c['in_time']:.0%} alone, first reached (steps, wall s): " + "; ".join(
+        f"seed {i}: {r['steps']:,}, {r['wall_s']:.0f} s" if r else f"seed {i}: not reached" for i, r in enumerate(first))]  # fmt: skip
+    last = [curve[-1] for curve in data["curves"]]
+    lines += ["", "at the last evaluation, median over seeds: energy "
+              f"{statistics.median(r['energy'] for r in last):.2f} (optimum {last[0]['optimal_energy']:.2f}), arrival at "
+              f"{statistics.median(r['arrival_fraction'] for r in last):.0%} of T_con, "
+              f"{statistics.median(r['turning_share'] for r in last):.0%} of the squared commands from turning"]  # fmt: skip
+    verdict = "met" if data["met"] else "NOT met"
+    lines += ["", f"goal <= {data['goal_s']:.0f} s each: median {data['median_time_s']:.0f} s, {verdict}"]
     return lines

@@ -238,7 +238,7 @@ def jax_env_step_table(data: dict[str, Any]) -> str:
 
 
 def sbx_speed_table(data: dict[str, Any]) -> str:
-    """Env steps per second of sbx-rl against stable-baselines3 (benchmarks/training/sbx_speed.py), one row per algorithm."""
+    """Env steps per second of sbx-rl against stable-baselines3 (archived: docs/rl_benchmark/sbx_speed.json), per algorithm."""
     names = {"sac": "SAC", "tqc": "TQC", "crossq": "CrossQ"}
     lines = ["| algorithm | SB3 (torch): env steps/s | sbx (JAX): env steps/s | sbx / SB3 |", "|---|---:|---:|---:|"]
     for algo, row in data["summary"].items():
