@@ -282,8 +282,8 @@ def main(argv: list[str] | None = None) -> None:
     init_from = values["init_from"]
     if init_from and not (Path(init_from) / MODEL_FILE).is_file():  # answered before the hours of planning
         parser.error(f"--init-from {init_from!r} is invalid: no {MODEL_FILE} in it; train the hand-over network first "
-                     f"(python -m train.learning.imitation.dagger --run-dir {init_from} ..., as "
-                     "benchmarks/recipes/dagger_agents.sh does) or pass --init-from '' to clone demonstrations")  # fmt: skip
+                     f"(python -m train.learning.imitation.dagger --run-dir {init_from} ..., as benchmarks/recipes/"
+                     "dagger_agents.sh does) or pass --init-from '' to clone demonstrations")  # fmt: skip
     run(RobustDaggerConfig(**values), Path(args.run_dir),
         ["python", "-m", "train.learning.imitation.robust_dagger", *(argv or sys.argv[1:])])  # fmt: skip
 
