@@ -32,7 +32,7 @@ def add_parser(sub: Any) -> None:
     add_scenario_arguments(p, "results/compare", COMPARE_SETS)
     add_agents_argument(p, "compared with the controllers, each on the env id it was trained on, or a shipped "
                            "agent's name (default: the leaderboard's shipped agents; the paper's reward's record only "
-                           "by name: --agents ppo residual-ppo)")
+                           "by name: --agents ppo residual-ppo)")  # fmt: skip
     p.set_defaults(func=run)
 
 
