@@ -68,7 +68,9 @@ def test_bad_input_is_one_line_naming_it_before_any_heavy_import(args: list[str]
     assert heavy == [], f"dwr-gym {' '.join(args)} imported {heavy} before answering"
 
 
-@pytest.mark.parametrize("given", ["train/pretrained/no_such_agent", "apg-teacher-v2", "train/pretrained/es_arena50_v1"])
+@pytest.mark.parametrize(
+    "given", ["train/pretrained/no_such_agent", "apg-teacher-v2", "train/pretrained/es_arena50_v1"]
+)
 def test_an_agent_not_shipped_is_one_line_naming_the_shipped_agents(given: str) -> None:
     from train.learning.agents import PRETRAINED
 
