@@ -50,6 +50,12 @@ def answer(*args: str) -> tuple[int, list[str], str]:
         (["compare", "--agents", "train/pretrained/apg_hold_heading10_time_scaled_30min"],
          "--agents 'train/pretrained/apg_hold_heading10_time_scaled_30min' is invalid: no such file or directory; "
          "the agents shipped with dwr-gym"),
+        (["compare", "--agents", "train/pretrained/apg_hold_heading10_time_scaled_30min_v2"],
+         "apg-hold-heading10-time-scaled-30min-v2 is shipped as apg-v2 now; the agents shipped with dwr-gym"),
+        (["evaluate", "--agents", "dagger-handover"],
+         "--agents 'dagger-handover' is invalid: dagger-handover is no longer shipped"),
+        (["evaluate", "--agents", "runs/ppo"],  # a user's path is never read as the shipped agent of its name
+         "--agents 'runs/ppo' is invalid: no such file or directory; the agents shipped with dwr-gym"),
         (["evaluate", "--threads", "0"], "--threads 0 is invalid: expected an integer in [1, 1024]"),
         (["train", "--total-timesteps", "-5"], "--total-timesteps -5 is invalid"),
         (["train", "--env", "CartPole-v1"], "--env 'CartPole-v1' is invalid"),
@@ -62,12 +68,16 @@ def test_bad_input_is_one_line_naming_it_before_any_heavy_import(args: list[str]
     assert heavy == [], f"dwr-gym {' '.join(args)} imported {heavy} before answering"
 
 
-def test_a_removed_agent_path_names_the_shipped_agents() -> None:
-    from train.learning.agents import pretrained_paths
+@pytest.mark.parametrize(
+    "given", ["train/pretrained/no_such_agent", "apg-teacher-v2", "train/pretrained/es_arena50_v1"]
+)
+def test_an_agent_not_shipped_is_one_line_naming_the_shipped_agents(given: str) -> None:
+    from train.learning.agents import PRETRAINED
 
-    code, _, stderr = answer("evaluate", "--agents", "train/pretrained/no_such_agent")
-    shipped = [path.name for path in pretrained_paths().values()]
-    assert code == 2 and shipped and all(name in stderr for name in shipped), stderr
+    code, _, stderr = answer("evaluate", "--agents", given)
+    line = stderr.strip()
+    assert code == 2 and len(line.splitlines()) == 1, stderr
+    assert all(name in line.rsplit(":", 1)[-1] for name in PRETRAINED), stderr
 
 
 def test_a_measure_not_asked_for_has_no_column_and_no_line(tmp_path: Path) -> None:
@@ -86,12 +96,16 @@ def test_a_measure_not_asked_for_has_no_column_and_no_line(tmp_path: Path) -> No
     assert "E/opt mean" in runs["pose"].stdout and "optimum" in runs["pose"].stdout.splitlines()[-1]
 
 
-def test_compare_without_the_optimum_has_no_E_opt_in_its_tables_and_no_pareto_figure(tmp_path: Path) -> None:
+def test_compare_runs_a_shipped_agent_by_name_on_its_own_env_and_without_the_optimum_no_E_opt(tmp_path: Path) -> None:
+    """``--agents ppo``: the paper's reward's agent, on v0 where it was trained, beside PTC on --env (v2)."""
     env = {**os.environ, "MPLBACKEND": "Agg"}
     result = subprocess.run([sys.executable, "-m", "train.cli", "compare", "--controllers", "ptc", "--scenarios",
                              "random", "noise", "--n", "5", "--optimum", "none", "--no-progress", "--agents",
-                             "train/pretrained/dagger", "--out", str(tmp_path)], capture_output=True, text=True,
+                             "ppo", "--out", str(tmp_path)], capture_output=True, text=True,
                             cwd=ROOT, env=env, timeout=600)  # fmt: skip
     assert result.returncode == 0, result.stderr
     assert "the robust headline" in result.stdout and "E/opt" not in result.stdout
     assert "optimum" not in result.stdout.splitlines()[-1] and not (tmp_path / "pareto.png").exists()
+    rows = json.loads((tmp_path / "comparison.json").read_text())
+    assert {(row["policy"], row["env_id"]) for row in rows} == {("ppo", "DWRPointStabilization-v0"),
+                                                                 ("ptc", "DWRPointStabilization-v2")}  # fmt: skip

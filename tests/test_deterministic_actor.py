@@ -58,7 +58,7 @@ def test_a_stochastic_action_and_a_wrong_shape_go_to_predict() -> None:
     assert not model.policy.training
 
 
-@pytest.mark.parametrize("name", ["ppo", "residual-ppo", "dagger-handover"])
+@pytest.mark.parametrize("name", ["ppo", "residual-ppo"])
 def test_the_loaded_agents_use_it(name: str) -> None:
     _, policy = load_agent(pretrained_paths()[name])
     assert isinstance(policy if name == "ppo" else policy.model, DeterministicActor)

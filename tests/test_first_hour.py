@@ -55,10 +55,9 @@ def test_a_run_that_recorded_no_env_id_loads_as_v0_and_the_shipped_agents_record
     old = load_config(tmp_path)
     assert old.env_id == PAPER_ENV_ID and old.env_params().T_con_range is None
     shipped = {name: trained_env_id(path) for name, path in PRETRAINED.items()}
-    assert shipped == {"residual-ppo": PAPER_ENV_ID, "ppo": PAPER_ENV_ID, "dagger": TASK_ENV_ID,
-                       "dagger-handover": TASK_ENV_ID, "robust": TASK_ENV_ID, "ppo-v1": TASK_ENV_ID,
-                       "ppo-jax-v1": TASK_ENV_ID, "residual-ppo-v1": TASK_ENV_ID,
-                       "residual-ppo-astolfi-v1": TASK_ENV_ID}  # fmt: skip
+    assert shipped == {"apg-v2": HELD_ENV_ID, "apg-residual-ptc-v2": HELD_ENV_ID, "ppo-jax-v1": TASK_ENV_ID,
+                       "es-v1": TASK_ENV_ID, "robust": TASK_ENV_ID, "ppo": PAPER_ENV_ID,
+                       "residual-ppo": PAPER_ENV_ID}  # fmt: skip
 
 
 def test_evaluate_runs_on_the_task_the_paper_sets_keep_their_T_con_and_T_con_replaces_the_range(
@@ -96,12 +95,12 @@ def test_every_command_that_makes_an_env_takes_env_and_refuses_an_abbreviation(c
 
 
 def test_evaluate_takes_agent_as_agents(tmp_path: Path) -> None:
-    ppo, dagger = str(ROOT / "train/pretrained/ppo"), str(ROOT / "train/pretrained/dagger")
+    ppo, ppo_jax = str(ROOT / "train/pretrained/ppo"), str(ROOT / "train/pretrained/ppo_jax_v1")
     result = dwr_gym("evaluate", "--controllers", "ptc", "--scenarios", "paper-fig5", "--optimum", "none",
-                     "--no-progress", "--out", str(tmp_path), "--agent", ppo, "--agent", dagger)  # fmt: skip
+                     "--no-progress", "--out", str(tmp_path), "--agent", ppo, "--agent", ppo_jax)  # fmt: skip
     assert result.returncode == 0, result.stderr
     rows = json.loads((tmp_path / "evaluation.json").read_text())
-    assert [row["policy"] for row in rows] == ["ptc", "ppo", "dagger"]
+    assert [row["policy"] for row in rows] == ["ptc", "ppo", "ppo-jax-v1"]
 
 
 @pytest.mark.parametrize("command", ["evaluate", "compare", "robustness"])
@@ -189,12 +188,12 @@ def check_figure(fig: object, path: Path) -> None:
 def recorded() -> dict[str, object]:
     from train.evaluation.evaluate import evaluate
     from train.evaluation.scenarios import make_scenario
-    from train.learning.agents import load_agent, pretrained_paths
+    from train.learning.agents import default_agents, load_agent
 
-    policies: dict[str, object] = dict(load_agent(path) for path in pretrained_paths().values())
+    policies: dict[str, object] = dict(load_agent(path) for path in default_agents().values())
     policies.update({name: name for name in ("ptc", "conventional-ptc", "fabregas", "fixed-time", "astolfi",
                                              "pt-astolfi", "optimal", "robust-pt")})  # fmt: skip
-    assert len(policies) == 17  # as compare draws them: every controller and shipped agent in one figure
+    assert len(policies) == 13  # as compare draws them: every controller and shipped agent in one figure
     return evaluate(policies, make_scenario("paper-fig5"), record=True)  # type: ignore[arg-type]
 
 

@@ -52,3 +52,20 @@ def test_a_row_whose_json_is_missing_is_named_not_filled(tmp_path: Path) -> None
     assert any(gone.method in missing for missing in data["missing"])
     table = board.leaderboard_table(data)
     assert "nan" not in table and len(table.strip().splitlines()) == 2 + len(data["rows"])
+
+
+def test_the_shipped_agents_are_the_leaderboards_each_on_the_env_its_row_names() -> None:
+    """One shipped agent per row that names one, and those are what ``dwr-gym compare`` runs by default; the paper's
+    reward's record (v0) is shipped beside them, compared only when named."""
+    from train.learning.agents import PAPER_AGENTS, PRETRAINED, PRETRAINED_DIR, default_agents, trained_env_id
+
+    rows = [row for row in board.ROWS if row.agent != "-"]
+    assert sorted(path.name for path in default_agents().values()) == sorted(row.agent for row in rows)
+    assert set(PRETRAINED) == {row.agent.replace("_", "-") for row in rows} | set(PAPER_AGENTS)
+    for row in rows:
+        trained = trained_env_id(PRETRAINED_DIR / row.agent)
+        assert f"({trained.rsplit('-', 1)[-1]}" in row.method, (row.method, trained)
+        env = board.measures(row, ROOT)["env"]
+        assert env in (None, trained), (row.method, env, trained)
+    for name in PAPER_AGENTS:
+        assert trained_env_id(PRETRAINED[name]) == "DWRPointStabilization-v0"

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import subprocess
@@ -269,12 +270,17 @@ def test_ctrl_c_saves_the_current_model(tmp_path: Path) -> None:
 
 
 @pytest.mark.skipif(not pretrained_paths(), reason="no pretrained agent in this checkout")
-def test_compare_on_the_shipped_agents(tmp_path: Path) -> None:
+def test_compare_on_the_shipped_agents_each_on_its_own_env(tmp_path: Path) -> None:
+    """By default the leaderboard's agents, each on the env id it was trained on; the paper's reward's only by name."""
+    from train.learning.agents import PAPER_AGENTS, default_agents, trained_env_id
+
     result = dwr_gym("compare", "--scenarios", "paper-fig5", "random", "--n", "50", "--controllers", "ptc",
                      "--out", "out", "--no-progress", cwd=tmp_path)  # fmt: skip
     assert result.returncode == 0, result.stderr
-    for label in pretrained_paths():
-        assert label in result.stdout.replace("_", "-")
+    envs = {row["policy"]: row["env_id"] for row in json.loads((tmp_path / "out" / "comparison.json").read_text())}
+    assert envs == {"ptc": "DWRPointStabilization-v2", **{label: trained_env_id(path)
+                                                          for label, path in default_agents().items()}}  # fmt: skip
+    assert len(set(envs.values())) > 1 and not set(PAPER_AGENTS) & set(envs)
     for name in ("comparison.csv", "comparison.json", "trajectories.png", "time_series.png", "learning_curves.png"):
         assert (tmp_path / "out" / name).is_file(), name
 

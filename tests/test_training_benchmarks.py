@@ -68,11 +68,15 @@ def test_a_recipe_is_replayed_with_only_seed_run_dir_env_and_budget_changed(tmp_
 def test_every_shipped_agent_has_a_recipe_this_checkout_can_run(tmp_path: Path) -> None:
     module = load("retrain_pretrained")
     agents = sorted(path.parent for path in module.PRETRAINED.glob("*/config.yaml"))
-    assert {"ppo", "residual_ppo", "dagger", "dagger_handover"} <= {agent.name for agent in agents}
+    assert {"ppo", "residual_ppo", "robust", "apg_v2"} <= {agent.name for agent in agents}
     for agent in agents:
-        for step in module.recipe(agent):
-            command = module.runnable(step, 1, tmp_path / agent.name, "DWRPointStabilization-v1", 1.0)
+        steps, dirs = module.moved_run_dirs(module.recipe(agent), tmp_path / agent.name)
+        assert dirs[-1] == tmp_path / agent.name
+        for step, run_dir in zip(steps, dirs, strict=True):
+            command = module.runnable(step, 1, run_dir, "DWRPointStabilization-v1", 1.0)
             assert importlib.util.find_spec(command[command.index("-m") + 1]) is not None
-            assert command[command.index("--run-dir") + 1] == str(tmp_path / agent.name)
-    steps = module.recipe(module.PRETRAINED / "dagger_handover")
-    assert len(steps) == 2 and "--handover-only" in steps[1]  # the recorded "then: ..." runs after the training
+            assert command[command.index("--run-dir") + 1] == str(run_dir)
+    # robust: the DAgger hand-over network first, in a directory of its own, then robust DAgger starting from it
+    steps, dirs = module.moved_run_dirs(module.recipe(module.PRETRAINED / "robust"), tmp_path / "robust")
+    assert len(steps) == 2 and dirs[0] != dirs[1] and "train.learning.imitation.dagger" in steps[0]
+    assert steps[1][steps[1].index("--init-from") + 1] == str(dirs[0])

@@ -1,8 +1,10 @@
 """The prescribed-time goal of the learned agents, measured: any T_con, the full pose, less energy than PTC.
 
-    python -m benchmarks run prescribed-time-goal train/pretrained/dagger_handover
+    python -m benchmarks run prescribed-time-goal runs/dagger_handover_s0
     python -m benchmarks run prescribed-time-goal runs/dagger_handover_s0 runs/dagger_handover_s1 runs/dagger_handover_s2
-    python -m benchmarks run prescribed-time-goal train/pretrained/dagger_handover --n 200 --docs   # goal.json, table
+    python -m benchmarks run prescribed-time-goal runs/dagger_handover_s0 --n 200 --docs   # goal.json, table
+
+(runs/dagger_handover_s0 ... are the hand-over agents of benchmarks/recipes/dagger_agents.sh.)
 
 On random starts 0.3-3 m away (500 per T_con, seed 0), at each T_con in {10, 20, 40, 60} s, it
 evaluates the given agents (several run directories are treated as training seeds of one agent:

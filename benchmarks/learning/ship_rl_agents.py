@@ -19,16 +19,16 @@ from benchmarks.core.commands import parser_for
 
 ROOT = Path(__file__).resolve().parents[2]
 
-#: benchmark entry -> directory under train/pretrained/ (the names of train.learning.agents.PRETRAINED).
+#: benchmark entry -> directory under train/pretrained/: the leaderboard's agents that a ``dwr-gym benchmark`` makes
+#: (train.learning.agents.PRETRAINED, train.reporting.leaderboard.ROWS), each shipped where its --out holds its run.
 SHIPPED = {
-    "ppo": "ppo_v1",
+    "apg-hold-heading10-time-scaled-30min-v2": "apg_v2",
+    "apg-residual-v2": "apg_residual_ptc_v2",
     "ppo-jax": "ppo_jax_v1",
-    "residual-ppo": "residual_ppo_v1",
-    "residual-ppo-astolfi": "residual_ppo_astolfi_v1",
+    "es-arena50": "es_v1",
 }
-"""The registered names (train.learning.agents.PRETRAINED, in ``dwr-gym compare``'s default set). ``--also`` ships
-more entries as ``<entry>_v1`` without registering them (load them by path): the shipped ``sac_tuned_v1`` and
-``tqc_tuned_v1``, whose best seeds arrive in few episodes, are baselines to beat, not agents for the comparison."""
+"""``--also`` ships more entries as ``<entry>_v1`` (or ``<entry>`` where it ends in its env version) without
+registering them: load them by path."""
 
 
 def plot_curve(evaluations: Path, target: Path, title: str) -> None:

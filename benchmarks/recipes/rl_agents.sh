@@ -2,8 +2,8 @@
 # The RL benchmark of v1's reward, five seeds of each learner, and the agents it ships.
 # The RL benchmark of v1's reward (docs/rl-benchmark.md) and the agents it ships: PPO from v1's reward, residual PPO on
 # PTC and on pt-astolfi, SAC and TQC, five seeds each, evaluated on the fixed sets and aggregated with IQM and 95 %
-# stratified-bootstrap intervals; then the best seed of ppo, residual-ppo and residual-ppo-astolfi is copied into
-# train/pretrained/{ppo_v1,residual_ppo_v1,residual_ppo_astolfi_v1} (with its learning curve).
+# stratified-bootstrap intervals; then the best seed of ppo-jax and es-arena50 is copied into
+# train/pretrained/{ppo_jax_v1,es_v1} (with its learning curve).
 # The budgets are those that fitted on 2 shared cores in an hour (about 1 hour with --jobs 4 there); give more with --env-steps and the entries' total_timesteps. Each run's config.yaml records the
 # `dwr-gym train` command that trains it alone (`python -m benchmarks run retrain-pretrained` runs it again).
 set -euo pipefail
@@ -26,5 +26,5 @@ dwr-gym benchmark --agents 'sac-utd8:algo=sac,hyperparams=train/hyperparams/sac_
 # evolution strategies: OpenAI-ES on v1's reward with an arena of 50 m (docs/evolution.md), one core each
 dwr-gym benchmark --agents 'es-arena50:threads=1,total_timesteps=80000000' --seeds 5 --eval-freq 5000000 \
   --disturbed-episodes 100 --out results/rl-benchmark --docs
-python -m benchmarks run ship-rl-agents results/rl-benchmark --also sac-tuned tqc-tuned es-arena50
+python -m benchmarks run ship-rl-agents results/rl-benchmark
 python -m benchmarks render

@@ -7,8 +7,7 @@
 # SEEDS (5) seeds of each, two runs side by side on one core each (about 30 minutes a pair on 2 cores with the
 # evaluation: about 2.5 hours in all), on the benchmark's sets and at T_con 10, 20, 40 and 60 s. Writes
 # docs/rl_benchmark/apg_hold.json (tables rl-apg-hold and rl-apg-hold-per-T_con; rows of docs/what-was-tried.md) and its
-# curves, and ships the best seed of each as train/pretrained/apg_hold_time_scaled_30min_v2 and
-# apg_hold_heading_time_scaled_30min_v2.
+# curves.
 set -euo pipefail
 export OMP_NUM_THREADS=1
 OUT=${OUT:-results/rl-apg-hold}
@@ -17,5 +16,4 @@ dwr-gym benchmark --agents "apg-hold-time-scaled-30min-v2:threads=1" "apg-hold-h
   --out "$OUT"
 cp "$OUT/benchmark.json" docs/rl_benchmark/apg_hold.json
 cp "$OUT/curves_steps.png" docs/rl_benchmark/apg_hold_curves_steps.png
-python -m benchmarks run ship-rl-agents "$OUT" --also apg-hold-time-scaled-30min-v2 apg-hold-heading-time-scaled-30min-v2
 python -m benchmarks render

@@ -7,7 +7,7 @@
 # pair on 2 cores with the evaluation, about 1.5 hours in all; 40 minutes a pair on a machine 1.37x slower), on the benchmark's sets and at T_con 10, 20, 40 and
 # 60 s. Writes docs/rl_benchmark/apg_hold_heading10.json (tables rl-apg-hold-heading10 and
 # rl-apg-hold-heading10-per-T_con; rows of docs/what-was-tried.md) and its curves, and ships the best seed as
-# train/pretrained/apg_hold_heading10_time_scaled_30min_v2.
+# train/pretrained/apg_v2.
 set -euo pipefail
 export OMP_NUM_THREADS=1
 OUT=${OUT:-results/rl-apg-hold-heading10}
@@ -16,5 +16,5 @@ dwr-gym benchmark --agents "apg-hold-heading10-time-scaled-30min-v2:threads=1" \
   --out "$OUT"
 cp "$OUT/benchmark.json" docs/rl_benchmark/apg_hold_heading10.json
 cp "$OUT/curves_steps.png" docs/rl_benchmark/apg_hold_heading10_curves_steps.png
-python -m benchmarks run ship-rl-agents "$OUT" --also apg-hold-heading10-time-scaled-30min-v2
+python -m benchmarks run ship-rl-agents "$OUT"
 python -m benchmarks render

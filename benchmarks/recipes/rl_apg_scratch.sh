@@ -5,7 +5,7 @@
 # update, a rate of 1e-3 decaying to 0, each episode's state gradient clipped to 4 per step, the best policy on the run's own 256
 # validation episodes exported), five seeds of 400 M env steps (about 15 minutes of one core each), JOBS (2) runs side by
 # side (about 45 minutes on 2 quiet cores), on the benchmark's sets and at T_con 10, 20, 40 and 60 s. Writes
-# docs/rl_benchmark/apg_scratch.json and ships the best seed as train/pretrained/apg_v2.
+# docs/rl_benchmark/apg_scratch.json.
 set -euo pipefail
 export OMP_NUM_THREADS=1
 OUT=${OUT:-results/rl-apg-scratch}
@@ -13,5 +13,4 @@ dwr-gym benchmark --agents 'apg-v2:total_timesteps=400000000,threads=1' \
   --seeds 5 --jobs "${JOBS:-2}" --eval-episodes 200 --disturbed-episodes 20 --optimum-episodes 50 --out "$OUT"
 cp "$OUT/benchmark.json" docs/rl_benchmark/apg_scratch.json
 cp "$OUT/curves_steps.png" docs/rl_benchmark/apg_scratch_curves_steps.png
-python -m benchmarks run ship-rl-agents "$OUT" --also apg-v2
 python -m benchmarks render

@@ -6,8 +6,7 @@
 # --action-time-scale 10), five seeds each of 400 M env steps (the teacher's 145 M included; about 15 minutes of one
 # core a seed alone), JOBS (2) runs side by side (the published tables: 2 for the first, 3 for the second; about 50
 # minutes each on 2 cores), on the benchmark's sets and at T_con 10, 20, 40 and 60 s. Writes
-# docs/rl_benchmark/apg_teacher.json and apg_teacher_time_scaled.json, and ships each one's best seed as
-# train/pretrained/apg_teacher_v2 and apg_teacher_time_scaled_v2.
+# docs/rl_benchmark/apg_teacher.json and apg_teacher_time_scaled.json.
 set -euo pipefail
 export OMP_NUM_THREADS=1
 OUT=${OUT:-results/rl-apg-teacher}
@@ -17,6 +16,5 @@ for agent in apg-teacher-v2 apg-teacher-time-scaled-v2; do
     --seeds 5 --jobs "${JOBS:-2}" --eval-episodes 200 --disturbed-episodes 20 --optimum-episodes 50 --out "$OUT/$name"
   cp "$OUT/$name/benchmark.json" "docs/rl_benchmark/${name//-/_}.json"
   cp "$OUT/$name/curves_steps.png" "docs/rl_benchmark/${name//-/_}_curves_steps.png"
-  python -m benchmarks run ship-rl-agents "$OUT/$name" --also "$agent"
 done
 python -m benchmarks render

@@ -5,8 +5,7 @@
 # the 400 M runs took about 15 minutes of a core alone and were still climbing), SEEDS (2) seeds, two runs side by side
 # on one core each (about 45 minutes a pair on 2 cores with the evaluation), on the benchmark's sets and at T_con 10,
 # 20, 40 and 60 s. Writes docs/rl_benchmark/apg_teacher_30min.json (tables rl-apg-teacher-30min and
-# rl-apg-teacher-30min-per-T_con; rows of docs/what-was-tried.md) and ships the best seed of the one-round entry as
-# train/pretrained/apg_teacher_time_scaled_30min_v2.
+# rl-apg-teacher-30min-per-T_con; rows of docs/what-was-tried.md).
 set -euo pipefail
 export OMP_NUM_THREADS=1
 OUT=${OUT:-results/rl-apg-teacher-30min}
@@ -15,5 +14,4 @@ dwr-gym benchmark --agents "apg-teacher-time-scaled-30min-v2:threads=1" \
   --out "$OUT"
 cp "$OUT/benchmark.json" docs/rl_benchmark/apg_teacher_30min.json
 cp "$OUT/curves_steps.png" docs/rl_benchmark/apg_teacher_30min_curves_steps.png
-python -m benchmarks run ship-rl-agents "$OUT" --also apg-teacher-time-scaled-30min-v2
 python -m benchmarks render

@@ -4,8 +4,8 @@
 # benchmark's sets and at T_con 10, 20, 40 and 60 s, the reference controllers evaluated on v2 too: ES on a residual
 # on PTC (train/hyperparams/residual_es.yml), the residual PPO on PTC inside the jitted loop, and the jitted PPO from
 # reward alone with its noise on a fixed schedule (train/hyperparams/ppo_jax_v2.yml). Budgets sized for one shared
-# core of 2, the PPO runs bounded to 4 minutes each (about 90 minutes in all on a shared machine). Writes docs/rl_benchmark/v2.json,
-# ships each entry's best seed as train/pretrained/<entry> (learned_from: reward, its env id, recipe and curve).
+# core of 2, the PPO runs bounded to 4 minutes each (about 90 minutes in all on a shared machine). Writes
+# docs/rl_benchmark/v2.json.
 set -euo pipefail
 export OMP_NUM_THREADS=1
 OUT=${OUT:-results/rl-v2}
@@ -17,5 +17,4 @@ dwr-gym benchmark --agents \
 cp "$OUT/benchmark.json" docs/rl_benchmark/v2.json
 cp "$OUT/curves_steps.png" docs/rl_benchmark/v2_curves_steps.png
 cp "$OUT/curves_wall.png" docs/rl_benchmark/v2_curves_wall.png
-python -m benchmarks run ship-rl-agents "$OUT" --also es-residual-v2 residual-ppo-jax-v2 ppo-jax-fixed-noise-v2
 python -m benchmarks render

@@ -5,8 +5,9 @@
 
 The recipe of an agent is the ``command:`` its run recorded in config.yaml (``dwr-gym train ...``,
 ``python -m train.learning.imitation.dagger ...``, or any other module with ``--run-dir`` and ``--seed``; a later
-step recorded as ``"then: <command>"`` runs after it in the same run directory). Each is run again as it
-was typed, with only ``--seed`` and ``--run-dir`` replaced, so a new agent directory needs no change here.
+step recorded as ``"then: <command>"`` runs after it, in the same run directory or, if it names another, starting
+from the earlier one's, as ``robust`` starts from the DAgger hand-over network). Each is run again as it was typed,
+with only ``--seed`` and the run directories replaced, so a new agent directory needs no change here.
 Two things are added where the recorded command relied on what were defaults then: ``--env <env_id of the
 config>`` to a ``dwr-gym train`` command that names no env (the default env was v0 before it became v1),
 and a module that moved since (``train.dagger``, ``train.learning.dagger``) is read as its new place. Everything
@@ -97,6 +98,17 @@ def moved_module(name: str) -> str:
     return found[0] if found else name
 
 
+def moved_run_dirs(steps: list[list[str]], run_dir: Path) -> tuple[list[list[str]], list[Path]]:
+    """The steps with their recorded run directories moved: the last step's is ``run_dir``, an earlier step's own one
+    (a network that a later step starts from with ``--init-from``) lies beside it, and every mention follows."""
+    recorded = [step[step.index("--run-dir") + 1] if "--run-dir" in step[:-1] else None for step in steps]
+    moved = {old: run_dir.parent / f"{run_dir.name}_{Path(old).name}" for old in recorded if old is not None}
+    if recorded[-1] is not None:
+        moved[recorded[-1]] = run_dir
+    steps = [[str(moved.get(word, word)) for word in step] for step in steps]
+    return steps, [moved.get(old, run_dir) if old is not None else run_dir for old in recorded]
+
+
 def runnable(step: list[str], seed: int, run_dir: Path, env_id: str, budget: float) -> list[str]:
     """One recorded step as this checkout runs it: the seed, run directory and budget replaced."""
     program, args = step[0], step[1:]
@@ -141,7 +153,8 @@ def retrain(agent_dir: Path, seed: int, out: Path, budget: float, n: int) -> dic
     if run_dir.exists():
         shutil.rmtree(run_dir)
     env_id = load_config(agent_dir).env_id
-    commands = [runnable(step, seed, run_dir, env_id, budget) for step in recipe(agent_dir)]
+    steps, dirs = moved_run_dirs(recipe(agent_dir), run_dir)
+    commands = [runnable(step, seed, step_dir, env_id, budget) for step, step_dir in zip(steps, dirs, strict=True)]
     began = time.time()
     for command in commands:
         print(f"[{agent_dir.name} seed {seed}] {shlex.join(command[1:])}", flush=True)

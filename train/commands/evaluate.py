@@ -31,7 +31,7 @@ def run(args: argparse.Namespace) -> int:
     heavy imports (torch, the agents), so that bad input is answered at once."""
     env_id, env_kwargs = checked_env(args)
     names = checked_selection(args)
-    check_agent_paths(args.agents)
+    args.agents = check_agent_paths(args.agents)
     with command_threads(args):
         return _run(args, env_id, env_kwargs, names)
 

@@ -47,7 +47,7 @@ def add_parser(sub: Any) -> None:
         "'optimal' needs the optimal extra and is slow: it re-plans from the measured pose)",
     )
     add_agents_argument(p, "swept too, beside the shipped ones")
-    p.add_argument("--no-shipped-agents", action="store_true", help="leave out the pretrained agents")
+    p.add_argument("--no-shipped-agents", action="store_true", help="leave out the shipped agents (the leaderboard's)")
     p.add_argument("--n", type=count, default=200, help="random start poses per magnitude (default: 200)")
     p.add_argument(
         "--n-optimal",
@@ -112,7 +112,7 @@ def _checked(args: argparse.Namespace) -> tuple[str, dict[str, Any], list[str]]:
             raise UsageError(f"--disturbances {name!r} is invalid: expected any of {', '.join(SWEEPS)}")
     args.scenarios, args.T_con = [], None
     names = checked_selection(args)
-    check_agent_paths(args.agents)
+    args.agents = check_agent_paths(args.agents)
     if args.n_optimal < 1:
         raise UsageError(f"--n-optimal {args.n_optimal} is invalid: expected an integer >= 1")
     if not 0.0 <= args.give_up_below <= 1.0:
@@ -128,9 +128,9 @@ def _run(args: argparse.Namespace, env_id: str, env_kwargs: dict[str, Any], name
     policies: dict[str, Any] = {name: name for name in names}
     paths = list(args.agents or [])
     if not args.no_shipped_agents:
-        from train.learning.agents import pretrained_paths
+        from train.learning.agents import default_agents
 
-        paths = [str(path) for path in pretrained_paths().values()] + paths
+        paths = [str(path) for path in default_agents().values()] + paths
     policies.update(load_agents(paths, env_id))
     workers = args.workers or min(os.cpu_count() or 1, 8)
     if workers > 1:

@@ -116,7 +116,7 @@ def interrupted(rows: list[dict[str, Any]], env_id: str, out: str, stem: str) ->
 
     cached = "the optima solved so far are cached"
     if rows:
-        csv_path, json_path = write_results([{**row, "env_id": env_id} for row in rows], out, stem)
+        csv_path, json_path = write_results([{"env_id": env_id, **row} for row in rows], out, stem)  # a row's own wins
         counted = f"{len(rows)} row{'s' if len(rows) != 1 else ''}"
         print(f"\ninterrupted: wrote the {counted} finished so far to {csv_path} and {json_path}; {cached}",
               file=sys.stderr)  # fmt: skip
@@ -294,18 +294,23 @@ def add_scenario_arguments(p: argparse.ArgumentParser, out: str, sets: Sequence[
     add_env_arguments(p)
 
 
-def check_agent_paths(paths: Sequence[str] | None, flag: str = "--agents") -> None:
-    """Before any heavy import: every path of ``--agents`` exists, else a UsageError naming the agents shipped with
-    dwr-gym (a path that a user copied from an older version's docs is the common case)."""
+def check_agent_paths(paths: Sequence[str] | None, flag: str = "--agents") -> list[str]:
+    """Before any heavy import: every item of ``--agents`` is a path that exists or a shipped agent's name (``apg-v2``,
+    ``train/pretrained/apg_v2``), else a UsageError naming the agents shipped with dwr-gym (a path that a user copied
+    from an older version's docs is the common case). Returns the paths, a shipped agent's name resolved."""
     from pathlib import Path
 
-    for path in paths or ():
-        if not Path(path).exists():
-            from train.learning.agents import PRETRAINED_DIR, pretrained_paths
+    from train.learning.agents import not_shipped_note, shipped_agent
 
-            shipped = ", ".join(p.name for p in pretrained_paths().values()) or "none"
-            raise UsageError(f"{flag} {str(path)!r} is invalid: no such file or directory; the agents shipped with "
-                             f"dwr-gym, in {PRETRAINED_DIR}: {shipped}")  # fmt: skip
+    resolved = []
+    for path in paths or ():
+        if Path(path).exists():
+            resolved.append(path)
+        elif (shipped := shipped_agent(path)) is not None:
+            resolved.append(str(shipped))
+        else:
+            raise UsageError(f"{flag} {str(path)!r} is invalid: {not_shipped_note(path)}")
+    return resolved
 
 
 def load_agents(paths: Sequence[str] | None, env_id: str | None = None) -> dict[str, Any]:

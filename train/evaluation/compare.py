@@ -3,7 +3,7 @@ scenarios, and the recorded Figure 5 rollouts that its figures draw."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 from baselines import plan_store
@@ -31,8 +31,12 @@ def compare(
     on_rows: Callable[[list[dict[str, Any]]], None] | None = None,
     clock: StageClock | None = None,
     address: str | None = None,
+    elsewhere: Sequence[tuple[dict[str, Any], dict[str, Any]]] = (),
 ) -> tuple[list[dict[str, Any]], dict[str, RolloutResult], tuple[str, ...]]:
     """Evaluate agents and controllers on each scenario set (at each T_con).
+
+    ``elsewhere``: more agents, each group (agents by label, env keywords) on the same sets made with its own env's
+    keywords (an agent on the env id it was trained on; the controllers run on ``env_kwargs``'s).
 
     Returns the rows, every policy's recorded rollouts from Figure 5's starts, and those starts' labels;
     ``on_rows`` receives the rows so far after each scenario set (:func:`evaluate_sets`); ``clock`` times the stages
@@ -40,21 +44,32 @@ def compare(
     the optima are solved as Ray tasks on that cluster.
     """
     policies: dict[str, Any] = {**agents, **{name: name for name in controllers}}
+    runs = [(policies, env_kwargs or {}), *((dict(group), kwargs) for group, kwargs in elsewhere if group)]
     own = clock is None
     clock = clock or StageClock(progress=progress)
-    trajectory_scenario = make_scenario(TRAJECTORY_SCENARIO, env_kwargs=env_kwargs)
+    trajectory_scenarios = [make_scenario(TRAJECTORY_SCENARIO, env_kwargs=kwargs) for _, kwargs in runs]
     # the recorded rollouts of the figures, the last stages: planned now, so that the time left counts them
-    steps = max_steps(trajectory_scenario, EnvParams.from_kwargs(**split_env_kwargs(trajectory_scenario.env_kwargs)[0]))
-    clock.plan(
-        [((FIGURES, label), estimated_seconds(label, trajectory_scenario.size, steps)) for label in policies],
-        beside=running_beside(policies),
-    )
+    for (group, _), scenario in zip(runs, trajectory_scenarios, strict=True):
+        steps = max_steps(scenario, EnvParams.from_kwargs(**split_env_kwargs(scenario.env_kwargs)[0]))
+        clock.plan([((FIGURES, label), estimated_seconds(label, scenario.size, steps)) for label in group],
+                   beside=running_beside(group))  # fmt: skip
+    rows: list[dict[str, Any]] = []
+    recorded: dict[str, RolloutResult] = {}
+
+    def so_far(found: list[dict[str, Any]], before: list[dict[str, Any]]) -> None:
+        if on_rows is not None:
+            on_rows(before + found)
+
     try:
         with plan_store.opened():  # the planners' plans, kept for the next command (what they solved, also on Ctrl-C)
-            rows = evaluate_sets(policies, scenarios, n, seed, env_kwargs or {}, progress, optimum=optimum,
-                                 T_cons=T_cons, n_optimal=n_optimal, on_rows=on_rows, clock=clock, address=address)  # fmt: skip
-            recorded = evaluate(policies, trajectory_scenario, record=True, clock=clock, stage_scenario=FIGURES)
+            for group, kwargs in runs:
+                before = list(rows)
+                rows += evaluate_sets(group, scenarios, n, seed, kwargs, progress, optimum=optimum, T_cons=T_cons,
+                                      n_optimal=n_optimal, on_rows=lambda found, before=before: so_far(found, before),
+                                      clock=clock, address=address)  # fmt: skip
+            for (group, _), scenario in zip(runs, trajectory_scenarios, strict=True):
+                recorded.update(evaluate(group, scenario, record=True, clock=clock, stage_scenario=FIGURES))
     finally:
         if own:
             clock.close()
-    return rows, recorded, trajectory_scenario.labels
+    return rows, recorded, trajectory_scenarios[0].labels

@@ -8,18 +8,33 @@ from typing import Any
 from train.learning.runs import MODEL_FILE, AgentLoadError, find_run_dir, load_config
 
 PRETRAINED_DIR = Path(__file__).resolve().parent.parent / "pretrained"
+#: The agents shipped with dwr-gym, by the name ``--agents`` accepts (their directories' names with dashes): one per
+#: row of the leaderboard that ships one (train.reporting.leaderboard.ROWS, each trained on the env id of its
+#: config.yaml), then the paper's reward's record (:data:`PAPER_AGENTS`).
 PRETRAINED = {
-    "residual-ppo": PRETRAINED_DIR / "residual_ppo",
-    "ppo": PRETRAINED_DIR / "ppo",
-    "dagger": PRETRAINED_DIR / "dagger",
-    "dagger-handover": PRETRAINED_DIR / "dagger_handover",
-    "robust": PRETRAINED_DIR / "robust",
-    # learned from v1's reward by `dwr-gym benchmark` (docs/rl-benchmark.md): the best seed of each
-    "ppo-v1": PRETRAINED_DIR / "ppo_v1",
+    "apg-v2": PRETRAINED_DIR / "apg_v2",
+    "apg-residual-ptc-v2": PRETRAINED_DIR / "apg_residual_ptc_v2",
     "ppo-jax-v1": PRETRAINED_DIR / "ppo_jax_v1",
-    "residual-ppo-v1": PRETRAINED_DIR / "residual_ppo_v1",
-    "residual-ppo-astolfi-v1": PRETRAINED_DIR / "residual_ppo_astolfi_v1",
+    "es-v1": PRETRAINED_DIR / "es_v1",
+    "robust": PRETRAINED_DIR / "robust",
+    "ppo": PRETRAINED_DIR / "ppo",
+    "residual-ppo": PRETRAINED_DIR / "residual_ppo",
 }
+#: The agents learned from the paper's reward (v0): its record, compared only when named (``--agents ppo``).
+PAPER_AGENTS = ("ppo", "residual-ppo")
+#: Agents shipped before, no longer in the package (their numbers stay in the results JSONs under docs/): the new
+#: name of a renamed one, else None.
+RETIRED = {
+    "apg-hold-heading10-time-scaled-30min-v2": "apg-v2",
+    "apg-residual-v2": "apg-residual-ptc-v2",
+    "es-arena50-v1": "es-v1",
+    **dict.fromkeys(
+        ("apg-hold-heading-time-scaled-30min-v2", "apg-hold-time-scaled-30min-v2", "apg-near-miss-time-scaled-30min-v2",
+         "apg-teacher-time-scaled-30min-v2", "apg-teacher-time-scaled-v2", "apg-teacher-v2", "dagger",
+         "dagger-handover", "es-residual-v2", "es-time-scaled-v2", "ppo-jax-fixed-noise-v2", "ppo-v1",
+         "residual-ppo-astolfi-v1", "residual-ppo-jax-v2", "residual-ppo-v1", "sac-tuned-v1", "tqc-tuned-v1"),
+    ),
+}  # fmt: skip
 
 
 #: What of a composite agent ``load_agent`` returns: the whole agent, the network alone, or (for a robust agent)
@@ -111,14 +126,46 @@ def pretrained_paths() -> dict[str, Path]:
     return {name: path for name, path in PRETRAINED.items() if (path / "model.zip").is_file()}
 
 
+def default_agents() -> dict[str, Path]:
+    """The shipped agents that commands run when given none: the leaderboard's, not :data:`PAPER_AGENTS`."""
+    return {name: path for name, path in pretrained_paths().items() if name not in PAPER_AGENTS}
+
+
+def shipped_agent(given: str) -> Path | None:
+    """The shipped agent that ``--agents`` names by its name (``apg-v2``) or its directory in the repository
+    (``train/pretrained/apg_v2``, wherever the package is installed), else None."""
+    path = Path(given)
+    if path.parent.parts not in ((), ("train", "pretrained")):
+        return None
+    return pretrained_paths().get(path.name.replace("_", "-"))
+
+
+def not_shipped_note(given: str) -> str:
+    """Why ``given``, a path that does not exist, is not an agent of dwr-gym, and the agents that are: one line."""
+    name = Path(given).stem.replace("_", "-")
+    shipped = ", ".join(pretrained_paths()) or "none"
+    if RETIRED.get(name):
+        why = f"{name} is shipped as {RETIRED[name]} now"
+    elif name in RETIRED:
+        why = f"{name} is no longer shipped (its numbers stay in the results under docs/)"
+    else:
+        why = "no such file or directory"
+    return f"{why}; the agents shipped with dwr-gym (a name or train/pretrained/NAME): {shipped}"
+
+
 __all__ = [
+    "PAPER_AGENTS",
     "PARTS",
     "PRETRAINED",
     "PRETRAINED_DIR",
+    "RETIRED",
     "AgentLoadError",
+    "default_agents",
     "find_run_dir",
     "load_agent",
     "load_extra",
+    "not_shipped_note",
     "pretrained_paths",
+    "shipped_agent",
     "trained_env_id",
 ]

@@ -44,7 +44,8 @@ MARKER = re.compile(
 OPENING = re.compile(r"^<!-- (?:generated\b[^>]*|table: [\w-]+|[\w-]+:begin) -->", re.MULTILINE)
 
 #: How the tables name the policies: the controllers of baselines and the agents shipped in train/pretrained, each by
-#: the name the command line prints (an agent's label: its directory's name with hyphens).
+#: the name the command line prints (an agent's label: its directory's name with hyphens); then the agents shipped
+#: before, whose rows the archived JSON still holds.
 POLICY_NAMES = {
     "optimal": "**optimum** (`optimal`)",
     "ptc": "PTC (16)-(19)",
@@ -53,14 +54,17 @@ POLICY_NAMES = {
     "fixed-time": "fixed-time [23]",
     "astolfi": "Astolfi",
     "pt-astolfi": "`pt-astolfi` (2)",
+    "robust-pt": "`robust-pt` (3)",
+    "apg-v2": "`apg-v2` (v2, reward, APG)",
+    "apg-residual-ptc-v2": "`apg-residual-ptc-v2` (v2, reward, APG on PTC)",
+    "ppo-jax-v1": "`ppo-jax-v1` (v1, reward, JAX)",
+    "es-v1": "`es-v1` (v1, reward, ES)",
+    "robust": "`robust` agent (v1)",
     "residual-ppo": "`residual-ppo` (v0)",
     "ppo": "`ppo` (v0)",
     "dagger": "`dagger` (v1)",
     "dagger-handover": "`dagger-handover` (v1)",
-    "robust-pt": "`robust-pt` (3)",
-    "robust": "`robust` agent (v1)",
     "ppo-v1": "`ppo-v1` (v1, reward)",
-    "ppo-jax-v1": "`ppo-jax-v1` (v1, reward, JAX)",
     "residual-ppo-v1": "`residual-ppo-v1` (v1, reward, on PTC)",
     "residual-ppo-astolfi-v1": "`residual-ppo-astolfi-v1` (v1, reward, on `pt-astolfi`)",
 }

@@ -45,17 +45,17 @@ class Row:
 
 
 ROWS: tuple[Row, ...] = (
-    Row("APG from the reward (v2)", "apg_hold_heading10_time_scaled_30min_v2", "docs/rl_benchmark/apg_hold_heading10.json",
+    Row("APG from the reward (v2)", "apg_v2", "docs/rl_benchmark/apg_hold_heading10.json",
         "apg-hold-heading10-time-scaled-30min-v2", "benchmark", "python -m benchmarks run rl-apg-hold-heading10"),
     Row("APG, the deadline as a constraint (v2)", "-", "docs/rl_benchmark/constrained.json", "apg-lagrangian-v2",
         "benchmark", "python -m benchmarks run rl-constrained"),
-    Row("residual on PTC, APG (v2)", "apg_residual_v2", "docs/rl_benchmark/apg.json", "apg-residual-v2",
+    Row("residual on PTC, APG (v2)", "apg_residual_ptc_v2", "docs/rl_benchmark/apg.json", "apg-residual-v2",
         "benchmark", "python -m benchmarks run rl-apg"),
     Row("residual on PTC, constrained (v2)", "-", "docs/rl_benchmark/constrained.json",
         "apg-lagrangian-residual-ptc-v2", "benchmark", "python -m benchmarks run rl-constrained"),
     Row("PPO, jitted (v1)", "ppo_jax_v1", "docs/rl_benchmark/benchmark.json", "ppo-jax", "benchmark",
         "python -m benchmarks run rl-agents"),
-    Row("ES (v1, arena 50 m)", "es_arena50_v1", "docs/rl_benchmark/benchmark.json", "es-arena50", "benchmark",
+    Row("ES (v1, arena 50 m)", "es_v1", "docs/rl_benchmark/benchmark.json", "es-arena50", "benchmark",
         "python -m benchmarks run rl-agents"),
     Row("TQC, sbx (v2, 30 min)", "-", "docs/rl_benchmark/sbx_v2_30min_tqc.json", "tqc-sbx-v2", "benchmark",
         "python -m benchmarks run sbx-learn v2-30min-tqc --docs"),

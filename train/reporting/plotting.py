@@ -18,8 +18,9 @@ PALETTE = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#0
            "#999933", "#332288", "#F0E442")  # fmt: skip
 MARKERS = ("o", "s", "^", "D", "v", "P", "*", "X", "<", ">", "h", "p", "d", "H")
 #: Fixed places in the palette for the policies dwr-gym ships, so that each looks the same in every figure.
-KNOWN_POLICIES = ("ptc", "fabregas", "astolfi", "pt-astolfi", "fixed-time", "dagger", "optimal", "residual-ppo",
-                  "dagger-handover", "conventional-ptc", "ppo", "robust", "robust-pt")  # fmt: skip
+KNOWN_POLICIES = ("ptc", "fabregas", "astolfi", "pt-astolfi", "fixed-time", "apg-v2", "optimal", "es-v1",
+                  "apg-residual-ptc-v2", "conventional-ptc", "ppo-jax-v1", "robust", "robust-pt", "residual-ppo",
+                  "ppo")  # fmt: skip
 #: Markers drawn along a line of many points: about this many per line, staggered between lines.
 MARKS_PER_LINE = 8
 

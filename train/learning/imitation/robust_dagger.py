@@ -5,7 +5,8 @@ on the controller's state estimate, with the estimated disturbance cancelled, un
 ``handover_time`` * T_con or the robot falls behind schedule; then the controller's planner (or, with ``plan=False``,
 its analytic finish) takes over. This module trains the network:
 
-1. it starts from a network cloned from minimum-energy plans (``init_from``, the shipped ``dagger_handover``) or
+1. it starts from a network cloned from minimum-energy plans (``init_from``: the hand-over network of
+   ``python -m train.learning.imitation.dagger``, seed 0 of benchmarks/recipes/dagger_agents.sh) or
    from demonstrations (:func:`train.learning.imitation.dagger.demonstrations`);
 2. each DAgger round, the network drives, behind the filter, from random starts and T_con in the env's range, in
    ``disturbed_fraction`` of the episodes on a robot drawn from :class:`dwr_gym.randomization.DisturbanceDistribution`
@@ -57,8 +58,9 @@ class RobustDaggerConfig:
 
     seed: int = 0
     """Seed of the rollouts' starts and robots, the fits and the evaluation."""
-    init_from: str = "train/pretrained/dagger_handover"
-    """A run directory whose network is the starting point ('' clones ``episodes`` demonstrations first)."""
+    init_from: str = "runs/dagger_handover_s0"
+    """A run directory whose network is the starting point, by default where seed 0 of
+    benchmarks/recipes/dagger_agents.sh writes its hand-over network ('' clones ``episodes`` demonstrations first)."""
     episodes: int = 500
     """Demonstration plans (arriving at plan_arrival * T_con) fitted before the rounds; 0: none."""
     dagger_rounds: int = 4
@@ -262,6 +264,8 @@ def plot_curves(curve: list[dict[str, Any]], T_cons: Any, run_dir: Path) -> None
 
 
 def main(argv: list[str] | None = None) -> None:
+    from train.learning.runs import MODEL_FILE
+
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0], allow_abbrev=False)
     parser.add_argument("--run-dir", required=True)
     for f in dataclasses.fields(RobustDaggerConfig):
@@ -275,6 +279,11 @@ def main(argv: list[str] | None = None) -> None:
         values["env_id"] = check_env_id(values["env_id"])
     except ValueError as error:
         parser.error(str(error))
+    init_from = values["init_from"]
+    if init_from and not (Path(init_from) / MODEL_FILE).is_file():  # answered before the hours of planning
+        parser.error(f"--init-from {init_from!r} is invalid: no {MODEL_FILE} in it; train the hand-over network first "
+                     f"(python -m train.learning.imitation.dagger --run-dir {init_from} ..., as benchmarks/recipes/"
+                     "dagger_agents.sh does) or pass --init-from '' to clone demonstrations")  # fmt: skip
     run(RobustDaggerConfig(**values), Path(args.run_dir),
         ["python", "-m", "train.learning.imitation.robust_dagger", *(argv or sys.argv[1:])])  # fmt: skip
 
