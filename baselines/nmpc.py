@@ -26,6 +26,7 @@ from numpy.typing import ArrayLike
 
 from baselines.base import Controller, ControllerInput, ControllerParams, prescribed_time
 from baselines.optimal import (
+    PLAN_TOLERANCE,
     InfeasibleArrivalTimeError,
     OptimalControlError,
     Plan,
@@ -258,7 +259,8 @@ class OptimalController(Controller):
         p = self.params
         arrival = p.arrival_time if p.arrival_time is not None else T_con * p.arrival_fraction
         job: dict[str, Any] = {"start": start, "arrival_time": arrival, "dt": p.dt, "u_max": p.u_max,
-                               "omega_max": p.omega_max, "heading": p.heading, "hold_steps": p.hold_steps}  # fmt: skip
+                               "omega_max": p.omega_max, "heading": p.heading, "hold_steps": p.hold_steps,
+                               "tol": PLAN_TOLERANCE}  # fmt: skip
         h = p.dt * p.hold_steps
         least = least_arrival_time(start, p.u_max, p.omega_max, p.heading)
         running = plan is not None and step < self._origin[i] + plan.intervals * p.hold_steps

@@ -306,7 +306,7 @@ class RobustPTController(Controller):
         spent only as far as the robot is behind. A plan that proves infeasible (a failing wheel slows the robot more
         than the bound of the time needed assumes) is tried again with more time; a robot with no plan at all goes to
         the finish law (a late plan beats that law's asymptotic approach)."""
-        from baselines.optimal import Plan, least_arrival_time
+        from baselines.optimal import PLAN_TOLERANCE, Plan, least_arrival_time
 
         p = self.params
         h = p.dt * p.hold_steps
@@ -323,7 +323,7 @@ class RobustPTController(Controller):
                 continue
             jobs[i] = {"start": start, "arrival_time": left, "dt": p.dt, "u_max": p.u_max, "omega_max": p.omega_max,
                        "heading": not near, "hold_steps": p.hold_steps, "response": tuple(float(v) for v in response),
-                       "pad_to": PAD_TO, "max_iter": MAX_ITERATIONS}  # fmt: skip
+                       "pad_to": PAD_TO, "max_iter": MAX_ITERATIONS, "tol": PLAN_TOLERANCE}  # fmt: skip
         for attempt in range(PLAN_ATTEMPTS):
             if not jobs:
                 break
