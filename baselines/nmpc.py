@@ -39,6 +39,10 @@ from dwr_gym.params import check_range
 
 #: A re-plan on the episode's grid needs at least this many intervals left (fewer: the plan is kept).
 MIN_REPLAN_INTERVALS = 4
+#: Plans are solved on problems of a multiple of this many intervals, the robot still at the goal in the extra ones
+#: (:func:`baselines.optimal.solve_minimum_energy`'s ``pad_to``): the same plan to the solver's tolerance, from an eighth
+#: of the solvers to build (a build costs as much as some ten solves; each episode's T_con is a size of its own).
+PAD_TO = 8
 #: Plans (or their errors) kept by :class:`PlanPool`, by job, least recently used out: some 10 kB each.
 MEMO_SIZE = 8192
 
@@ -260,7 +264,7 @@ class OptimalController(Controller):
         arrival = p.arrival_time if p.arrival_time is not None else T_con * p.arrival_fraction
         job: dict[str, Any] = {"start": start, "arrival_time": arrival, "dt": p.dt, "u_max": p.u_max,
                                "omega_max": p.omega_max, "heading": p.heading, "hold_steps": p.hold_steps,
-                               "tol": PLAN_TOLERANCE}  # fmt: skip
+                               "tol": PLAN_TOLERANCE, "pad_to": PAD_TO}  # fmt: skip
         h = p.dt * p.hold_steps
         least = least_arrival_time(start, p.u_max, p.omega_max, p.heading)
         running = plan is not None and step < self._origin[i] + plan.intervals * p.hold_steps
@@ -270,9 +274,9 @@ class OptimalController(Controller):
             if moving < MIN_REPLAN_INTERVALS:
                 return None  # too close to the plan's end for a re-plan to change anything: keep the plan
             if moving * h >= least * 1.05 + h:  # time is left on the same grid: shrink the horizon
-                guess = plan.solution.copy()
+                guess = plan.solution.copy()  # the padded problem's unknowns: its states, then its commands
                 guess[: 3 * (frozen + 1)] = np.tile(start, frozen + 1)
-                n_states = 3 * (plan.intervals + 1)
+                n_states = 3 * ((guess.size - 3) // 5 + 1)
                 guess[n_states : n_states + 2 * frozen] = 0.0
                 job.update(intervals=plan.intervals, frozen=frozen, warm_start=guess)
                 job["origin"] = int(self._origin[i])
