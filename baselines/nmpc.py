@@ -22,7 +22,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from baselines.base import Controller, ControllerInput, ControllerParams, prescribed_time
 from baselines.optimal import (
@@ -158,6 +158,19 @@ class PlanPool:
         """Nothing to stop: the threads are shared (:func:`baselines.optimal.solve_plans`)."""
 
 
+def remaining_guess(plan: Plan, played: int, start: tuple[float, float, float]) -> NDArray[np.float64]:
+    """The unknowns of a plan from ``start`` over the intervals of ``plan`` after its first ``played``, padded to a
+    multiple of :data:`PAD_TO` (the robot still at the goal): the rest of ``plan``'s padded solution from ``start``."""
+    padded_before = (plan.solution.size - 3) // 5
+    states = plan.solution[: 3 * (padded_before + 1)].reshape(-1, 3)[played:]
+    commands = plan.solution[3 * (padded_before + 1) :].reshape(-1, 2)[played:]
+    padded = -(-(plan.intervals - played) // PAD_TO) * PAD_TO
+    states = np.concatenate([states, np.repeat(states[-1:], max(padded + 1 - len(states), 0), axis=0)])[: padded + 1]
+    commands = np.concatenate([commands, np.zeros((max(padded - len(commands), 0), 2))])[:padded]
+    states[0] = start
+    return np.concatenate([states.ravel(), commands.ravel()])
+
+
 class OptimalController(Controller):
     """Minimum-energy NMPC to the prescribed deadline (``make_controller("optimal")``)."""
 
@@ -274,12 +287,9 @@ class OptimalController(Controller):
             if moving < MIN_REPLAN_INTERVALS:
                 return None  # too close to the plan's end for a re-plan to change anything: keep the plan
             if moving * h >= least * 1.05 + h:  # time is left on the same grid: shrink the horizon
-                guess = plan.solution.copy()  # the padded problem's unknowns: its states, then its commands
-                guess[: 3 * (frozen + 1)] = np.tile(start, frozen + 1)
-                n_states = 3 * ((guess.size - 3) // 5 + 1)
-                guess[n_states : n_states + 2 * frozen] = 0.0
-                job.update(intervals=plan.intervals, frozen=frozen, warm_start=guess)
-                job["origin"] = int(self._origin[i])
+                # The intervals already played are not the new plan's (held at zero they were the same problem, a
+                # solve some frozen / moving times longer): the plan from here, warm-started from the rest of the last.
+                job.update(intervals=moving, warm_start=remaining_guess(plan, frozen, start), origin=step)
                 return job
         # A new grid from now: the first plan of an episode, or once a plan ran out before arrival (noise), late.
         remaining = arrival - step * p.dt
@@ -332,4 +342,4 @@ class OptimalController(Controller):
         self.close()
 
 
-__all__ = ["OptimalController", "OptimalParams", "PlanPool", "clear_memo", "job_key"]
+__all__ = ["OptimalController", "OptimalParams", "PlanPool", "clear_memo", "job_key", "remaining_guess"]
