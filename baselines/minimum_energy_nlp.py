@@ -128,13 +128,13 @@ def _new_lock_in_child() -> None:
 os.register_at_fork(after_in_child=_new_lock_in_child)
 
 
-def thread_solver(intervals: int, max_iter: int, response: bool, solver: str) -> Any:
+def thread_solver(intervals: int, max_iter: int, response: bool, solver: str, tol: float = 1e-10) -> Any:
     """This thread's own :func:`minimum_energy_solver` (a solver's buffers serve one call at a time), built once."""
     solvers = _LOCAL.__dict__.setdefault("solvers", {})
-    key = (intervals, max_iter, response, solver)
+    key = (intervals, max_iter, response, solver, tol)
     if key not in solvers:
         with _BUILDING:
-            solvers[key] = minimum_energy_solver.__wrapped__(intervals, max_iter=max_iter, response=response,
+            solvers[key] = minimum_energy_solver.__wrapped__(intervals, max_iter=max_iter, tol=tol, response=response,
                                                              solver=solver)  # fmt: skip
     return solvers[key]
 

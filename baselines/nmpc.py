@@ -22,10 +22,11 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from baselines.base import Controller, ControllerInput, ControllerParams, prescribed_time
 from baselines.optimal import (
+    PLAN_TOLERANCE,
     InfeasibleArrivalTimeError,
     OptimalControlError,
     Plan,
@@ -38,6 +39,10 @@ from dwr_gym.params import check_range
 
 #: A re-plan on the episode's grid needs at least this many intervals left (fewer: the plan is kept).
 MIN_REPLAN_INTERVALS = 4
+#: Plans are solved on problems of a multiple of this many intervals, the robot still at the goal in the extra ones
+#: (:func:`baselines.optimal.solve_minimum_energy`'s ``pad_to``): the same plan to the solver's tolerance, from an eighth
+#: of the solvers to build (a build costs as much as some ten solves; each episode's T_con is a size of its own).
+PAD_TO = 8
 #: Plans (or their errors) kept by :class:`PlanPool`, by job, least recently used out: some 10 kB each.
 MEMO_SIZE = 8192
 
@@ -153,6 +158,19 @@ class PlanPool:
         """Nothing to stop: the threads are shared (:func:`baselines.optimal.solve_plans`)."""
 
 
+def remaining_guess(plan: Plan, played: int, start: tuple[float, float, float]) -> NDArray[np.float64]:
+    """The unknowns of a plan from ``start`` over the intervals of ``plan`` after its first ``played``, padded to a
+    multiple of :data:`PAD_TO` (the robot still at the goal): the rest of ``plan``'s padded solution from ``start``."""
+    padded_before = (plan.solution.size - 3) // 5
+    states = plan.solution[: 3 * (padded_before + 1)].reshape(-1, 3)[played:]
+    commands = plan.solution[3 * (padded_before + 1) :].reshape(-1, 2)[played:]
+    padded = -(-(plan.intervals - played) // PAD_TO) * PAD_TO
+    states = np.concatenate([states, np.repeat(states[-1:], max(padded + 1 - len(states), 0), axis=0)])[: padded + 1]
+    commands = np.concatenate([commands, np.zeros((max(padded - len(commands), 0), 2))])[:padded]
+    states[0] = start
+    return np.concatenate([states.ravel(), commands.ravel()])
+
+
 class OptimalController(Controller):
     """Minimum-energy NMPC to the prescribed deadline (``make_controller("optimal")``)."""
 
@@ -258,7 +276,8 @@ class OptimalController(Controller):
         p = self.params
         arrival = p.arrival_time if p.arrival_time is not None else T_con * p.arrival_fraction
         job: dict[str, Any] = {"start": start, "arrival_time": arrival, "dt": p.dt, "u_max": p.u_max,
-                               "omega_max": p.omega_max, "heading": p.heading, "hold_steps": p.hold_steps}  # fmt: skip
+                               "omega_max": p.omega_max, "heading": p.heading, "hold_steps": p.hold_steps,
+                               "tol": PLAN_TOLERANCE, "pad_to": PAD_TO}  # fmt: skip
         h = p.dt * p.hold_steps
         least = least_arrival_time(start, p.u_max, p.omega_max, p.heading)
         running = plan is not None and step < self._origin[i] + plan.intervals * p.hold_steps
@@ -268,12 +287,9 @@ class OptimalController(Controller):
             if moving < MIN_REPLAN_INTERVALS:
                 return None  # too close to the plan's end for a re-plan to change anything: keep the plan
             if moving * h >= least * 1.05 + h:  # time is left on the same grid: shrink the horizon
-                guess = plan.solution.copy()
-                guess[: 3 * (frozen + 1)] = np.tile(start, frozen + 1)
-                n_states = 3 * (plan.intervals + 1)
-                guess[n_states : n_states + 2 * frozen] = 0.0
-                job.update(intervals=plan.intervals, frozen=frozen, warm_start=guess)
-                job["origin"] = int(self._origin[i])
+                # The intervals already played are not the new plan's (held at zero they were the same problem, a
+                # solve some frozen / moving times longer): the plan from here, warm-started from the rest of the last.
+                job.update(intervals=moving, warm_start=remaining_guess(plan, frozen, start), origin=step)
                 return job
         # A new grid from now: the first plan of an episode, or once a plan ran out before arrival (noise), late.
         remaining = arrival - step * p.dt
@@ -326,4 +342,4 @@ class OptimalController(Controller):
         self.close()
 
 
-__all__ = ["OptimalController", "OptimalParams", "PlanPool", "clear_memo", "job_key"]
+__all__ = ["OptimalController", "OptimalParams", "PlanPool", "clear_memo", "job_key", "remaining_guess"]

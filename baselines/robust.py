@@ -61,6 +61,9 @@ MAX_ITERATIONS = 150
 PLAN_ATTEMPTS = 3
 #: A plan longer than this many intervals (T_con 60 s at the defaults needs 192) is not solved: the finish law drives.
 MAX_PLAN_INTERVALS = 1000
+#: Nor is a plan longer than this many T_con (the env ends an episode at 1.5 T_con by default): a robot that slow (a
+#: failing wheel) gets the finish law at once instead of searches of hundreds of intervals that rarely converge.
+LONGEST_PLAN = 2.0
 
 
 @dataclass(frozen=True)
@@ -306,7 +309,7 @@ class RobustPTController(Controller):
         spent only as far as the robot is behind. A plan that proves infeasible (a failing wheel slows the robot more
         than the bound of the time needed assumes) is tried again with more time; a robot with no plan at all goes to
         the finish law (a late plan beats that law's asymptotic approach)."""
-        from baselines.optimal import Plan, least_arrival_time
+        from baselines.optimal import PLAN_TOLERANCE, Plan, least_arrival_time
 
         p = self.params
         h = p.dt * p.hold_steps
@@ -318,12 +321,13 @@ class RobustPTController(Controller):
             near = math.hypot(start[0], start[1]) < p.near_goal  # the last centimetres: the position alone
             least = least_arrival_time(start, max(reach[0], 1e-3), max(reach[1], 1e-3), not near)
             left = max(p.plan_arrival * T_con[i] - step[i] * p.dt, 1.1 * least, MIN_PLAN_INTERVALS * h)
-            if left * 1.3 ** (PLAN_ATTEMPTS - 1) > MAX_PLAN_INTERVALS * h:  # Guard: far away, a solve would not end
+            if (left * 1.3 ** (PLAN_ATTEMPTS - 1) > MAX_PLAN_INTERVALS * h  # Guard: far away, a solve would not end
+                    or left > LONGEST_PLAN * T_con[i]):  # Guard: so slow (a failing wheel) the search rarely ends
                 self._phase[i] = FINISH
                 continue
             jobs[i] = {"start": start, "arrival_time": left, "dt": p.dt, "u_max": p.u_max, "omega_max": p.omega_max,
                        "heading": not near, "hold_steps": p.hold_steps, "response": tuple(float(v) for v in response),
-                       "pad_to": PAD_TO, "max_iter": MAX_ITERATIONS}  # fmt: skip
+                       "pad_to": PAD_TO, "max_iter": MAX_ITERATIONS, "tol": PLAN_TOLERANCE}  # fmt: skip
         for attempt in range(PLAN_ATTEMPTS):
             if not jobs:
                 break

@@ -27,7 +27,7 @@ def test_the_cache_solves_padded_problems_to_the_same_energy_to_1e_6(start: tupl
     the unpadded problem's to 1e-6 relative, the goal python -m benchmarks run optimum-speed measures on compare's episodes."""
     plain = solve_minimum_energy(start, 10.37, **LIMITS)  # type: ignore[arg-type]
     padded = solve_minimum_energy(start, 10.37, **LIMITS, pad_to=optimum_module.PAD_TO)  # type: ignore[arg-type]
-    assert plain.intervals == padded.intervals == 207  # padded to 220 and cut back
+    assert plain.intervals == padded.intervals == 207  # padded to 400 and cut back
     assert padded.energy == pytest.approx(plain.energy, rel=1e-6)
 
 

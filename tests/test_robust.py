@@ -221,6 +221,22 @@ def test_past_its_re_plans_or_too_far_to_plan_the_robot_is_handed_to_the_finish_
     assert u == pytest.approx(p.k_rho * np.hypot(-1.0, 0.4) / T, rel=1e-12)
 
 
+def test_a_robot_too_slow_for_a_plan_of_two_T_con_gets_the_finish_law_without_a_search(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A failing wheel that leaves the robot 1 cm/s: the plan would take 1.1 x 108 s, over LONGEST_PLAN = 2 T_con
+    (the episode ends at 1.5 T_con), so no search is started (one of hundreds of intervals rarely converges) and the
+    finish law drives; at 0.4 m/s the same robot is planned."""
+    slow = make_controller("robust-pt", T_con=T_CON, estimator=None, workers=1)
+    monkeypatch.setattr(slow, "_responses", lambda index: np.tile([0.0, 0.0, 0.02, 0.0], (index.size, 1)))
+    one_step(slow, -1.0, 0.4, 0.3, 0.0)
+    assert slow.solves == 0 and not slow.failures  # type: ignore[attr-defined]
+    able = make_controller("robust-pt", T_con=T_CON, estimator=None, workers=1)
+    monkeypatch.setattr(able, "_responses", lambda index: np.tile([0.0, 0.0, 0.8, 0.0], (index.size, 1)))
+    one_step(able, -1.0, 0.4, 0.3, 0.0)
+    assert able.solves == 1  # type: ignore[attr-defined]
+
+
 class Cruise:
     """A learned cruise whose mean action is (0.5, -0.25); a sampled one (deterministic=False) is 0.1 off: the cruise
     must drive on the mean, as a deployed agent does (reproducible, no sampling noise in the commands)."""

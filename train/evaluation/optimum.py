@@ -40,8 +40,10 @@ from train.evaluation.shipped_optima import problem_record, shipped_energies
 CACHE_VERSION = 2
 #: Each optimum is solved on a problem of the next multiple of this many intervals, the last ones holding the robot still
 #: at the goal (:func:`baselines.optimal.solve_minimum_energy`'s ``pad_to``): the same energy to 1e-9 (the solver's
-#: tolerance), from some 50 solvers to build for the default sets instead of one per episode.
-PAD_TO = 20
+#: tolerance). Building a solver takes about 1.5 ms per interval (a second at 700), a solve from the coarse plan some
+#: 0.04 ms per interval: the 7 sizes of 200 to 1,400 intervals cost more per solve than the 52 of a multiple of 20,
+#: and 4x less building, which is most of a batch's time (``python -m benchmarks run optimum-speed``).
+PAD_TO = 200
 #: Each optimum is searched on a grid this many times coarser first, then refined from the cheapest coarse plan
 #: (:func:`baselines.optimal.solve_plans`): the same energies to 1e-6 (``dwr-gym optimum verify``), fewer solves.
 COARSE = 10
