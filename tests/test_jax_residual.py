@@ -299,3 +299,33 @@ def test_cli_trains_an_es_residual_on_v2_that_evaluate_loads_as_expert_plus_resi
     assert saved["config"]["residual"] and saved["config"]["algo"] == "es" and saved["learned_from"] == "reward"
     _, policy = load_agent(run_dir)
     assert isinstance(policy, ResidualPolicy) and policy.expert.controller.name == "ptc"
+
+
+def test_a_gradient_through_the_law_is_kept_where_finite_and_zero_where_its_derivative_is_not() -> None:
+    """finite_cotangent: the value unchanged, the cotangent's non-finite entries 0 (sqrt's derivative at 0 is inf)."""
+    from train.learning.jitted.residual import finite_cotangent
+
+    x = jnp.asarray([0.0, 4.0])
+    np.testing.assert_array_equal(np.asarray(finite_cotangent(x)), [0.0, 4.0])
+    grad = jax.grad(lambda v: jnp.sum(jnp.sqrt(finite_cotangent(v))))(x)
+    np.testing.assert_allclose(np.asarray(grad), [0.0, 0.25])
+
+
+def test_apg_updates_of_a_residual_on_ptc_are_not_voided_by_the_laws_gain_at_T_con() -> None:
+    """PTC's gain is undefined at T_con (eq. (17)), and a batch's gradient through it was NaN, the update skipped (most
+    of them, measured); through the residual env every update of a fresh residual APG on PTC is taken."""
+    from dwr_gym.jax_env import make_gymnax_env
+    from train.learning.jitted.apg import JaxAPG
+    from train.learning.jitted.apg_settings import APGSettings
+    from train.learning.jitted.residual import ResidualGymnaxEnv
+
+    env, params = make_gymnax_env("DWRPointStabilization-v2", T_con_range=[10.0, 12.0])
+    residual = ResidualGymnaxEnv(env, make_controller("ptc"), U_MAX, OMEGA_MAX, scale=0.5)
+    apg = JaxAPG(APGSettings(episodes=64, net_arch=(8,), state_grad_clip=64.0), residual, params, residual=True)
+    state = apg.init(0)
+    update = jax.jit(apg._update)
+    skipped = []
+    for _ in range(2):
+        state, metrics = update(state)
+        skipped.append(bool(metrics["skipped"]))
+    assert not any(skipped), f"updates skipped for a non-finite gradient: {skipped}"

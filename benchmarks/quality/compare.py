@@ -1,19 +1,17 @@
 """The results tables: every shipped agent and controller on the paper's scenarios, random starts and disturbances.
 
-    python -m benchmarks run compare --docs       # dwr-gym compare --env DWRPointStabilization-v1 --out docs/compare
+    python -m benchmarks run compare --docs       # dwr-gym compare --out docs/compare
 
-The suite's name for ``dwr-gym compare`` as the README's and docs' tables run it: its defaults on v1, the env its
-agents were trained on and its tables were made on (the command's default env is v2); other arguments go to the
-command.
+The suite's name for ``dwr-gym compare`` as the README's and docs' tables run it: its defaults (the laws on v2, each
+agent on the env id it was trained on); other arguments go to the command.
 """
 
 from __future__ import annotations
 
 from benchmarks.core.commands import command_main
 from benchmarks.core.docs import NUMBER, OPTIONAL_NUMBER, Schema, table
-from train.env_ids import TASK_ENV_ID
 
-main = command_main(["compare", "--env", TASK_ENV_ID], ["--out", "docs/compare"])
+main = command_main(["compare"], ["--out", "docs/compare"])
 
 ROWS = Schema({"scenario": str, "policy": str, "n": NUMBER, "T_con": OPTIONAL_NUMBER, "success_rate": NUMBER,
                "final_heading_error_mean": NUMBER, "energy_mean": NUMBER, "energy_ratio_mean": OPTIONAL_NUMBER,

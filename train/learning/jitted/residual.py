@@ -26,6 +26,23 @@ from train.learning.config import ConfigError, TrainConfig
 LAST_LAYER_GAIN = 1e-3
 
 
+@jax.custom_vjp
+def finite_cotangent(x: jax.Array) -> jax.Array:
+    """``x`` unchanged on the way forward; on the way back its cotangent with each non-finite entry set to 0."""
+    return x
+
+
+def _finite_forward(x: jax.Array) -> tuple[jax.Array, None]:
+    return x, None
+
+
+def _finite_backward(_: None, cotangent: jax.Array) -> tuple[jax.Array]:
+    return (jnp.where(jnp.isfinite(cotangent), cotangent, 0.0),)
+
+
+finite_cotangent.defvjp(_finite_forward, _finite_backward)
+
+
 def residual_action(expert: Any, residual: Any, scale: float) -> Any:
     """clip(expert + scale * clip(residual, -1, 1), -1, 1), in the residual's dtype (jax arrays)."""
     return jnp.clip(expert + scale * jnp.clip(residual, -1.0, 1.0), -1.0, 1.0).astype(residual.dtype)
@@ -51,7 +68,10 @@ class ResidualGymnaxEnv:
 
     def step_env(self, key: jax.Array, state: Any, action: jax.Array, params: Any) -> tuple[Any, ...]:
         """One step without auto-reset, with the expert's action plus the residual ``action``."""
-        executed = residual_action(self.expert_action(state.observation), action, self.scale)
+        # the law's derivative is undefined where its gain is (at T_con, eq. (17)): a gradient through it is kept
+        # wherever it is finite and is 0 at those steps, so one such step does not void a whole batch's update
+        expert = self.expert_action(finite_cotangent(state.observation))
+        executed = residual_action(expert, action, self.scale)
         return self.env.step_env(key, state, executed, params)  # type: ignore[no-any-return]
 
     def __getattr__(self, name: str) -> Any:  # the spaces, default_params, is_truncated, ...
@@ -93,6 +113,7 @@ def start_near_expert(runner: Any) -> Any:
 __all__ = [
     "ResidualGymnaxEnv",
     "check_residual_expert",
+    "finite_cotangent",
     "near_zero_head",
     "residual_action",
     "residual_env",
