@@ -141,6 +141,10 @@ BUGS: dict[str, tuple[str, str, str, str]] = {
         "APG's deadline multiplier rewarding the distance instead of charging it", "train/learning/jitted/apg.py",
         "miss = weights[0] * after.distance + weights[1]",
         "miss = -weights[0] * after.distance + weights[1]"),
+    "residual_gradient_through_undefined_law": (
+        "the JAX residual's gradient through the law's undefined gain at T_con unguarded",
+        "train/learning/jitted/residual.py", "self.expert_action(finite_cotangent(state.observation))",
+        "self.expert_action(state.observation)"),
     "apg_hold_heading_sign": (
         "APG's hold heading term with its sign flipped", "train/learning/jitted/apg.py",
         "miss = miss + self.settings.hold_heading_weight * 2.0 * jnp.abs(jnp.sin(0.5 * after.psi))",
@@ -189,6 +193,9 @@ TARGETED: dict[str, list[str]] = {
     "v2_miss_only_outside_tolerance": [f"{ORACLES}v2s_reward_is_its_definition_term_by_term"],
     "apg_deadline_multiplier_sign": [
         "tests/test_lagrangian.py::test_the_multipliers_weigh_the_distance_and_heading_at_T_con_in_the_gradient"
+    ],
+    "residual_gradient_through_undefined_law": [
+        "tests/test_jax_residual.py::test_apg_updates_of_a_residual_on_ptc_are_not_voided_by_the_laws_gain_at_T_con"
     ],
     "apg_hold_heading_sign": [
         f"{LEARNERS}each_apg_option_adds_the_gradient_of_its_documented_charge[hold_heading_weight]"
