@@ -20,8 +20,8 @@ def add_parser(sub: Any) -> None:
     from train.learning.benchmark import ENTRIES
 
     p = sub.add_parser("benchmark", help="RL protocol: agents x seeds, IQM with 95 %% CIs (rliable), learning curves",
-                       description="Train each agent with each seed on DWRPointStabilization-v1's reward, evaluate "
-                       "the learning curve on a fixed set and the final agent on the nominal and disturbed sets, and "
+                       description="Train each agent with each seed on its entry's env id and reward (v1's for a "
+                       "NAME:KEY=VALUE agent that names none), evaluate the learning curve on a fixed set and the final agent on the nominal and disturbed sets, and "
                        "aggregate over seeds (IQM, stratified bootstrap).")  # fmt: skip
     p.add_argument("--agents", nargs="+", default=["ppo", "sac", "tqc", "residual-ppo"], metavar="AGENT",
                    help=f"entries: {', '.join(ENTRIES)}, or NAME:KEY=VALUE,... with options of dwr-gym train "
