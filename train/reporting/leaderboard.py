@@ -55,6 +55,8 @@ ROWS: tuple[Row, ...] = (
         "apg-lagrangian-residual-ptc-v2", "benchmark", "python -m benchmarks run rl-constrained"),
     Row("PPO, jitted (v1)", "ppo_jax_v1", "docs/rl_benchmark/benchmark.json", "ppo-jax", "benchmark",
         "python -m benchmarks run rl-agents"),
+    Row("PPO-Lagrangian, jitted (v2, 30 min)", "-", "docs/rl_benchmark/constrained.json", "ppo-lagrangian-30min-v2",
+        "benchmark", "python -m benchmarks run rl-constrained"),
     Row("ES (v1, arena 50 m)", "es_v1", "docs/rl_benchmark/benchmark.json", "es-arena50", "benchmark",
         "python -m benchmarks run rl-agents"),
     Row("TQC, sbx (v2, 30 min)", "-", "docs/rl_benchmark/sbx_v2_30min_tqc.json", "tqc-sbx-v2", "benchmark",

@@ -74,15 +74,17 @@ def leaderboard_per_T_con(data: dict[str, Any]) -> str:
 
 
 def constraint_log_table(data: dict[str, Any]) -> str:
-    """Each constrained run's last logged violation rate, mean final heading and multipliers per T_con bin (the JSON
-    of ``python -m benchmarks run constraint-log``)."""
-    lines = ["| run | env steps | T_con [s] | violation rate | final heading [rad] | deadline multiplier | "
-             "heading multiplier |", "|---|---:|---|---:|---:|---:|---:|"]  # fmt: skip
-    for run in data["runs"]:
-        for row in run["bins"]:
-            lines.append(f"| {run['run']} | {run['timesteps']:,} | {row['T_con_low']:g}-{row['T_con_high']:g} | "
-                         f"{row['violation_rate']:.3f} | {row['heading']:.3f} | {row['deadline_multiplier']:.1f} | "
-                         f"{row['heading_multiplier']:.1f} |")  # fmt: skip
+    """Each constrained run's last logged violation rate, mean final heading and multipliers, a cell per measure with
+    its T_con bins in order, "/" between them (the JSON of ``python -m benchmarks run constraint-log``)."""
+    runs = data["runs"]
+    bins = " / ".join(f"{row['T_con_low']:g}-{row['T_con_high']:g}" for row in runs[0]["bins"]) if runs else ""
+    lines = [f"| run | env steps | violation rate ({bins} s) | final heading [rad] | deadline multiplier | "
+             "heading multiplier |", "|---|---:|---|---|---|---|"]  # fmt: skip
+    for run in runs:
+        cells = [" / ".join(f"{row[key]:{form}}" for row in run["bins"])
+                 for key, form in (("violation_rate", ".2f"), ("heading", ".2f"), ("deadline_multiplier", ".0f"),
+                                   ("heading_multiplier", ".0f"))]  # fmt: skip
+        lines.append(f"| {run['run']} | {run['timesteps']:,} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
 
