@@ -71,6 +71,8 @@ ROWS: tuple[Row, ...] = (
         "python -m benchmarks run robust-goal --n 200 --docs"),
     Row("the optimum", "-", "docs/compare/comparison.json", "optimal", "compare", "python -m benchmarks run compare"),
 )  # fmt: skip
+#: The env id of robust-goal's sets (``python -m benchmarks run robust-goal``: v1's episode end and in-time rule).
+ROBUST_GOAL_ENV_ID = "DWRPointStabilization-v1"
 #: The JSON of ``dwr-gym compare`` (the nominal numbers of the robust-goal rows).
 COMPARE_JSON = "docs/compare/comparison.json"
 
@@ -124,7 +126,8 @@ def measures(row: Row, root: Path = ROOT) -> dict[str, Any]:
                          final_heading=nominal["final_heading_error_mean"], env=nominal.get("env_id"))  # fmt: skip
         if disturbed is not None:
             cells["disturbed_in_time"] = disturbed["success_rate"]
-        if row.kind == "robust-goal":
+        # robust-goal's sets end as v1's episodes: its in-time cells stand beside compare's only on the same env id
+        if row.kind == "robust-goal" and cells["env"] in (None, ROBUST_GOAL_ENV_ID):
             for item in data["rows"]:
                 if item["policy"] == row.entry and item["set"] == "random" and int(item["T_con"]) in T_CONS:
                     cells[f"in_time_{int(item['T_con'])}"] = item["success_rate"]
