@@ -321,8 +321,10 @@ class RobustPTController(Controller):
             near = math.hypot(start[0], start[1]) < p.near_goal  # the last centimetres: the position alone
             least = least_arrival_time(start, max(reach[0], 1e-3), max(reach[1], 1e-3), not near)
             left = max(p.plan_arrival * T_con[i] - step[i] * p.dt, 1.1 * least, MIN_PLAN_INTERVALS * h)
-            if (left * 1.3 ** (PLAN_ATTEMPTS - 1) > MAX_PLAN_INTERVALS * h  # Guard: far away, a solve would not end
-                    or left > LONGEST_PLAN * T_con[i]):  # Guard: so slow (a failing wheel) the search rarely ends
+            if (
+                left * 1.3 ** (PLAN_ATTEMPTS - 1) > MAX_PLAN_INTERVALS * h  # Guard: far away, a solve would not end
+                or left > LONGEST_PLAN * T_con[i]
+            ):  # Guard: so slow (a failing wheel) the search rarely ends
                 self._phase[i] = FINISH
                 continue
             jobs[i] = {"start": start, "arrival_time": left, "dt": p.dt, "u_max": p.u_max, "omega_max": p.omega_max,

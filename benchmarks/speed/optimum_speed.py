@@ -55,7 +55,9 @@ def solve_before(jobs: list[tuple[tuple[float, float, float], float]]) -> NDArra
     for i in sorted(range(len(jobs)), key=lambda i: -jobs[i][1]):
         start, T_con = jobs[i]
         try:
-            energies[i] = solve_minimum_energy(start, T_con, 0.05, 0.5, 2.0, pad_to=BEFORE_PAD_TO, solver="ipopt").energy
+            energies[i] = solve_minimum_energy(
+                start, T_con, 0.05, 0.5, 2.0, pad_to=BEFORE_PAD_TO, solver="ipopt"
+            ).energy
         except OptimalControlError:
             pass
     return energies
@@ -91,10 +93,15 @@ def measure(n: int, seed: int, workers: int, before: bool) -> dict[str, Any]:
     chosen = sorted(np.random.default_rng(seed).choice(len(every), size=min(n, len(every)), replace=False))
     jobs = [every[i] for i in chosen]
     reference = shipped(jobs)
-    ways = {f"now: fatrop, padded to {PAD_TO}, coarse {COARSE}x then fine, a batch on {workers} threads":
-            lambda: solve_now(jobs, workers)}
+    ways = {
+        f"now: fatrop, padded to {PAD_TO}, coarse {COARSE}x then fine, a batch on {workers} threads": lambda: solve_now(
+            jobs, workers
+        )
+    }
     if before:
-        ways[f"before: IPOPT, padded to {BEFORE_PAD_TO} intervals, one search after another"] = lambda: solve_before(jobs)
+        ways[f"before: IPOPT, padded to {BEFORE_PAD_TO} intervals, one search after another"] = lambda: solve_before(
+            jobs
+        )
     results: dict[str, Any] = {}
     for label, solve in ways.items():
         minimum_energy_solver.cache_clear()
