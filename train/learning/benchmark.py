@@ -211,21 +211,13 @@ ENTRIES: dict[str, dict[str, Any]] = {
         "hyperparams": str(HYPERPARAMS_DIR / "ppo_jax_v2.yml"),
         "hyperparam_overrides": {"lagrangian": 1},
     },
-    # and for the 30 minutes of one core a seed (60 M env steps at its 33,000 a second), its schedules over them
-    "ppo-lagrangian-30min-v2": {
-        "algo": "ppo",
-        "backend": "jax",
-        "env_id": V2,
-        "hyperparams": str(HYPERPARAMS_DIR / "ppo_jax_v2.yml"),
-        "hyperparam_overrides": {"lagrangian": 1},
-        "total_timesteps": 60_000_000,
-        "eval_freq": 6_000_000,
-        "checkpoint_freq": 6_000_000,
-    },
     "sac-sbx-v2": {"algo": "sac", "backend": "sbx", "env_id": V2},
     "tqc-sbx-v2": {"algo": "tqc", "backend": "sbx", "env_id": V2},
     "crossq-sbx-v2": {"algo": "crossq", "backend": "sbx", "env_id": V2},
 }
+# PPO-Lagrangian for the 30 minutes of one core a seed (60 M env steps at its 33,000 a second), its schedules over them
+ENTRIES["ppo-lagrangian-30min-v2"] = {**ENTRIES["ppo-lagrangian-v2"], "total_timesteps": 60_000_000,
+                                      "eval_freq": 6_000_000, "checkpoint_freq": 6_000_000}  # fmt: skip
 RESULTS_DIR, RUNS_DIR = "results", "runs"
 
 

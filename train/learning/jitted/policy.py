@@ -10,6 +10,7 @@ SB3 model tensor for tensor.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field, fields
 from typing import Any
@@ -235,6 +236,15 @@ def activation_function(name: str) -> Any:
             "gelu": lambda x: nn.gelu(x, approximate=False), "sigmoid": nn.sigmoid}[name]  # fmt: skip
 
 
+def dense_layer(settings: PPOSettings, size: int, gain: float, name: str) -> Any:
+    """A dense layer of ``size`` as SB3 initialises one: orthogonal with ``gain`` (``ortho_init``, else LeCun normal),
+    zero bias."""
+    import flax.linen as nn
+
+    init = nn.initializers.orthogonal(gain) if settings.ortho_init else nn.initializers.lecun_normal()
+    return nn.Dense(size, kernel_init=init, bias_init=nn.initializers.zeros, name=name)
+
+
 def make_network(settings: PPOSettings, action_dim: int) -> Any:
     """The flax module ``ActorCritic``: obs (..., n) -> (mean (..., action_dim), log_std (action_dim,), value (...)).
 
@@ -244,10 +254,7 @@ def make_network(settings: PPOSettings, action_dim: int) -> Any:
     import flax.linen as nn
     import jax.numpy as jnp
 
-    def dense(size: int, gain: float, name: str) -> nn.Dense:
-        init = nn.initializers.orthogonal(gain) if settings.ortho_init else nn.initializers.lecun_normal()
-        return nn.Dense(size, kernel_init=init, bias_init=nn.initializers.zeros, name=name)
-
+    dense = functools.partial(dense_layer, settings)
     activation = activation_function(settings.activation)
 
     class ActorCritic(nn.Module):

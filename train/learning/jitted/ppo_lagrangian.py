@@ -30,6 +30,7 @@ The multipliers live in the runner (:class:`LagrangianRunner`), so a run saves a
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from typing import Any
 
@@ -39,7 +40,13 @@ import jax.numpy as jnp
 
 from train.learning.config import ConfigError
 from train.learning.jitted import lagrangian
-from train.learning.jitted.policy import PPOSettings, activation_function, gaussian_entropy, gaussian_log_prob
+from train.learning.jitted.policy import (
+    PPOSettings,
+    activation_function,
+    dense_layer,
+    gaussian_entropy,
+    gaussian_log_prob,
+)
 from train.learning.jitted.ppo import JaxPPO, Runner, Transition, clipped_surrogate, gae
 
 #: The env's info keys a transition keeps: the two costs (deadline, heading, in the order of
@@ -59,10 +66,7 @@ def make_cost_critic(settings: PPOSettings, costs: int) -> nn.Module:
     """The cost critic: obs (..., n) -> the value of each of ``costs`` costs (..., costs), an MLP of ``net_arch``
     with the value network's activation and initialisation (SB3's gains: sqrt(2) hidden, 1 for the head)."""
 
-    def dense(size: int, gain: float, name: str) -> nn.Dense:
-        init = nn.initializers.orthogonal(gain) if settings.ortho_init else nn.initializers.lecun_normal()
-        return nn.Dense(size, kernel_init=init, bias_init=nn.initializers.zeros, name=name)
-
+    dense = functools.partial(dense_layer, settings)
     activation = activation_function(settings.activation)
 
     class CostCritic(nn.Module):
