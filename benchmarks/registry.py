@@ -31,8 +31,6 @@ SUITE: dict[str, str] = {
     "constraint-log": "benchmarks.learning.constraint_log",
     "ship-rl-agents": "benchmarks.learning.ship_rl_agents",
     "per-t-con": "benchmarks.learning.per_t_con",
-    "prescribed-time-goal": "benchmarks.learning.prescribed_time_goal",
-    "sbx-learn": "benchmarks.learning.sbx_learn",
     # robustness: the deadline under disturbances
     "robustness": "benchmarks.robustness.robustness",
     "robust-goal": "benchmarks.robustness.robust_goal",
@@ -56,7 +54,6 @@ SUITE: dict[str, str] = {
     # recipes: the trainings behind the shipped agents and the docs' tables (long: hours)
     "agents-v0": "benchmarks/recipes/agents_v0.sh",
     "dagger-agents": "benchmarks/recipes/dagger_agents.sh",
-    "prescribed-time-agents": "benchmarks/recipes/prescribed_time_agents.sh",
     "rl-agents": "benchmarks/recipes/rl_agents.sh",
     "rl-v2": "benchmarks/recipes/rl_v2.sh",
     "rl-time-scale": "benchmarks/recipes/rl_time_scale.sh",
@@ -68,6 +65,7 @@ SUITE: dict[str, str] = {
     "rl-apg-hold": "benchmarks/recipes/rl_apg_hold.sh",
     "rl-apg-hold-heading10": "benchmarks/recipes/rl_apg_hold_heading10.sh",
     "rl-constrained": "benchmarks/recipes/rl_constrained.sh",
+    "sbx-tqc-v2": "benchmarks/recipes/sbx_tqc_v2.sh",
     "robust-rl": "benchmarks/recipes/robust_rl.sh",
 }
 

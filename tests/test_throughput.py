@@ -10,7 +10,7 @@ import pytest
 from benchmarks.core import docs
 from benchmarks.core.timing import background_load
 from benchmarks.speed import throughput
-from benchmarks.speed.throughput_report import goals
+from train.reporting.throughput_tables import goals
 
 
 @pytest.mark.parametrize("block", ["throughput", "compare-commits-loaded", "compare-commits-quiet", "instructions"])

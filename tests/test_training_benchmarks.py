@@ -42,27 +42,19 @@ def test_the_readmes_training_example_is_what_its_benchmark_measured() -> None:
     assert results["best"]["timesteps"] == best["timesteps"]  # the most episodes in time, then the least energy
 
 
-def test_a_recipe_is_replayed_with_only_seed_run_dir_env_and_budget_changed(tmp_path: Path) -> None:
+def test_a_recipe_is_replayed_with_only_seed_run_dir_and_budget_changed(tmp_path: Path) -> None:
     module = load("retrain_pretrained")
-    recorded = ["dwr-gym", "train", "--seed", "0", "--run-dir", "runs/ppo_s0", "--total-timesteps", "1500000",
-                "--env-kwargs", "heading_weight=5", "--no-progress"]  # fmt: skip
-    args = module.runnable(recorded, 2, tmp_path / "r", "DWRPointStabilization-v0", 0.5)[1:]
-    assert args == ["-m", "train.cli", "train", "--seed", "2", "--run-dir", str(tmp_path / "r"), "--total-timesteps",
-                    "750000", "--env-kwargs", "heading_weight=5", "--no-progress", "--env", "DWRPointStabilization-v0"]  # fmt: skip
-    moved = module.runnable(["python", "-m", "train.dagger", "--run-dir", "x", "--seed", "0", "--episodes", "250"], 1,
-                            tmp_path / "d", "DWRPointStabilization-v1", 1.0)[1:]  # fmt: skip
-    assert moved == [
-        "-m",
-        "train.learning.imitation.dagger",
-        "--run-dir",
-        str(tmp_path / "d"),
-        "--seed",
-        "1",
-        "--episodes",
-        "250",
-    ]
+    recorded = ["dwr-gym", "train", "--env", "DWRPointStabilization-v0", "--seed", "0", "--run-dir", "runs/ppo_s0",
+                "--total-timesteps", "1500000", "--env-kwargs", "heading_weight=5", "--no-progress"]  # fmt: skip
+    args = module.runnable(recorded, 2, tmp_path / "r", 0.5)[1:]
+    assert args == ["-m", "train.cli", "train", "--env", "DWRPointStabilization-v0", "--seed", "2", "--run-dir",
+                    str(tmp_path / "r"), "--total-timesteps", "750000", "--env-kwargs", "heading_weight=5",
+                    "--no-progress"]  # fmt: skip
+    dagger = module.runnable(["python", "-m", "train.learning.imitation.dagger", "--run-dir", "x", "--episodes", "250"],
+                             1, tmp_path / "d", 1.0)[1:]  # fmt: skip
+    assert dagger == ["-m", "train.learning.imitation.dagger", "--run-dir", str(tmp_path / "d"), "--episodes", "250"]
     with pytest.raises(ValueError, match="not dwr-gym or python"):
-        module.runnable(["bash", "train.sh"], 0, tmp_path, "DWRPointStabilization-v1", 1.0)
+        module.runnable(["bash", "train.sh"], 0, tmp_path, 1.0)
 
 
 def test_every_shipped_agent_has_a_recipe_this_checkout_can_run(tmp_path: Path) -> None:
@@ -73,7 +65,7 @@ def test_every_shipped_agent_has_a_recipe_this_checkout_can_run(tmp_path: Path) 
         steps, dirs = module.moved_run_dirs(module.recipe(agent), tmp_path / agent.name)
         assert dirs[-1] == tmp_path / agent.name
         for step, run_dir in zip(steps, dirs, strict=True):
-            command = module.runnable(step, 1, run_dir, "DWRPointStabilization-v1", 1.0)
+            command = module.runnable(step, 1, run_dir, 1.0)
             assert importlib.util.find_spec(command[command.index("-m") + 1]) is not None
             assert command[command.index("--run-dir") + 1] == str(run_dir)
     # robust: the DAgger hand-over network first, in a directory of its own, then robust DAgger starting from it

@@ -55,7 +55,7 @@ class Schema:
         return found
 
 
-#: What ``dwr-gym benchmark`` writes (its benchmark.json), which the RL recipes and sbx-learn copy under docs/.
+#: What ``dwr-gym benchmark`` writes (its benchmark.json), which the RL recipes copy under docs/.
 BENCHMARK = Schema({"budget": dict, "machine": str, "summary": dict, "references": dict, "best_seed": dict})
 
 

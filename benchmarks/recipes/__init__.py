@@ -38,6 +38,7 @@ BLOCKS: dict[str, tuple[Block, ...]] = {
             "rl-constrained",
         )
     },
+    "sbx-tqc-v2": _and_per_t_con("sbx-v2-30min-tqc"),
     "robust-rl": (table("rl-robust", Schema({"rows": list, "seed": int, "n": int, "seconds": NUMBER})),),
 }
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The DAgger hand-over agents, three seeds, then their prescribed-time goal.
+# The DAgger hand-over agents, three seeds.
 # The hand-over agents of the README's "Prescribed-time agents": minimum-energy plans from random
 # starts (0.3-3 m, T_con in [10, 60] s, DWRPointStabilization-v1), four DAgger rounds in which the network
 # drives and plans are solved again from the states it reaches, then the choice of the hand-over to the
@@ -15,5 +15,3 @@ for seed in 0 1 2; do
     --dagger-episodes 300 --replans-per-episode 5 --epochs 30 --workers 2 --near-goal-weight 1 \
     --handover-expert pt-astolfi --eval-episodes 200
 done
-# The goal, measured at T_con in {10, 20, 40, 60} on 500 random starts each (seed 0), the seeds as mean +- sd:
-python -m benchmarks run prescribed-time-goal runs/dagger_handover_s{0,1,2}

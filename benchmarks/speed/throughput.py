@@ -26,7 +26,7 @@ machine's load hit both sides of a ratio):
 
 Then the env-speed and busy-machine goals, met or not, and the machine and library versions. ``--docs`` writes
 every figure into the JSON, from which the results block of docs/throughput.md is rendered
-(:mod:`benchmarks.speed.throughput_report`). Compare two versions of the code with ``instructions`` (counts).
+(:mod:`train.reporting.throughput_tables`). Compare two versions of the code with ``instructions`` (counts).
 """
 
 from __future__ import annotations
@@ -52,8 +52,8 @@ from benchmarks.core.commands import parser_for
 from benchmarks.core.docs import Schema, fenced
 from benchmarks.core.record import cpu_model, report
 from benchmarks.core.timing import Stepper, background_load, interleaved, median_seconds, paired_ratio
-from benchmarks.speed.throughput_report import render
 from dwr_gym import model
+from train.reporting.throughput_tables import render
 
 ROOT = Path(__file__).resolve().parents[2]
 JSON_PATH = ROOT / "docs" / "throughput" / "throughput.json"

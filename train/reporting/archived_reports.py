@@ -1,7 +1,8 @@
 """The reports of answered probes whose measuring code left the suite, rendered from their archived JSON (the
 benchmarks entry ``archive`` declares their blocks): ES on v1 within a budget, residual PPO on the analytic laws at
 the jitted trainer's speed, `dwr-gym train`'s old defaults against its new, two commits of the env timed against
-each other, `dwr-gym train`'s threads under load, ES's speed, and the jitted PPO's time to the criteria. Each returns the block's lines."""
+each other, `dwr-gym train`'s threads under load, ES's speed, the jitted PPO's time to the criteria, and the learning
+curves of sbx's TQC on v2 beside keeping still. Each returns the block's lines."""
 
 from __future__ import annotations
 
@@ -242,4 +243,15 @@ def time_to_criteria(data: dict[str, Any]) -> list[str]:
               f"{statistics.median(r['turning_share'] for r in last):.0%} of the squared commands from turning"]  # fmt: skip
     verdict = "met" if data["met"] else "NOT met"
     lines += ["", f"goal <= {data['goal_s']:.0f} s each: median {data['median_time_s']:.0f} s, {verdict}"]
+    return lines
+
+
+def sbx_curves(data: dict[str, Any]) -> list[str]:
+    """Each seed's learning curve in brief (peak and last in-time rate) beside the return of keeping still."""
+    lines = [f"{'run':<22}{'peak in time':>13}{'at env steps':>14}{'last in time':>13}{'last return':>12}"
+             f"{'keeping still':>14}{'final distance':>15}{'energy':>8}"]  # fmt: skip
+    for name, seed in data["seeds"].items():
+        lines.append(f"{name:<22}{seed['peak_in_time']:>13.1%}{seed['peak_env_steps']:>14,}{seed['last_in_time']:>13.1%}"
+                     f"{seed['last_return']:>12.2f}{seed['still_return']:>14.2f}{seed['last_final_distance']:>13.2f} m"
+                     f"{seed['last_energy']:>8.2f}")  # fmt: skip
     return lines

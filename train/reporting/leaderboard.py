@@ -60,7 +60,7 @@ ROWS: tuple[Row, ...] = (
     Row("ES (v1, arena 50 m)", "es_v1", "docs/rl_benchmark/benchmark.json", "es-arena50", "benchmark",
         "python -m benchmarks run rl-agents"),
     Row("TQC, sbx (v2, 30 min)", "-", "docs/rl_benchmark/sbx_v2_30min_tqc.json", "tqc-sbx-v2", "benchmark",
-        "python -m benchmarks run sbx-learn v2-30min-tqc --docs"),
+        "python -m benchmarks run sbx-tqc-v2"),
     Row("cloned from robust-pt (v1)", "robust", "docs/robust/goal.json", "robust", "robust-goal",
         "python -m benchmarks run robust-goal --n 200 --docs"),
     Row("PTC, the paper's law (16)-(19)", "-", "docs/rl_benchmark/apg_hold_heading10.json", "ptc", "reference",

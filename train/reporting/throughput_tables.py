@@ -1,4 +1,4 @@
-"""The report of ``throughput``: its goals and its lines, from the JSON alone."""
+"""The report of the ``throughput`` benchmark (docs/throughput.md): its goals and its lines, from its JSON alone."""
 
 from __future__ import annotations
 
