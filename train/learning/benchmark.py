@@ -142,6 +142,16 @@ ENTRIES: dict[str, dict[str, Any]] = {
         "eval_freq": 25_000_000,
         "checkpoint_freq": 25_000_000,
     },
+    # the residual on PTC by APG (train/hyperparams/residual_apg.yml): the shipped apg_residual_ptc_v2's entry
+    "apg-residual-v2": {
+        "algo": "apg",
+        "backend": "jax",
+        "env_id": V2,
+        "residual": True,
+        "expert": "ptc",
+        "eval_freq": 10_000_000,
+        "checkpoint_freq": 10_000_000,
+    },
     # the same, its policy first cloned from an open-loop teacher (train/hyperparams/apg_teacher.yml)
     "apg-teacher-v2": {
         "algo": "apg",

@@ -1,0 +1,71 @@
+"""The leaderboard's reproducing commands train what was shipped: each shipped learner's benchmark entry (the row's
+``dwr-gym benchmark`` entry, as its recipe runs it) asks for the same run as the command its config.yaml recorded."""
+
+from __future__ import annotations
+
+import shlex
+from pathlib import Path
+from typing import Any
+
+import pytest
+import yaml
+
+from train.learning.agents import PRETRAINED_DIR
+from train.learning.benchmark import parse_entry, train_config
+from train.reporting.leaderboard import ROWS
+
+ROOT = Path(__file__).resolve().parents[1]
+#: What a run trains with (beside the budget, which the entry or the recipe sets).
+TRAINED_WITH = ("env_id", "algo", "backend", "residual", "expert", "action_time_scale", "hyperparam_overrides",
+                "env_kwargs", "threads")  # fmt: skip
+SHIPPED_LEARNERS = [row for row in ROWS if row.kind == "benchmark" and row.agent != "-"]
+
+
+def recorded_config(agent: str, monkeypatch: pytest.MonkeyPatch) -> Any:
+    """The TrainConfig the shipped agent's recorded ``dwr-gym train`` command parses into (training stubbed)."""
+    import train.learning.training as training
+    from train.cli import main
+
+    command = [str(word) for word in yaml.safe_load((PRETRAINED_DIR / agent / "config.yaml").read_text())["command"]]
+    assert Path(command[0]).name == "dwr-gym" and command[1] == "train", shlex.join(command)
+    caught: list[Any] = []
+    monkeypatch.setattr(training, "train", lambda config, command=None: caught.append(config))
+    monkeypatch.chdir(ROOT)  # the commands name the repository's hyperparameter files
+    assert main(command[1:]) == 0
+    return caught[0]
+
+
+def recipe_option(recipe: str, entry: str, flag: str) -> str | None:
+    """The value the recipe script behind ``entry`` gives ``flag`` (None where it leaves it to the default)."""
+    text = (ROOT / "benchmarks" / "recipes" / recipe).read_text().replace("\\\n", " ")
+    line = next(line for line in text.splitlines() if "dwr-gym benchmark" in line and entry in line)
+    words = shlex.split(line.split("#")[0])
+    return words[words.index(flag) + 1] if flag in words else None
+
+
+def test_every_shipped_learner_has_a_benchmark_row() -> None:
+    assert {row.agent for row in SHIPPED_LEARNERS} >= {"apg_v2", "apg_residual_ptc_v2", "ppo_jax_v1", "es_v1"}
+
+
+@pytest.mark.parametrize("row", SHIPPED_LEARNERS, ids=lambda row: row.agent)
+def test_the_rows_entry_trains_what_the_shipped_agent_was_trained_with(
+    row: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    shipped = recorded_config(row.agent, monkeypatch)
+    recipe = row.reproduce.split()[-1].replace("-", "_") + ".sh"
+    # the recipe's own agent options (``NAME:threads=1``) and budget, as `dwr-gym benchmark` passes them on
+    text = (ROOT / "benchmarks" / "recipes" / recipe).read_text()
+    words = [word.strip("\"'") for word in text.split()]
+    options = next((word for word in words if word.startswith(f"{row.entry}:")), row.entry)
+    budget: dict[str, Any] = {"eval_episodes": int(recipe_option(recipe, row.entry, "--eval-episodes") or 1000)}
+    for key, flag in (("env_steps", "--env-steps"), ("eval_freq", "--eval-freq")):
+        if (value := recipe_option(recipe, row.entry, flag)) is not None:
+            budget[key] = int(value)
+    entry = parse_entry(options)
+    config = train_config(entry, shipped.seed, tmp_path / "run", budget)
+    for key in (*TRAINED_WITH, "total_timesteps", "eval_freq", "checkpoint_freq", "eval_episodes", "eval_seed"):
+        assert getattr(config, key) == getattr(shipped, key), (
+            f"{row.agent}: {key} is {getattr(config, key)!r} by the entry {row.entry!r} of {recipe}, "
+            f"{getattr(shipped, key)!r} by the shipped agent's recorded command"
+        )
+    assert Path(config.hyperparams or "").resolve() == Path(ROOT / (shipped.hyperparams or "")).resolve()
