@@ -67,7 +67,8 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
     # the measures' modules, with the oracles of every published measure (tests/oracles.py)
     "evaluation": (["train/evaluation/rollout.py", "train/evaluation/scenarios.py", "train/evaluation/evaluate.py"],
                    ["tests/test_oracles.py", "tests/test_controllers.py", "tests/test_optimal.py",
-                    "tests/test_prescribed_time.py", "tests/test_robustness.py"]),
+                    "tests/test_prescribed_time.py", "tests/test_robustness.py", "tests/test_stages.py",
+                    "tests/test_first_hour_progress.py::test_evaluate_and_the_optimum_show_such_bars"]),
     "learning": (["train/learning/imitation/dagger.py", "train/learning/imitation/robust_dagger.py",
                   "train/learning/residual.py"],
                  ["tests/test_dagger.py", "tests/test_robust_dagger.py", "tests/test_residual.py",
@@ -103,6 +104,7 @@ EXTRA = {"robust": ("shipped",),
          # two seeds instead), and the RL options' training runs
          "protocol": ("trains_evaluates_and_aggregates", "tqc_and_crossq", "normalised_observations", "energy_split"),
          "guards": ("ctrl_c", "train_runs_on_one_thread"),
+         "evaluation": ("evaluate_rows_carry_each_stage_time",),  # a command in a subprocess
          # an xfail test cannot fail a mutant; the CLI refusal runs in a subprocess; the docs block is not the code's
          "jax_env": ("v2_steps_equal",),
          "jax_ppo": ("backend_jax_refuses", "each_docs_block")}  # fmt: skip
