@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -235,3 +237,114 @@ def test_shipped_configs_name_no_directory_of_the_machine_that_trained_them() ->
     assert portable_config("- /work/copy/train/hyperparams/a.yml\n", Path("/tmp/wt3")) == "- train/hyperparams/a.yml\n"
     for config in sorted((ROOT / "train" / "pretrained").glob("*/config.yaml")):
         assert "/train/hyperparams/" not in config.read_text().replace(" train/hyperparams/", ""), config
+
+
+def seed_result(entry: str, seed: int, in_time: float | None, ratio: float | None, heading: float = 0.05,
+                sets: tuple[str, ...] = ("random",)) -> dict[str, Any]:  # fmt: skip
+    """One (entry, seed) of dwr-gym benchmark's results, evaluated on ``sets`` with the same metrics on each."""
+    metrics = {"in_time": in_time, "energy_ratio": ratio, "final_heading": heading, "energy": 1.0}
+    return {"entry": entry, "seed": seed, "sets": dict.fromkeys(sets, metrics), "curve": [], "seconds": 60.0}
+
+
+def table_rows(text: str) -> dict[str, list[str]]:
+    """A markdown table's body: {first cell: the other cells}."""
+    rows = [line.strip().strip("|").split(" | ") for line in text.splitlines()[2:] if line.startswith("|")]
+    return {row[0].strip(): [cell.strip() for cell in row[1:]] for row in rows}
+
+
+VERDICT = re.compile(r"(?P<value>-|\d+\.\d+) \((?:goal )?(?P<op>>=|<=) (?P<target>[\d.]+)\): (?P<verdict>.+)")
+
+
+def verdict(cell: str) -> tuple[str, str, float, str]:
+    """A goals-table cell read back: (value, comparison, target, verdict)."""
+    match = VERDICT.fullmatch(cell)
+    assert match, f"not a verdict cell: {cell!r}"
+    return match["value"], match["op"], float(match["target"]), match["verdict"]
+
+
+def test_a_figure_exactly_at_its_goal_meets_it_and_one_just_past_does_not() -> None:
+    """The goals read 'in time >= 99 %', 'E/opt <= 1.5', 'heading <= 0.1 rad': the boundary itself is met."""
+    from train.goals import FROM_REWARD as GOAL
+    from train.reporting.rl_benchmark import goals_table
+
+    at = aggregate([seed_result("ppo", 0, GOAL.in_time, GOAL.energy_ratio, GOAL.final_heading)])
+    assert at["ppo"]["sets"]["random"]["in_time"]["iqm"] == GOAL.in_time  # one seed: the IQM is its value
+    cells = table_rows(goals_table(at))[GOAL.name]
+    assert cells[:2] == ["ppo", "1"]
+    figures = {"in time": (">=", GOAL.in_time), "E/opt": ("<=", GOAL.energy_ratio),
+               "heading": ("<=", GOAL.final_heading)}  # fmt: skip
+    for cell, (name, (op, target)) in zip(cells[2:5], figures.items(), strict=True):
+        assert verdict(cell)[1:] == (op, target, "met"), (name, cell)
+    past = aggregate(
+        [seed_result("ppo", 0, GOAL.in_time - 0.001, GOAL.energy_ratio + 0.001, GOAL.final_heading + 0.001)]
+    )
+    for cell, name in zip(table_rows(goals_table(past))[GOAL.name][2:5], figures, strict=True):
+        assert verdict(cell)[3] == "not met", (name, cell)
+
+
+def test_a_figure_not_measured_is_not_reached_and_still_names_its_goal() -> None:
+    """E/opt with no episode in time, or an in-time rate recorded as None, reads '-' and 'not reached' beside the
+    goal's own comparison and target, never 'met'."""
+    from train.goals import FROM_REWARD as GOAL
+    from train.reporting.rl_benchmark import goals_table
+
+    cells = table_rows(goals_table(aggregate([seed_result("sac", 0, 0.0, None)])))[GOAL.name]
+    assert verdict(cells[2]) == ("0.000", ">=", GOAL.in_time, "not met")
+    assert verdict(cells[3]) == ("-", "<=", GOAL.energy_ratio, "not reached")
+    cells = table_rows(goals_table(aggregate([seed_result("sac", 0, None, None)])))[GOAL.name]
+    assert verdict(cells[2]) == ("-", ">=", GOAL.in_time, "not reached")
+
+
+def test_the_best_agent_for_a_goal_is_the_one_most_in_time() -> None:
+    """An agent that never arrives in time (0.0, listed first) or whose rate is unknown is not the best over one
+    that arrives half the time."""
+    from train.goals import FROM_REWARD as GOAL
+    from train.reporting.rl_benchmark import goals_table
+
+    for never in (0.0, None):
+        summary = aggregate([seed_result("ppo", 0, never, None), seed_result("sac", 0, 0.5, 3.0)])
+        best = table_rows(goals_table(summary))[GOAL.name][0]
+        assert best == "sac", (never, best)
+
+
+def test_the_goals_table_lists_a_later_goal_when_an_earlier_one_has_no_agent() -> None:
+    """A benchmark run of the residual agent alone still shows the residual goal (the first goal has no candidate)."""
+    from train.goals import FROM_REWARD, RESIDUAL_ON_PTC
+    from train.reporting.rl_benchmark import goals_table
+
+    rows = table_rows(goals_table(aggregate([seed_result("residual-ppo", 0, 1.0, 1.2)])))
+    assert list(rows) == [RESIDUAL_ON_PTC.name] and rows[RESIDUAL_ON_PTC.name][0] == "residual-ppo"
+    rows = table_rows(
+        goals_table(aggregate([seed_result("residual-ppo", 0, 1.0, 1.2), seed_result("td3", 0, 0.9, 2.0)]))
+    )
+    assert list(rows) == [FROM_REWARD.name, RESIDUAL_ON_PTC.name]
+
+
+def test_the_disturbed_table_shows_a_dash_for_a_set_an_entry_or_a_law_was_not_evaluated_on() -> None:
+    from train.evaluation.benchmark import SETS
+    from train.reporting.rl_benchmark import disturbed_table
+
+    summary = aggregate([seed_result("a", 0, 0.8, 1.2, sets=("random", "delay"))])
+    references = {"ptc": {"random": {"in_time": 1.0}, "delay": {"in_time": 0.75}}}
+    text = disturbed_table(summary, references)
+    names = [s for s in SETS if s != "random"]
+    assert text.splitlines()[0].count(": in time") == len(names)
+    rows = table_rows(text)
+    for row, value in (("a", "0.80 [0.80, 0.80]"), ("ptc (controller)", "0.75")):
+        expected = [value if s == "delay" else "-" for s in names]
+        assert rows[row] == expected, (row, rows[row], expected)
+
+
+def test_the_diagnosis_table_of_one_noise_level_shows_a_dash_for_e_over_opt_it_could_not_measure() -> None:
+    """A diagnosis of a single sigma renders, its footnote's optimum from that row; E/opt undefined reads '-'."""
+    from train.reporting.rl_benchmark import diagnosis_table
+
+    row = {"sigma": 1.0, "in_time": 0.0, "energy": 70.0, "energy_ratio": None, "return": -140.0,
+           "optimal_energy": 0.34, "episode_seconds": 30.0, "noise_cost_per_second": 4.0}  # fmt: skip
+    data = {"n": 200, "seed": 3232, "energy_weight": 2.0, "arrival_bonus": 10.0, "rows": [row]}
+    text = diagnosis_table(data)
+    assert table_rows(text)["1.00"][:3] == ["0.000", "70.00", "-"]
+    footnote = re.search(r"optimum's mean energy (\S+), i\.e\. a reward of (\S+);", text)
+    assert footnote and (float(footnote[1]), float(footnote[2])) == (0.34, -0.68), footnote
+    ratio = table_rows(diagnosis_table({**data, "rows": [{**row, "energy_ratio": 200.0}]}))["1.00"][2]
+    assert ratio == "200.00"
