@@ -18,6 +18,7 @@ from train.reporting.rl_benchmark import (
     diagnosis_table,
     disturbed_table,
     goals_table,
+    iqm_interval,
     plot_curves,
     residual_table,
     rushing_table,
@@ -157,11 +158,12 @@ def test_the_curves_figure_draws_each_entrys_iqm_and_its_translucent_band_side_b
     """In time and energy side by side; per entry (those after an entry without a curve too) a line through the
     IQM at the curve's x and a translucent band from the interval's low to its high, in the line's colour."""
     pytest.importorskip("matplotlib")
-    import matplotlib.pyplot as plt
     from matplotlib.colors import to_rgb
+    from matplotlib.figure import Figure
 
-    figures: list[Any] = []
-    monkeypatch.setattr(plt, "close", figures.append)  # keep the figure to read it back
+    figures: list[Figure] = []
+    real_savefig = Figure.savefig
+    monkeypatch.setattr(Figure, "savefig", lambda fig, *a, **k: figures.append(fig) or real_savefig(fig, *a, **k))
     curve = [{"env_steps": 0.0, "wall_time": 0.0, "in_time": 0.0, "energy": 9.0, "final_heading": 1.0},
              {"env_steps": 100.0, "wall_time": 5.0, "in_time": 0.5, "energy": 3.0, "final_heading": 0.5}]  # fmt: skip
     results = [seed_result("empty", 0, 0.1, None)]
@@ -186,3 +188,75 @@ def test_the_curves_figure_draws_each_entrys_iqm_and_its_translucent_band_side_b
         assert band["low"] != band["high"]
         face = fill.get_facecolor()[0]
         assert face[3] < 1.0 and to_rgb(face) == to_rgb(line.get_color()), (face, line.get_color())
+
+
+def test_the_curves_figure_names_its_axes_and_is_written_into_a_folder_not_yet_made(tmp_path: Path) -> None:
+    """The x axis says env steps or wall-clock seconds as asked; the grid is faint, the legend's text smaller than
+    the axes' labels; the file goes into a folder made for it, however deep; no figure is left open."""
+    pytest.importorskip("matplotlib")
+    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
+
+    curve = [{"env_steps": 0.0, "wall_time": 0.0, "in_time": 0.0, "energy": 9.0, "final_heading": 1.0},
+             {"env_steps": 100.0, "wall_time": 5.0, "in_time": 0.5, "energy": 3.0, "final_heading": 0.5}]  # fmt: skip
+    summary = aggregate([{**seed_result("a", s, 0.5, 1.2), "curve": curve} for s in (0, 1)])
+    figures: list[Figure] = []
+    real_savefig = Figure.savefig
+    open_before = plt.get_fignums()
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(Figure, "savefig", lambda fig, *a, **k: figures.append(fig) or real_savefig(fig, *a, **k))
+        for x in ("env_steps", "wall_time"):
+            path = tmp_path / "new" / "deeper" / f"curves_{x}.png"
+            plot_curves(summary, path, x)
+            assert path.is_file()
+    assert plt.get_fignums() == open_before
+    for fig, words in zip(figures, ("env steps", "wall-clock seconds"), strict=True):
+        for ax in fig.axes:
+            assert ax.get_xlabel().startswith(words), (words, ax.get_xlabel())
+            grid = ax.get_xgridlines() + ax.get_ygridlines()
+            assert all(line.get_visible() and (line.get_alpha() or 1.0) < 1.0 for line in grid)
+        legend = fig.axes[0].get_legend()
+        assert legend.get_texts()[0].get_fontsize() < fig.axes[0].yaxis.label.get_fontsize()
+
+
+def test_the_curves_band_spans_the_shortest_run_on_its_grid_and_a_run_of_one_evaluation_is_one_point() -> None:
+    """The grid runs from 0 to the last evaluation of the shortest run (not its second) in CURVE_POINTS points, for
+    an extent under 1 too; runs evaluated only at 0 give one point, the seeds' IQM there."""
+    from train.reporting.rl_benchmark import CURVE_POINTS, curve_band
+
+    def run(*xs: float) -> list[dict[str, float]]:
+        return [{"wall_time": x, "in_time": x / 10.0} for x in xs]
+
+    band = curve_band([run(0.0, 2.0, 5.0), run(0.0, 1.0, 4.0, 8.0)], "wall_time", "in_time")
+    assert len(band["x"]) == CURVE_POINTS and band["x"][0] == 0.0 and band["x"][-1] == 5.0, band["x"]
+    short = curve_band([run(0.0, 0.25, 0.5), run(0.0, 0.5)], "wall_time", "in_time")
+    assert len(short["x"]) == CURVE_POINTS and short["x"][-1] == 0.5, short["x"]
+    start = [[{"wall_time": 0.0, "in_time": v}] for v in (0.2, 0.4, 0.9)]
+    band = curve_band(start, "wall_time", "in_time")
+    assert band["x"] == [0.0] and band["iqm"] == pytest.approx([iqm_interval([0.2, 0.4, 0.9])["iqm"]]), band
+
+
+def test_the_aggregate_counts_env_steps_and_reads_a_result_without_its_env_as_v1() -> None:
+    """The env steps' IQM over seeds (a result without them: none); a result recorded before its env id was (an
+    earlier run's) is v1's, the task's env."""
+    from train.env_ids import TASK_ENV_ID
+
+    results = [{**seed_result("a", s, 0.5, 1.2), "env_steps": steps} for s, steps in enumerate((1000, 2000, 3000))]
+    summary = aggregate([*results, seed_result("b", 0, 0.5, 1.2)])
+    assert summary["a"]["env_steps"]["iqm"] == pytest.approx(2000.0) and summary["b"]["env_steps"]["iqm"] is None
+    assert summary["a"]["env_id"] == summary["b"]["env_id"] == TASK_ENV_ID == "DWRPointStabilization-v1"
+
+
+def test_the_tables_show_a_dash_for_a_laws_missing_figure_and_list_entries_after_one_without_per_T_con_sets() -> None:
+    """A law without E/opt on the nominal set reads '-' there; an entry evaluated on the nominal set alone is left out
+    of the per-T_con table, not the entries after it; an entry kept from an earlier run's docs without its env id
+    reads v1."""
+    from train.reporting.rl_benchmark import per_T_con_table, table
+
+    summary = aggregate([seed_result("nominal-only", 0, 0.9, 1.2), seed_result("a", 0, 0.8, 1.3, sets=("T_con=10",))])
+    law = {"ptc": {"random": {"in_time": 1.0, "energy_ratio": None, "final_heading": 0.02, "energy": 0.7}}}
+    assert table_rows(table(summary, law))["ptc (controller)"][3:] == ["1.000", "-", "0.02", "0.70"]
+    rows = table_rows(per_T_con_table(summary))
+    assert list(rows) == ["a"] and rows["a"][0] == "v1", rows
+    del summary["a"]["env_id"]
+    assert table_rows(per_T_con_table(summary))["a"][0] == "v1"
