@@ -85,6 +85,7 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
     "protocol": (["train/learning/benchmark.py", "train/evaluation/benchmark.py", "train/reporting/rl_benchmark.py"],
                  ["tests/test_oracles.py", "tests/test_rl_protocol.py", "tests/test_rl_benchmark.py",
                   "tests/test_benchmark_entries.py",
+                  "tests/test_rl_benchmark_tables.py",
                   "tests/test_docs.py::test_every_generated_block_names_its_producer_and_is_what_its_json_renders"]),
     "datasets": (["train/datasets/*"], ["tests/test_datasets.py"]),
     # the first-hour tests of the optimum's cache only (the others train agents, minutes per mutant)
