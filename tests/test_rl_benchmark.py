@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -235,3 +236,35 @@ def test_shipped_configs_name_no_directory_of_the_machine_that_trained_them() ->
     assert portable_config("- /work/copy/train/hyperparams/a.yml\n", Path("/tmp/wt3")) == "- train/hyperparams/a.yml\n"
     for config in sorted((ROOT / "train" / "pretrained").glob("*/config.yaml")):
         assert "/train/hyperparams/" not in config.read_text().replace(" train/hyperparams/", ""), config
+
+
+def test_the_benchmarks_evaluation_rolls_the_nominal_set_out_once_when_e_over_opt_takes_all_its_episodes(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """With n_optimum >= n the nominal set's E/opt is over its own n episodes, measured in the one rollout of it (a
+    second would cost its time again); the disturbed sets stay without E/opt. The evaluation is silent unless asked
+    for its progress, which then goes to stderr."""
+    import oracles
+
+    from train.evaluation import benchmark
+
+    oracles.use_stand_in_optimum(monkeypatch)
+    rolled: list[tuple[str, int]] = []
+    evaluate_sets = benchmark.evaluate_sets
+
+    def counted(*args: Any, **kwargs: Any) -> list[dict[str, Any]]:  # (set, episodes) of each rollout
+        rolled.append((args[1][0], args[2]))
+        return evaluate_sets(*args, **kwargs)
+
+    monkeypatch.setattr(benchmark, "evaluate_sets", counted)
+    for n_optimum in (2, 5):
+        rolled.clear()
+        sets = benchmark.evaluate_policy("ptc", n=2, n_disturbed=1, n_optimum=n_optimum, sets=("random", "delay"),
+                                         per_T_con=())  # fmt: skip
+        assert rolled == [("random", 2), ("delay", 1)], (n_optimum, rolled)
+        assert sets["delay"]["energy_ratio"] is None and sets["random"]["energy_ratio"] is not None
+        alone = benchmark.evaluate_policy("ptc", n=2, n_disturbed=1, n_optimum=None, sets=("random",), per_T_con=())
+        assert sets["random"] == alone["random"], (n_optimum, sets["random"], alone["random"])
+    assert capsys.readouterr().err == ""
+    benchmark.evaluate_policy("ptc", n=1, n_disturbed=1, sets=("random",), per_T_con=(), progress=True)
+    assert "%" in capsys.readouterr().err
