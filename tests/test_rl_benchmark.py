@@ -242,29 +242,31 @@ def test_the_benchmarks_evaluation_rolls_the_nominal_set_out_once_when_e_over_op
     monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """With n_optimum >= n the nominal set's E/opt is over its own n episodes, measured in the one rollout of it (a
-    second would cost its time again); the disturbed sets stay without E/opt. The evaluation is silent unless asked
-    for its progress, which then goes to stderr."""
+    second would cost its time again); the disturbed sets stay without E/opt. Each rollout (E/opt's set of n_optimum
+    episodes too) is silent unless asked for its progress, which then goes to stderr."""
     import oracles
 
     from train.evaluation import benchmark
 
     oracles.use_stand_in_optimum(monkeypatch)
-    rolled: list[tuple[str, int]] = []
+    rolled: list[tuple[str, int, str]] = []
     evaluate_sets = benchmark.evaluate_sets
 
-    def counted(*args: Any, **kwargs: Any) -> list[dict[str, Any]]:  # (set, episodes) of each rollout
-        rolled.append((args[1][0], args[2]))
-        return evaluate_sets(*args, **kwargs)
+    def counted(*args: Any, **kwargs: Any) -> list[dict[str, Any]]:  # (set, episodes, stderr) of each rollout
+        rows = evaluate_sets(*args, **kwargs)
+        rolled.append((args[1][0], args[2], capsys.readouterr().err))
+        return rows
 
     monkeypatch.setattr(benchmark, "evaluate_sets", counted)
     for n_optimum in (2, 5):
         rolled.clear()
         sets = benchmark.evaluate_policy("ptc", n=2, n_disturbed=1, n_optimum=n_optimum, sets=("random", "delay"),
                                          per_T_con=())  # fmt: skip
-        assert rolled == [("random", 2), ("delay", 1)], (n_optimum, rolled)
+        assert rolled == [("random", 2, ""), ("delay", 1, "")], (n_optimum, rolled)
         assert sets["delay"]["energy_ratio"] is None and sets["random"]["energy_ratio"] is not None
         alone = benchmark.evaluate_policy("ptc", n=2, n_disturbed=1, n_optimum=None, sets=("random",), per_T_con=())
         assert sets["random"] == alone["random"], (n_optimum, sets["random"], alone["random"])
-    assert capsys.readouterr().err == ""
-    benchmark.evaluate_policy("ptc", n=1, n_disturbed=1, sets=("random",), per_T_con=(), progress=True)
-    assert "%" in capsys.readouterr().err
+    rolled.clear()
+    benchmark.evaluate_policy("ptc", n=2, n_disturbed=1, n_optimum=1, sets=("random",), per_T_con=(), progress=True)
+    assert [(name, n) for name, n, _ in rolled] == [("random", 2), ("random", 1)]
+    assert all("%" in err for _, _, err in rolled), rolled
