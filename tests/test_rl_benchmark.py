@@ -243,7 +243,7 @@ def test_the_benchmarks_evaluation_rolls_the_nominal_set_out_once_when_e_over_op
 ) -> None:
     """With n_optimum >= n the nominal set's E/opt is over its own n episodes, measured in the one rollout of it (a
     second would cost its time again); the disturbed sets stay without E/opt. Each rollout (E/opt's set of n_optimum
-    episodes too) is silent unless asked for its progress, which then goes to stderr."""
+    episodes and the per-T_con sets too) is silent unless asked for its progress, which then goes to stderr."""
     import oracles
 
     from train.evaluation import benchmark
@@ -267,6 +267,7 @@ def test_the_benchmarks_evaluation_rolls_the_nominal_set_out_once_when_e_over_op
         alone = benchmark.evaluate_policy("ptc", n=2, n_disturbed=1, n_optimum=None, sets=("random",), per_T_con=())
         assert sets["random"] == alone["random"], (n_optimum, sets["random"], alone["random"])
     rolled.clear()
-    benchmark.evaluate_policy("ptc", n=2, n_disturbed=1, n_optimum=1, sets=("random",), per_T_con=(), progress=True)
-    assert [(name, n) for name, n, _ in rolled] == [("random", 2), ("random", 1)]
+    benchmark.evaluate_policy("ptc", n=2, n_disturbed=1, n_optimum=1, sets=("random",), per_T_con=(10.0,),
+                              n_per_T_con=1, progress=True)  # fmt: skip
+    assert [(name, n) for name, n, _ in rolled] == [("random", 2), ("random", 1), ("random", 1)]
     assert all("%" in err for _, _, err in rolled), rolled
