@@ -271,3 +271,12 @@ def test_the_benchmarks_evaluation_rolls_the_nominal_set_out_once_when_e_over_op
                               n_per_T_con=1, progress=True)  # fmt: skip
     assert [(name, n) for name, n, _ in rolled] == [("random", 2), ("random", 1), ("random", 1)]
     assert all("%" in err for _, _, err in rolled), rolled
+
+
+def test_a_summary_without_a_metric_gives_none_for_it_not_a_crash() -> None:
+    """A rollout summary that lacks a measure (a row of another tool's, or one written before the measure existed)
+    reads None there, as an undefined one does; the measures it holds are kept."""
+    from train.evaluation.benchmark import metrics_of
+
+    got = metrics_of({"success_rate": 0.75, "energy_mean": 2.5, "final_heading_error_mean": float("nan")})
+    assert got == {"in_time": 0.75, "energy_ratio": None, "final_heading": None, "energy": 2.5}, got
