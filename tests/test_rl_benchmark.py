@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -235,3 +236,47 @@ def test_shipped_configs_name_no_directory_of_the_machine_that_trained_them() ->
     assert portable_config("- /work/copy/train/hyperparams/a.yml\n", Path("/tmp/wt3")) == "- train/hyperparams/a.yml\n"
     for config in sorted((ROOT / "train" / "pretrained").glob("*/config.yaml")):
         assert "/train/hyperparams/" not in config.read_text().replace(" train/hyperparams/", ""), config
+
+
+def test_the_benchmarks_evaluation_rolls_the_nominal_set_out_once_when_e_over_opt_takes_all_its_episodes(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """With n_optimum >= n the nominal set's E/opt is over its own n episodes, measured in the one rollout of it (a
+    second would cost its time again); the disturbed sets stay without E/opt. Each rollout (E/opt's set of n_optimum
+    episodes and the per-T_con sets too) is silent unless asked for its progress, which then goes to stderr."""
+    import oracles
+
+    from train.evaluation import benchmark
+
+    oracles.use_stand_in_optimum(monkeypatch)
+    rolled: list[tuple[str, int, str]] = []
+    evaluate_sets = benchmark.evaluate_sets
+
+    def counted(*args: Any, **kwargs: Any) -> list[dict[str, Any]]:  # (set, episodes, stderr) of each rollout
+        rows = evaluate_sets(*args, **kwargs)
+        rolled.append((args[1][0], args[2], capsys.readouterr().err))
+        return rows
+
+    monkeypatch.setattr(benchmark, "evaluate_sets", counted)
+    for n_optimum in (2, 5):
+        rolled.clear()
+        sets = benchmark.evaluate_policy("ptc", n=2, n_disturbed=1, n_optimum=n_optimum, sets=("random", "delay"),
+                                         per_T_con=())  # fmt: skip
+        assert rolled == [("random", 2, ""), ("delay", 1, "")], (n_optimum, rolled)
+        assert sets["delay"]["energy_ratio"] is None and sets["random"]["energy_ratio"] is not None
+        alone = benchmark.evaluate_policy("ptc", n=2, n_disturbed=1, n_optimum=None, sets=("random",), per_T_con=())
+        assert sets["random"] == alone["random"], (n_optimum, sets["random"], alone["random"])
+    rolled.clear()
+    benchmark.evaluate_policy("ptc", n=2, n_disturbed=1, n_optimum=1, sets=("random",), per_T_con=(10.0,),
+                              n_per_T_con=1, progress=True)  # fmt: skip
+    assert [(name, n) for name, n, _ in rolled] == [("random", 2), ("random", 1), ("random", 1)]
+    assert all("%" in err for _, _, err in rolled), rolled
+
+
+def test_a_summary_without_a_metric_gives_none_for_it_not_a_crash() -> None:
+    """A rollout summary that lacks a measure (a row of another tool's, or one written before the measure existed)
+    reads None there, as an undefined one does; the measures it holds are kept."""
+    from train.evaluation.benchmark import metrics_of
+
+    got = metrics_of({"success_rate": 0.75, "energy_mean": 2.5, "final_heading_error_mean": float("nan")})
+    assert got == {"in_time": 0.75, "energy_ratio": None, "final_heading": None, "energy": 2.5}, got
