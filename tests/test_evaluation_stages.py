@@ -308,3 +308,9 @@ def test_policies_run_beside_the_planners_give_a_run_in_turns_numbers_each_stage
         assert stages == [("random", "fixed-time", 0.0, 2, False), ("random", "astolfi", 0.0, 2, False),
                           ("random", "ptc", 0.0, 2, False), ("random", "agent", 5.0, 2, True)]  # fmt: skip
         assert "policies 2 s (" in clock.summary(), clock.summary()
+
+
+def test_evaluate_sets_plans_the_policies_without_a_planner_beside_the_planners(fake_side: type[FakeSide]) -> None:
+    clock = PlannedClock()
+    evaluate_sets(BESIDE, ["random"], 1, 0, {"T_con": 5.0}, clock=clock)
+    assert [beside for _, beside, _ in clock.plans] == [frozenset({"ptc", "agent", "astolfi"})], clock.plans
