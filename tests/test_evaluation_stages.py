@@ -15,10 +15,11 @@ from baselines import plan_store
 from dwr_gym.params import EnvParams
 from train.evaluation import evaluate as evaluate_module
 from train.evaluation import ray_pool
-from train.evaluation.evaluate import evaluate, evaluate_sets, max_steps
+from train.evaluation.evaluate import evaluate, evaluate_sets, max_steps, planned_seconds, running_beside
+from train.evaluation.optimum import optimal_energies
 from train.evaluation.scenarios import make_scenario
 from train.evaluation.side_process import SWITCH
-from train.evaluation.stages import StageClock, StageTime, estimated_seconds
+from train.evaluation.stages import PLAN_SECONDS, StageClock, StageTime, estimated_seconds
 
 #: 1,200 steps a rollout (1.5 x 40 s / 0.05 s): 0.6 estimated seconds a stage, past the clock's calibration threshold
 LONG = {"T_con": 40.0}
@@ -314,3 +315,48 @@ def test_evaluate_sets_plans_the_policies_without_a_planner_beside_the_planners(
     clock = PlannedClock()
     evaluate_sets(BESIDE, ["random"], 1, 0, {"T_con": 5.0}, clock=clock)
     assert [beside for _, beside, _ in clock.plans] == [frozenset({"ptc", "agent", "astolfi"})], clock.plans
+
+
+def test_what_runs_beside_the_planners_only_where_there_are_both_and_no_cluster(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.setattr(evaluate_module, "side_process_usable", lambda: True)
+    assert running_beside({"optimal": "optimal", "ptc": "ptc", "astolfi": "astolfi"}) == {"ptc", "astolfi"}
+    assert running_beside({"ptc": "ptc", "astolfi": "astolfi"}) == frozenset()  # no planner to run beside
+    assert running_beside({"optimal": "optimal"}) == frozenset()
+    assert running_beside({"optimal": "optimal", "ptc": "ptc"}, "auto") == frozenset()  # every policy a Ray task
+    monkeypatch.setattr(evaluate_module, "side_process_usable", lambda: False)
+    assert running_beside({"optimal": "optimal", "ptc": "ptc"}) == frozenset()
+
+
+def assert_plan(got: list[tuple[tuple[str, str], float]], expected: list[tuple[tuple[str, str], float]]) -> None:
+    assert [stage for stage, _ in got] == [stage for stage, _ in expected], got
+    assert [seconds for _, seconds in got] == pytest.approx([seconds for _, seconds in expected]), (got, expected)
+
+
+def test_the_plan_counts_each_optimum_not_cached_once_and_optimal_on_its_n_optimal_episodes_of_a_disturbed_set(
+    tmp_path: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("DWR_GYM_CACHE", str(tmp_path))  # no optimum cached, no plan stored: the planners cold
+    sets = [make_scenario(name, n=3, seed=0) for name in ("random", "paper-fig5", "disturbed")]
+
+    def stage(name: str, label: str, episodes: int) -> tuple[tuple[str, str], float]:
+        return (name, label), estimated_seconds(label, episodes, 600, name, cold=True)
+
+    assert_plan(planned_seconds({"optimal": Still(), "ptc": "ptc"}, sets, "position", 1), [
+        (("random", "optimum"), 3 * PLAN_SECONDS), stage("random", "optimal", 3), stage("random", "ptc", 3),
+        (("paper-fig5", "optimum"), 8 * PLAN_SECONDS), stage("paper-fig5", "optimal", 8), stage("paper-fig5", "ptc", 8),
+        (("disturbed", "optimum"), 0.0),  # the random set's starts and T_con: its optima are counted there
+        stage("disturbed", "optimal", 1), stage("disturbed", "ptc", 3),
+    ])  # fmt: skip
+    # each episode's T_con drawn, too short for any plan: its optima are solved at once ("infeasible") and cached
+    kwargs = {"T_con_range": (0.4, 0.6)}
+    drawn = make_scenario("random", n=3, seed=0, env_kwargs=kwargs)
+    optimal_energies(EnvParams.from_kwargs(**kwargs), drawn.starts, drawn.goals, drawn.T_cons, heading=False)
+    steps = math.ceil(1.5 * max(drawn.T_cons) / 0.05)  # to the horizon of the longest T_con
+    for optimum, missing in (("position", 0), ("pose", 3)):
+        expected = [
+            (("random", "optimum"), missing * PLAN_SECONDS),
+            (("random", "ptc"), estimated_seconds("ptc", 3, steps)),
+        ]
+        assert_plan(planned_seconds({"ptc": "ptc"}, [drawn], optimum, None), expected)

@@ -58,6 +58,18 @@ def test_a_discounted_return_is_the_envs_rewards_discounted_step_by_step() -> No
         episode = oracles.play(V1, policy.robot(0, i), start, (0.0, 0.0, 0.0), 10.0, fixed)
         expected = sum(0.9**k * step.reward for k, step in enumerate(episode.steps))
         assert result.episode_return[i] == pytest.approx(expected, rel=1e-9, abs=1e-12), (i, len(episode.steps))
+    undiscounted = rollout(Scripted(0.3), EnvParams.from_kwargs(**kwargs), starts, np.zeros_like(starts))
+    for i, start in enumerate(starts):  # the default: the plain sum
+        episode = oracles.play(V1, policy.robot(0, i), start, (0.0, 0.0, 0.0), 10.0, fixed)
+        expected = sum(step.reward for step in episode.steps)
+        assert undiscounted.episode_return[i] == pytest.approx(expected, rel=1e-9, abs=1e-12), i
+
+
+def test_starts_and_goals_given_as_integers_roll_out_as_their_floats() -> None:
+    as_floats = rollout(Creep(), EnvParams(), np.array([[-1.0, 0.0, 0.0]]), np.array([[0.0, 1.0, 0.0]]))
+    as_ints = rollout(Creep(), EnvParams(), [[-1, 0, 0]], [[0, 1, 0]])  # type: ignore[arg-type]
+    for field in ("arrival_time", "final_distance", "final_heading_error", "energy", "path_length"):
+        np.testing.assert_array_equal(getattr(as_ints, field), getattr(as_floats, field), err_msg=field)
 
 
 def test_a_rollout_is_quiet_unless_asked_then_its_bar_counts_steps_and_is_erased(
