@@ -113,7 +113,28 @@ def test_e_opt_is_nan_where_the_episode_was_late_or_its_optimum_is_zero_or_unkno
         optimal_energy=np.array([0.0, 0.5, 2.0, 2.0, np.nan]),
     )
     np.testing.assert_array_equal(result.energy_ratio(), [np.nan, 2.0, 1.5, np.nan, np.nan])
-    assert result.summary()["energy_ratio_episodes"] == 2.0
+    summary = result.summary()
+    assert summary["energy_ratio_episodes"] == 2.0 and summary["energy_ratio_mean"] == 1.75
+    assert summary["optimal_energy_mean"] == pytest.approx(4.5 / 4)  # over the episodes with an optimum
+
+
+class Freezes:
+    """A planning controller's ``freeze``: the robots whose episodes ended, after each step."""
+
+    def __init__(self) -> None:
+        self.masks: list[list[bool]] = []
+
+    def freeze(self, ended: np.ndarray) -> None:
+        self.masks.append(ended.tolist())
+
+
+def test_a_planning_controller_is_told_after_each_step_which_robots_episodes_ended() -> None:
+    policy = Creep()
+    policy.controller = Freezes()  # type: ignore[attr-defined]
+    rollout(policy, EnvParams(), STARTS, np.zeros((2, 3)))
+    masks = policy.controller.masks  # type: ignore[attr-defined]
+    assert len(masks) == 196 and masks[0] == [True, False] and masks[-1] == [True, True], (len(masks), masks[:2])
+    assert masks[-2] == [True, False]  # robot 1 arrives at the last step
 
 
 @pytest.mark.parametrize("n", [0, -1, True, 2.5, "3"])
@@ -136,3 +157,16 @@ def test_a_controller_made_for_a_scenario_takes_the_envs_T_con_dt_and_limits_the
         planner = controller_for(name, fig7, params).params
         assert (planner.T_con, planner.dt, planner.u_max, planner.omega_max) == (30.0, 0.1, 0.3, 1.5), planner
     assert controller_for("ptc", fig7, params, K1=3.0).params.K1 == 3.0  # the caller's keywords win
+
+
+def test_a_robot_standing_on_the_arenas_bound_has_not_left_it() -> None:
+    """The env ends an episode beyond the arena's radius, not on it: a robot standing still there runs to the horizon
+    and is counted as missing its goal, not as gone."""
+
+    class Still(Creep):
+        def predict(self, observation: Any, *args: Any, **kwargs: Any) -> tuple[Any, Any]:
+            return np.zeros((len(observation), 2), np.float32), None
+
+    params = EnvParams(T_con=2.0)
+    result = rollout(Still(), params, np.array([[-params.arena_radius, 0.0, 0.0]]), np.zeros((1, 3)))
+    assert result.final_distance[0] == params.arena_radius and not result.left_arena[0] and not result.success[0]
