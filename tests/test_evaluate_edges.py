@@ -19,6 +19,7 @@ import pytest
 
 from dwr_gym.params import EnvParams
 from tests.test_evaluation_stages import FakeRay, Still, fake_ray, in_this_process  # noqa: F401 (fixtures)
+from train.evaluation import ray_pool
 from train.evaluation.evaluate import evaluate, evaluate_sets, max_steps
 from train.evaluation.optimum import missing_optima
 from train.evaluation.scenarios import make_scenario
@@ -66,6 +67,40 @@ def test_the_optimum_is_a_stage_of_its_set_advanced_per_plan_then_each_policy_pe
     evaluate({"ptc": "ptc"}, scenario, optimum="position", clock=again)  # cached: nothing to solve
     evaluate({"ptc": "ptc"}, scenario, optimum="pose", clock=again)  # the poses' optima are others
     assert [t.size for t in again.times if t.stage == "optimum"] == [0, 3]
+    assert missing_optima(params, scenario.starts, scenario.goals, scenario.T_cons, heading=True) == set()
+    one = Fractions()
+    evaluate({"ptc": "ptc"}, make_scenario("random", n=1, seed=1, env_kwargs=TOO_SHORT), optimum="pose", clock=one)
+    assert one.fractions["optimum"] == [1.0], one.fractions["optimum"]  # its one plan: the whole stage
+
+
+class FakeCluster(FakeRay):
+    """RayPool's interface in this process, with the part the optima use: ``map`` and ``workers``."""
+
+    workers = 2
+    mapped = 0
+
+    def map(self, function: Callable[[Any], Any], items: Any, chunksize: int = 1) -> Iterator[Any]:
+        for item in items:
+            FakeCluster.mapped += 1
+            yield function(item)
+
+    def shutdown(self, *args: Any, **kwargs: Any) -> None:
+        pass
+
+
+def test_with_an_address_the_optima_are_solved_on_the_cluster_too(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    fake_ray: type[FakeRay],  # noqa: F811
+) -> None:
+    monkeypatch.setenv("DWR_GYM_CACHE", str(tmp_path))
+    monkeypatch.setattr(ray_pool, "RayPool", FakeCluster)
+    monkeypatch.setattr(FakeCluster, "mapped", 0)
+    monkeypatch.setattr(FakeRay, "took", {"ptc": 4.0})
+    scenario = make_scenario("random", n=3, seed=0, env_kwargs=TOO_SHORT)
+    result = evaluate({"ptc": "ptc"}, scenario, optimum="position", address="a")["ptc"]
+    assert FakeRay.addresses == ["a", "a"] and FakeCluster.mapped == 3, (FakeRay.addresses, FakeCluster.mapped)
+    assert len(result.optimum_failures) == 3, result.optimum_failures
 
 
 def test_evaluate_by_default_is_quiet_records_nothing_asks_no_optimum_and_seeds_with_0(
