@@ -113,6 +113,8 @@ def test_evaluate_by_default_is_quiet_records_nothing_asks_no_optimum_and_seeds_
     seeded = {seed: evaluate({"ptc": "ptc"}, scenario, seed=seed)["ptc"].energy for seed in (0, 1)}
     np.testing.assert_array_equal(default.energy, seeded[0])
     assert not np.array_equal(seeded[0], seeded[1]), seeded
+    recorded = evaluate({"ptc": "ptc"}, scenario, record=True)["ptc"].trajectory
+    assert recorded is not None and recorded["x"].shape[1] == 2, recorded
     with pytest.raises(ValueError, match=re.escape("optimum='best' is invalid: expected one of pose, position, none")):
         evaluate({"ptc": "ptc"}, scenario, optimum="best")
 

@@ -70,7 +70,9 @@ def steps_of(name: str, n: int, env_kwargs: dict[str, Any]) -> int:
 
 def test_each_rows_seconds_are_its_own_stages_also_where_a_set_runs_at_two_T_cons() -> None:
     clock = StageClock(progress=False)
-    rows = evaluate_sets({"ptc": "ptc"}, ["random"], 2, 0, {}, T_cons=[10.0, 20.0], clock=clock)
+    so_far: list[list[dict[str, Any]]] = []
+    rows = evaluate_sets({"ptc": "ptc"}, ["random"], 2, 0, {}, T_cons=[10.0, 20.0], clock=clock, on_rows=so_far.append)
+    assert so_far == [rows[:1], rows], so_far  # the rows so far after each (set, T_con): what an interruption keeps
     stages = [t.seconds for t in clock.times if (t.scenario, t.stage) == ("random", "ptc")]
     assert len(stages) == 2, f"the given clock timed {clock.times}"
     seconds = [row["seconds"] for row in rows]
@@ -194,10 +196,13 @@ def fake_ray(monkeypatch: pytest.MonkeyPatch) -> type[FakeRay]:
     return FakeRay
 
 
-def test_ray_tasks_stages_are_recorded_under_their_set_and_the_wait_is_counted_once(fake_ray: type[FakeRay]) -> None:
+def test_ray_tasks_stages_are_recorded_under_their_set_and_the_wait_is_counted_once(
+    fake_ray: type[FakeRay], capsys: pytest.CaptureFixture[str]
+) -> None:
     scenario = make_scenario("random", n=2, seed=0, env_kwargs=LONG)
     clock = StageClock(progress=False)
     results = evaluate({"ptc": "ptc", "robust": Still()}, scenario, clock=clock, stage_scenario="sets", address="a")
+    assert capsys.readouterr().err == ""  # no bar from a task
     assert fake_ray.calls == [["ptc", "robust"]] and list(results) == ["ptc", "robust"]
     assert fake_ray.addresses == ["a"], f"joined {fake_ray.addresses}"
     assert clock.times == [StageTime("sets", "ptc", 4.0, 2, beside=True), StageTime("sets", "robust", 7.0, 2, True)]
