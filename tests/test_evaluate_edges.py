@@ -173,6 +173,11 @@ def test_optimal_runs_the_first_n_optimal_episodes_of_a_disturbed_set_only_as_ev
     assert [(row["scenario"], row["policy"], row["n"]) for row in rows] == [
         ("random", "optimal", 3), ("random", "ptc", 3), ("disturbed", "optimal", 1), ("disturbed", "ptc", 3)
     ]  # fmt: skip
+    (row,) = evaluate_sets({"ptc": "ptc"}, ["disturbed"], 3, 5, kwargs, n_optimal=1)  # no optimal: the whole set
+    summary = evaluate({"ptc": "ptc"}, make_scenario("disturbed", n=3, seed=5, env_kwargs=kwargs), seed=5)[
+        "ptc"
+    ].summary()
+    assert {k: row[k] for k in summary} == pytest.approx(summary, nan_ok=True)  # with the seed of its random walk
     clock = StageClock(progress=False)  # a set no larger than n_optimal: run as any other, in the policies' order
     evaluate_sets({"optimal": Still(), "ptc": "ptc"}, ["disturbed"], 1, 5, kwargs, n_optimal=1, clock=clock)
     assert [t.stage for t in clock.times] == ["optimal", "ptc"]
