@@ -215,6 +215,8 @@ def test_ray_tasks_stages_are_recorded_under_their_set_and_the_wait_is_counted_o
         assert clock.ratio(label, "sets") == pytest.approx(expected), f"{label}: {clock.ratio(label, 'sets')}"
     local = evaluate({"ptc": "ptc"}, scenario)["ptc"].summary()
     assert results["ptc"].summary() == pytest.approx(local, nan_ok=True)
+    assert results["ptc"].trajectory is None
+    assert evaluate({"ptc": "ptc"}, scenario, record=True, address="a")["ptc"].trajectory is not None
 
 
 def test_a_ray_answer_missing_a_result_is_an_error_not_a_missing_row(
@@ -299,8 +301,9 @@ def test_policies_run_beside_the_planners_give_a_run_in_turns_numbers_each_stage
     scenario = make_scenario("random", n=2, seed=3)
     in_turn = {label: evaluate({label: policy}, scenario, seed=1)[label].summary() for label, policy in BESIDE.items()}
     clock = StageClock(progress=False)
-    results = evaluate(BESIDE, scenario, seed=1, clock=clock)
+    results = evaluate(BESIDE, scenario, seed=1, clock=clock, record=True)
     (side,) = fake_side.made
+    assert all(result.trajectory is not None for result in results.values())
     assert side.order == ["agent", "ptc", "astolfi"] and side.closed  # the agents first: this process takes the last
     assert list(results) == list(BESIDE)
     for label, result in results.items():
