@@ -170,3 +170,9 @@ def test_a_robot_standing_on_the_arenas_bound_has_not_left_it() -> None:
     params = EnvParams(T_con=2.0)
     result = rollout(Still(), params, np.array([[-params.arena_radius, 0.0, 0.0]]), np.zeros((1, 3)))
     assert result.final_distance[0] == params.arena_radius and not result.left_arena[0] and not result.success[0]
+
+
+def test_the_paper_sets_keep_their_own_T_con_whatever_range_is_asked() -> None:
+    for name, T_con in (("paper-fig5", 20.0), ("paper-fig7", 70.0)):
+        scenario = make_scenario(name, env_kwargs={"T_con_range": (5.0, 9.0), "dt": 0.01})
+        assert scenario.env_kwargs == {"T_con": T_con, "dt": 0.01} and scenario.T_cons is None, scenario.env_kwargs
