@@ -368,3 +368,12 @@ def test_the_plan_counts_each_optimum_not_cached_once_and_optimal_on_its_n_optim
             (("random", "ptc"), estimated_seconds("ptc", 3, steps)),
         ]
         assert_plan(planned_seconds({"ptc": "ptc"}, [drawn], optimum, None), expected)
+
+
+def test_a_stage_run_here_without_a_plan_is_estimated_as_its_labels() -> None:
+    scenario = make_scenario("random", n=2, seed=0, env_kwargs=LONG)
+    clock = StageClock(progress=False)
+    evaluate({"robust": Still()}, scenario, clock=clock)  # an agent labelled robust: a planner's cost per episode
+    ((took,),) = [[t.seconds for t in clock.times]]
+    estimate = estimated_seconds("robust", 2, max_steps(scenario, EnvParams(**LONG)))
+    assert clock.ratio("robust", "random") == pytest.approx(took / estimate), (clock.ratio("robust", "random"), took)
