@@ -106,6 +106,12 @@ def test_starts_and_goals_other_than_two_n_by_3_arrays_are_refused_naming_their_
 
 def test_e_opt_is_nan_where_the_episode_was_late_or_its_optimum_is_zero_or_unknown() -> None:
     base = rollout(Creep(), EnvParams(), np.zeros((5, 3)), np.zeros((5, 3)))
+    assert base.energy_ratio().shape == (5,) and np.isnan(base.energy_ratio()).all()  # no optimum asked for
+    plain = base.summary()
+    assert (
+        plain["energy_ratio_episodes"] == 0.0
+        and np.isnan([plain["energy_ratio_mean"], plain["optimal_energy_mean"]]).all()
+    )
     result = dataclasses.replace(
         base,
         success=np.array([True, True, True, False, True]),
