@@ -121,6 +121,7 @@ def test_e_opt_is_nan_where_the_episode_was_late_or_its_optimum_is_zero_or_unkno
     np.testing.assert_array_equal(result.energy_ratio(), [np.nan, 2.0, 1.5, np.nan, np.nan])
     summary = result.summary()
     assert summary["energy_ratio_episodes"] == 2.0 and summary["energy_ratio_mean"] == 1.75
+    assert summary["energy_ratio_max"] == 2.0
     assert summary["optimal_energy_mean"] == pytest.approx(4.5 / 4)  # over the episodes with an optimum
 
 
@@ -182,3 +183,25 @@ def test_the_paper_sets_keep_their_own_T_con_whatever_range_is_asked() -> None:
     for name, T_con in (("paper-fig5", 20.0), ("paper-fig7", 70.0)):
         scenario = make_scenario(name, env_kwargs={"T_con_range": (5.0, 9.0), "dt": 0.01})
         assert scenario.env_kwargs == {"T_con": T_con, "dt": 0.01} and scenario.T_cons is None, scenario.env_kwargs
+        assert scenario.name == name
+
+
+def test_a_random_set_has_100_episodes_drawn_with_seed_0_by_default() -> None:
+    default = make_scenario("random")
+    assert default.size == 100 and default.name == "random" and default.labels == ()
+    np.testing.assert_array_equal(default.starts, make_scenario("random", n=100, seed=0).starts)
+
+
+def test_with_observation_noise_the_first_observation_is_noisy_too() -> None:
+    seen: list[np.ndarray] = []
+
+    class Looks(Creep):
+        def predict(self, observation: Any, *args: Any, **kwargs: Any) -> tuple[Any, Any]:
+            seen.append(np.array(observation))
+            return super().predict(observation)
+
+    rollout(Looks(), EnvParams(observation_noise=0.01), STARTS, np.zeros((2, 3)))
+    noisy = seen[0]
+    seen.clear()
+    rollout(Looks(), EnvParams(), STARTS, np.zeros((2, 3)))
+    assert not np.allclose(noisy, seen[0]), (noisy, seen[0])
