@@ -68,7 +68,6 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
     "evaluation": (["train/evaluation/rollout.py", "train/evaluation/scenarios.py", "train/evaluation/evaluate.py"],
                    ["tests/test_oracles.py", "tests/test_controllers.py", "tests/test_optimal.py",
                     "tests/test_prescribed_time.py", "tests/test_robustness.py", "tests/test_stages.py",
-                    "tests/test_first_hour_progress.py::test_evaluate_and_the_optimum_show_such_bars",
                     "tests/test_evaluation_stages.py", "tests/test_evaluate_edges.py", "tests/test_rollout_edges.py"]),
     "learning": (["train/learning/imitation/dagger.py", "train/learning/imitation/robust_dagger.py",
                   "train/learning/residual.py"],
