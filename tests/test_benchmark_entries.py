@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import shlex
 from pathlib import Path
 from typing import Any
@@ -69,3 +70,36 @@ def test_the_rows_entry_trains_what_the_shipped_agent_was_trained_with(
             f"{getattr(shipped, key)!r} by the shipped agent's recorded command"
         )
     assert Path(config.hyperparams or "").resolve() == Path(ROOT / (shipped.hyperparams or "")).resolve()
+
+
+def test_a_runs_command_names_each_budget_flag_once_and_overrides_as_the_command_line_reads_them(
+    tmp_path: Path,
+) -> None:
+    from train.learning.benchmark import train_command
+
+    entry = parse_entry("apg-hold-heading10-time-scaled-30min-v2:env_kwargs={T_con_range: [10, 20]}")
+    config = train_config(entry, 3, tmp_path / "run", {"eval_episodes": 200})
+    command = train_command(entry, config)
+    for flag in ("--total-timesteps", "--eval-freq", "--checkpoint-freq", "--eval-episodes", "--eval-seed", "--env"):
+        assert command.count(flag) == 1, (flag, command)  # the entry's own budget is given once, from the config
+    assert command[command.index("--eval-episodes") + 1] == "200"
+    hyperparams = command[command.index("--hyperparams") + 1 : command.index("--run-dir")]
+    assert hyperparams[0].endswith("apg_teacher.yml") and "hold_heading_weight=10.0" in hyperparams, hyperparams
+    # a string stays as typed, anything else as JSON (what KEY=VALUE reads back as YAML)
+    assert command[command.index("--env-kwargs") + 1] == "T_con_range=[10, 20]", command
+    typed = dataclasses.replace(entry, options={**entry.options, "hyperparam_overrides": {"note": "as typed", "n": 3}})
+    assert train_command(typed, config)[-4:-2] == ["note=as typed", "n=3"]
+
+
+def test_each_reference_controller_is_evaluated_on_the_env_asked_for(monkeypatch: pytest.MonkeyPatch) -> None:
+    import train.evaluation.benchmark as benchmark
+
+    calls: list[tuple[str, str, dict[str, Any]]] = []
+    monkeypatch.setattr(benchmark, "evaluate_policy",
+                        lambda name, env_id, **kwargs: calls.append((name, env_id, kwargs)) or {"set": name})  # fmt: skip
+    got = benchmark.reference_controllers(("ptc", "pt-astolfi"), "DWRPointStabilization-v2", n=7)
+    assert got == {"ptc": {"set": "ptc"}, "pt-astolfi": {"set": "pt-astolfi"}}
+    assert calls == [
+        ("ptc", "DWRPointStabilization-v2", {"n": 7}),
+        ("pt-astolfi", "DWRPointStabilization-v2", {"n": 7}),
+    ]
