@@ -87,8 +87,10 @@ def test_a_runs_command_names_each_budget_flag_once_and_overrides_as_the_command
     assert hyperparams[0].endswith("apg_teacher.yml") and "hold_heading_weight=10.0" in hyperparams, hyperparams
     # a string stays as typed, anything else as JSON (what KEY=VALUE reads back as YAML)
     assert command[command.index("--env-kwargs") + 1] == "T_con_range=[10, 20]", command
-    typed = dataclasses.replace(entry, options={**entry.options, "hyperparam_overrides": {"note": "as typed", "n": 3}})
-    assert train_command(typed, config)[-4:-2] == ["note=as typed", "n=3"]
+    typed = dataclasses.replace(
+        entry, options={**entry.options, "hyperparam_overrides": {"note": "as typed", "on": True}}
+    )
+    assert train_command(typed, config)[-4:-2] == ["note=as typed", "on=true"]
 
 
 def test_each_reference_controller_is_evaluated_on_the_env_asked_for(monkeypatch: pytest.MonkeyPatch) -> None:
