@@ -84,8 +84,7 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
                 ["tests/test_jax_training.py"]),
     "protocol": (["train/learning/benchmark.py", "train/evaluation/benchmark.py", "train/reporting/rl_benchmark.py"],
                  ["tests/test_oracles.py", "tests/test_rl_protocol.py", "tests/test_rl_benchmark.py",
-                  "tests/test_benchmark_entries.py",
-                  "tests/test_rl_benchmark_tables.py",
+                  "tests/test_benchmark_entries.py", "tests/test_rl_benchmark_tables.py",
                   "tests/test_docs.py::test_every_generated_block_names_its_producer_and_is_what_its_json_renders"]),
     "datasets": (["train/datasets/*"], ["tests/test_datasets.py"]),
     # the first-hour tests of the optimum's cache only (the others train agents, minutes per mutant)
@@ -101,9 +100,8 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
 KEPT = {"learning": ("cloning_run",)}
 #: Words a group leaves out besides: the shipped robust agent's evaluations take minutes per mutant.
 EXTRA = {"robust": ("shipped",),
-         # the protocol's older end-to-end run (two minutes per mutant on a busy machine; test_rl_protocol.py trains
-         # two seeds instead), and the RL options' training runs
-         "protocol": ("trains_evaluates_and_aggregates", "tqc_and_crossq", "normalised_observations", "energy_split"),
+         # the protocol's older end-to-end run (test_rl_protocol.py trains two seeds instead), the options' trainings
+         "protocol": ("trains_evaluates_and_aggregates", "tqc_and_crossq", "normalised_observations"),
          "guards": ("ctrl_c", "train_runs_on_one_thread"),
          "evaluation": ("evaluate_rows_carry_each_stage_time",),  # a command in a subprocess
          # an xfail test cannot fail a mutant; the CLI refusal runs in a subprocess; the docs block is not the code's
