@@ -337,18 +337,16 @@ def score_lines(results: dict[str, Any]) -> list[str]:
 
 
 def survivor_lines(results: dict[str, Any]) -> list[str]:
-    """The docs block of every mutant not killed: its status, its change, why it is equivalent if it is."""
+    """The docs block of every mutant tested and not killed that is not equivalent (the equivalent ones are listed with
+    their reasons in ``mutation_equivalent.json``): its status and its change."""
     equivalent = equivalent_mutants()
-    lines = ["| mutant | status | change | why |", "|---|---|---|---|"]
+    lines = ["| mutant | status | change |", "|---|---|---|"]
     for data in results["groups"].values():
         score(data["mutants"], equivalent)  # marks each mutant's "equivalent"
         for mutant in data["mutants"]:
-            if mutant["status"] in ("killed", "timeout", "not checked"):
-                continue
-            change = " / ".join(line.strip() for line in mutant.get("diff", [])).replace("|", "\\|")
-            why = (mutant.get("equivalent") or "").replace("|", "\\|")
-            status = "equivalent" if why else mutant["status"]
-            lines.append(f"| `{mutant['name']}` | {status} | `{change}` | {why} |")
+            if mutant["status"] not in ("killed", "timeout", "not checked") and not mutant["equivalent"]:
+                change = " / ".join(line.strip() for line in mutant.get("diff", [])).replace("|", "\\|")
+                lines.append(f"| `{mutant['name']}` | {mutant['status']} | `{change}` |")
     return lines
 
 
