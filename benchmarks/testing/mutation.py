@@ -111,11 +111,11 @@ EXTRA = {"robust": ("shipped",),
 #: them anew for each mutant instead of forking after collection, which would keep the unmutated import.
 IMPORT_PER_MUTANT = {"model"}
 #: Groups whose tests run threads that do not survive a fork of the process that ran them (mutmut's stats run): XLA's
-#: (jax_env, jax_ppo, core's JAX tests), a process pool's forked from it (guards: its mutants hung until their
-#: timeout, counted killed).
+#: (jax_env, jax_ppo, core's JAX tests), a process pool's or tqdm's lock forked from it (guards, evaluation: their
+#: mutants hung until their timeout, counted killed).
 #: Their mutants fork from a server that never ran a test. XLA's compilation cache is shared by the mutants, which
 #: then compile again only the programs their mutation changed (the cache is keyed by the program).
-FORKSERVER_GROUPS = {"jax_env", "jax_ppo", "guards", "core"}
+FORKSERVER_GROUPS = {"jax_env", "jax_ppo", "guards", "core", "evaluation"}
 
 
 def deselected(group: str) -> str:
