@@ -11,6 +11,7 @@ from typing import Any
 import pytest
 import yaml
 
+from tests.test_pretrained import asked
 from train.learning.agents import PRETRAINED_DIR
 from train.learning.benchmark import parse_entry, train_config
 from train.reporting.leaderboard import ROWS
@@ -24,24 +25,17 @@ SHIPPED_LEARNERS = [row for row in ROWS if row.kind == "benchmark" and row.agent
 
 def recorded_config(agent: str, monkeypatch: pytest.MonkeyPatch) -> Any:
     """The TrainConfig the shipped agent's recorded ``dwr-gym train`` command parses into (training stubbed)."""
-    import train.learning.training as training
-    from train.cli import main
-
     command = [str(word) for word in yaml.safe_load((PRETRAINED_DIR / agent / "config.yaml").read_text())["command"]]
     assert Path(command[0]).name == "dwr-gym" and command[1] == "train", shlex.join(command)
-    caught: list[Any] = []
-    monkeypatch.setattr(training, "train", lambda config, command=None: caught.append(config))
     monkeypatch.chdir(ROOT)  # the commands name the repository's hyperparameter files
-    assert main(command[1:]) == 0
-    return caught[0]
+    return asked(command, monkeypatch)[1]
 
 
-def recipe_option(recipe: str, entry: str, flag: str) -> str | None:
-    """The value the recipe script behind ``entry`` gives ``flag`` (None where it leaves it to the default)."""
+def recipe_words(recipe: str, entry: str) -> list[str]:
+    """The words of the ``dwr-gym benchmark`` command of the recipe script that trains ``entry``."""
     text = (ROOT / "benchmarks" / "recipes" / recipe).read_text().replace("\\\n", " ")
     line = next(line for line in text.splitlines() if "dwr-gym benchmark" in line and entry in line)
-    words = shlex.split(line.split("#")[0])
-    return words[words.index(flag) + 1] if flag in words else None
+    return shlex.split(line.split("#")[0])
 
 
 def test_every_shipped_learner_has_a_benchmark_row() -> None:
@@ -55,13 +49,13 @@ def test_the_rows_entry_trains_what_the_shipped_agent_was_trained_with(
     shipped = recorded_config(row.agent, monkeypatch)
     recipe = row.reproduce.split()[-1].replace("-", "_") + ".sh"
     # the recipe's own agent options (``NAME:threads=1``) and budget, as `dwr-gym benchmark` passes them on
-    text = (ROOT / "benchmarks" / "recipes" / recipe).read_text()
-    words = [word.strip("\"'") for word in text.split()]
+    words = recipe_words(recipe, row.entry)
     options = next((word for word in words if word.startswith(f"{row.entry}:")), row.entry)
-    budget: dict[str, Any] = {"eval_episodes": int(recipe_option(recipe, row.entry, "--eval-episodes") or 1000)}
-    for key, flag in (("env_steps", "--env-steps"), ("eval_freq", "--eval-freq")):
-        if (value := recipe_option(recipe, row.entry, flag)) is not None:
-            budget[key] = int(value)
+    flags = {flag: int(words[words.index(flag) + 1]) for flag in ("--eval-episodes", "--env-steps", "--eval-freq")
+             if flag in words}  # fmt: skip
+    budget: dict[str, Any] = {"eval_episodes": flags.get("--eval-episodes", 1000)}
+    budget.update({key: flags[flag] for key, flag in (("env_steps", "--env-steps"), ("eval_freq", "--eval-freq"))
+                   if flag in flags})  # fmt: skip
     entry = parse_entry(options)
     config = train_config(entry, shipped.seed, tmp_path / "run", budget)
     for key in (*TRAINED_WITH, "total_timesteps", "eval_freq", "checkpoint_freq", "eval_episodes", "eval_seed"):
