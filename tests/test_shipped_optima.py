@@ -125,3 +125,53 @@ def test_verify_fails_on_a_planted_wrong_energy(tmp_path: Path, monkeypatch: pyt
 def test_verify_refuses_a_bad_tolerance(argv: list[str], message: str, capsys) -> None:
     assert cli(["optimum", "verify", *argv]) == 2
     assert message in capsys.readouterr().err
+
+
+#: A shipped optimum (its key) on which the batched search (the cheapest coarse plan refined) stops 1.5e-6 above the
+#: shipped energy, and another of the same fine solver size (800 intervals).
+NEIGHBOURING_STATIONARY = "-4.999669273158e-01,-4.994638395080e-01,-7.960866141121e-01,3.030800634560e+01"
+SAME_SIZE = "-1.088301644463e-01,-7.059883345541e-01,-2.920180176385e-01,3.084763296714e+01"
+
+
+def _jobs(*keys: str) -> list[optimum_module.EnergyJob]:
+    return [((x, y, psi), T_con, 0.05, 0.5, 2.0, True) for x, y, psi, T_con in (map(float, k.split(",")) for k in keys)]
+
+
+def _in_a_new_thread(jobs: list[optimum_module.EnergyJob], **kwargs: int) -> list[float | str]:
+    """``solve_uncached`` on one solving thread that has built no solver yet (its solvers are its own)."""
+    import threading
+
+    out: list[list[float | str]] = []
+    thread = threading.Thread(target=lambda: out.append(optimum_module.solve_uncached(jobs, 1, **kwargs)))
+    thread.start()
+    thread.join()
+    return out[0]
+
+
+@needs_casadi
+def test_an_optimum_does_not_depend_on_what_its_solver_solved_before() -> None:
+    """fatrop keeps its tolerance option only until a solver's first success (a first search of this optimum reaches
+    the shipped energy, a later one stops 1.5e-6 above): each new solver is called once before its first search, so
+    an optimum is the same alone, after another of its size, and whatever the threads' timing."""
+    alone = _in_a_new_thread(_jobs(NEIGHBOURING_STATIONARY))[0]
+    after = _in_a_new_thread(_jobs(SAME_SIZE, NEIGHBOURING_STATIONARY))[1]
+    assert isinstance(alone, float) and alone == after, f"alone {alone!r}, after another optimum {after!r}"
+
+
+@needs_casadi
+def test_verify_decides_by_the_whole_search_where_the_batch_lands_above(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys
+) -> None:
+    real = shipped_optima.shipped_files()[0]
+    problem, energies = shipped_optima.read_shipped(real)
+    shipped = energies[NEIGHBOURING_STATIONARY]
+    batched = _in_a_new_thread(_jobs(NEIGHBOURING_STATIONARY))[0]
+    whole = _in_a_new_thread(_jobs(NEIGHBOURING_STATIONARY), coarse=1)[0]
+    assert isinstance(batched, float) and isinstance(whole, float)
+    assert 1e-6 < (batched - shipped) / shipped < 2e-6, f"batched {batched!r}, shipped {shipped!r}"
+    assert abs(whole - shipped) / shipped < 1e-9, f"whole search {whole!r}, shipped {shipped!r}"
+    shipped_optima.write_shipped(tmp_path / real.name, problem, {NEIGHBOURING_STATIONARY: shipped})
+    monkeypatch.setattr(shipped_optima, "SHIPPED_DIR", tmp_path)
+    assert cli(["optimum", "verify", "--no-progress", "--workers", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "1 optima reproduced by the whole fine search" in out and NEIGHBOURING_STATIONARY in out

@@ -83,6 +83,11 @@ def run_verify(args: argparse.Namespace) -> int:
             bar.close()
     print(f"verified {report.checked} shipped optima of {len(report.files)} file(s) with CasADi: largest relative "
           f"difference {report.largest:.2e} (tolerance {args.rtol:g})")  # fmt: skip
+    if report.whole_search:
+        print(f"{len(report.whole_search)} optima reproduced by the whole fine search where the batched search landed "
+              "above the tolerance (stopped at fatrop's own tolerance):")  # fmt: skip
+        for line in report.whole_search:
+            print(f"  {line}")
     for line in report.mismatches:
         print(f"mismatch: {line}")
     return 0 if report.ok else 1

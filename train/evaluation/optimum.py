@@ -45,10 +45,10 @@ CACHE_VERSION = 2
 #: and 4x less building, which is most of a batch's time (``python -m benchmarks run optimum-speed``).
 PAD_TO = 200
 #: Each optimum is searched on a grid this many times coarser first, then refined from the cheapest coarse plan
-#: (:func:`baselines.optimal.solve_plans`): the same energies to 1e-6 (``dwr-gym optimum verify``), fewer solves.
+#: (:func:`baselines.optimal.solve_plans`): the same energies to 1e-6 on all but 3 of the 1,009 default optima.
 COARSE = 10
 OPTIMA = ("pose", "position", "none")
-BATCH_PER_WORKER = 8
+BATCH_PER_WORKER = 32
 """Plans per solving thread between two writes of the cache: a few seconds of work, so an interruption loses little."""
 CLAIM_WAIT = 1.0  # [s]
 """How often a process waiting for optima that another process is solving looks at the cache again."""
@@ -93,13 +93,14 @@ def _start_key(start: NDArray[np.float64], T_con: float) -> str:
 EnergyJob = tuple[tuple[float, float, float], float, float, float, float, bool]
 
 
-def _solve_energies(jobs: list[EnergyJob], workers: int) -> list[float | str]:
+def _solve_energies(jobs: list[EnergyJob], workers: int, coarse: int = COARSE) -> list[float | str]:
     """The optimal energy of each job, or its error message (returned: one failure leaves the others intact), solved
-    as one batch on ``workers`` threads (:func:`baselines.optimal.solve_plans`)."""
+    as one batch on ``workers`` threads (:func:`baselines.optimal.solve_plans`); ``coarse`` = 1: every guess searched
+    on the fine grid (the whole search, some 5x slower)."""
     from baselines.optimal import Plan, solve_plans
 
     plans = solve_plans([{"start": start, "arrival_time": T_con, "dt": dt, "u_max": u_max, "omega_max": omega_max,
-                          "heading": heading, "pad_to": PAD_TO, "coarse": COARSE}
+                          "heading": heading, "pad_to": PAD_TO, "coarse": coarse}
                          for start, T_con, dt, u_max, omega_max, heading in jobs], workers)  # fmt: skip
     return [plan.energy if isinstance(plan, Plan) else str(plan) for plan in plans]
 
@@ -364,15 +365,17 @@ def solve_uncached(
     jobs: list[EnergyJob],
     workers: int = 0,
     on_solved: Callable[[int], None] | None = None,
+    coarse: int = COARSE,
 ) -> list[float | str]:
     """Solve each job (start in the goal's frame, T_con, dt, u_max, omega_max, heading) afresh on ``workers``
     threads (0: every core, at most 8), reading and writing no cache: the energy, or why there is none.
-    ``on_solved`` receives the number solved so far (what ``dwr-gym optimum verify`` re-solves)."""
+    ``on_solved`` receives the number solved so far (what ``dwr-gym optimum verify`` re-solves); ``coarse`` = 1
+    searches every guess on the fine grid instead of refining the cheapest coarse plan."""
     workers = workers or min(os.cpu_count() or 1, 8)
     results: list[float | str] = []
     size = BATCH_PER_WORKER * workers
     for first in range(0, len(jobs), size):  # a batch of a few seconds' work between two reports
-        results.extend(_solve_energies(jobs[first : first + size], workers))
+        results.extend(_solve_energies(jobs[first : first + size], workers, coarse))
         if on_solved is not None:
             on_solved(len(results))
     return results

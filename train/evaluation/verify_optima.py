@@ -12,7 +12,7 @@ from pathlib import Path
 from train.evaluation.optimum import solve_uncached
 from train.evaluation.shipped_optima import read_shipped, shipped_files
 
-#: Shipped and re-solved energies agree to this relative difference by default (the issue's tolerance for a plan).
+#: Shipped and re-solved energies agree to this relative difference by default (a plan's tolerance, docs/controllers.md).
 RTOL = 1e-6
 
 
@@ -24,6 +24,9 @@ class Verification:
     largest: float = 0.0
     mismatches: list[str] = field(default_factory=list)
     files: list[str] = field(default_factory=list)
+    #: The optima the batched search (the cheapest coarse plan refined) missed by more than the tolerance and the whole
+    #: fine search (every guess on the fine grid) reproduced: both energies.
+    whole_search: list[str] = field(default_factory=list)
 
     @property
     def ok(self) -> bool:
@@ -46,7 +49,9 @@ def verify_shipped(
     on_solved: Callable[[int, int], None] | None = None,
 ) -> Verification:
     """Solve the shipped optima again (all, or a seeded random ``sample`` of each file) and compare each energy with
-    the shipped one to ``rtol``. ``on_solved`` receives (solved so far, to solve)."""
+    the shipped one to ``rtol``: as ``dwr-gym compare`` solves an optimum (the batch), and where that misses by more
+    than ``rtol``, by the whole fine search, which must then agree. ``report.largest`` is the largest difference of
+    the energy that decided. ``on_solved`` receives (solved so far, to solve) for the batch."""
     if sample < 0:
         raise ValueError(f"sample={sample} is invalid: expected an integer >= 0 (0: every shipped optimum)")
     if not (rtol > 0 and math.isfinite(rtol)):
@@ -68,11 +73,20 @@ def verify_shipped(
             jobs.append(((x, y, psi), T_con, problem["dt"], problem["u_max"], problem["omega_max"], problem["heading"]))
         done = report.checked
         progress = None if on_solved is None else (lambda n, done=done: on_solved(done + n, total))
-        for key, solved in zip(keys, solve_uncached(jobs, workers, progress), strict=True):
+        missed = {}
+        for key, job, solved in zip(keys, jobs, solve_uncached(jobs, workers, progress), strict=True):
+            if relative_difference(energies[key], solved) > rtol:
+                missed[key] = (job, solved)
+            else:
+                report.largest = max(report.largest, relative_difference(energies[key], solved))
+        # The batched search refines the cheapest coarse plan: on a few optima it stops at fatrop's own tolerance, 1e-6
+        # above (docs/results.md); the whole fine search decides whether the shipped energy is right.
+        whole = solve_uncached([job for job, _ in missed.values()], workers, coarse=1) if missed else []
+        for (key, (_, batched)), solved in zip(missed.items(), whole, strict=True):
             difference = relative_difference(energies[key], solved)
             report.largest = max(report.largest, difference)
-            if difference > rtol:
-                report.mismatches.append(f"{path.name} {key}: shipped {energies[key]:.9g}, solved {solved}")
+            line = f"{path.name} {key}: shipped {energies[key]:.12g}, batched search {batched}, whole search {solved}"
+            (report.mismatches if difference > rtol else report.whole_search).append(line)
         report.checked += len(keys)
     return report
 
