@@ -7,6 +7,7 @@ definition in the docstrings in a plain loop over the recorded steps:
 - in time: v0 and v1 end an episode on arrival, and it is in time when the robot arrived (within the tolerances)
   at or before T_con; v2 holds every episode to T_con, and it is in time when the robot is at the goal *at* T_con
   (not when it passed the goal earlier, nor when it left the arena);
+- the constraint's cost: the env's ``info["cost"]`` summed over the episode is 1 where it is not in time, else 0;
 - E/opt: the episode's energy over the minimum energy to its goal *pose* by its *own* T_con, over the episodes in
   time that have an optimum; final heading: |psi - psi_d| at the episode's end; energy: the sum of
   (u^2 + omega^2) dt; return: the sum of the env's rewards;
@@ -54,6 +55,7 @@ class Step:
     terminated: bool
     truncated: bool
     energy_info: float
+    cost: float  # the env's info["cost"]: the constraint's cost of this step
 
 
 @dataclass
@@ -113,7 +115,7 @@ def play(
         x, y, psi = (float(v) for v in info["pose"])
         episode.steps.append(Step(float(info["time"]), x, y, psi, float(info["linear_velocity"]),
                                   float(info["angular_velocity"]), float(reward), terminated, truncated,
-                                  float(info["energy"])))  # fmt: skip
+                                  float(info["energy"]), float(info["cost"])))  # fmt: skip
         if terminated or truncated:
             env.close()
             return episode
@@ -164,6 +166,7 @@ class Measures:
     left_arena: bool
     reached_and_left: bool  # at the goal at some step before T_con, not at its end
     late_arrival: bool  # first at the goal after T_con
+    cost: float  # the env's summed info["cost"] (the deadline's violation: 1 exactly where not in time)
 
 
 def measure(episode: Episode) -> Measures:
@@ -201,6 +204,7 @@ def measure(episode: Episode) -> Measures:
         left_arena=distance(episode, end) > episode.params.arena_radius,
         reached_and_left=reached_before_end and not in_time,
         late_arrival=not math.isnan(arrival_time) and arrival_time > episode.T_con + 1e-9,
+        cost=sum(step.cost for step in episode.steps),
     )
 
 

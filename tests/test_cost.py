@@ -84,6 +84,22 @@ def test_v1_counts_an_arrival_after_T_con_as_a_violation(T_con: float, cost: flo
     assert infos[-1]["is_success"] and costs(infos).sum() == cost and costs(infos)[-1] == cost
 
 
+def test_an_arrival_one_control_period_after_T_con_costs_one_and_one_at_T_con_nothing() -> None:
+    """v1 at the deadline's edge: the same drive arrives at the step ending at T_con (in time, cost 0) and, with
+    T_con one control period shorter, at the step after it (late, cost 1)."""
+    drive = {"start": (0.3, 0.0, 0.0), "goal": (0.0, 0.0, 0.0)}
+
+    def reverse(obs: object, t: int) -> np.ndarray:
+        return np.array([-0.4, 0.0], np.float32)
+
+    arrival = episode(gym.make(V1), reverse, {**drive, "T_con": 5.0})[-1]["time"]  # the step it arrives at [s]
+    dt = gym.make(V1).unwrapped.params.dt
+    at = episode(gym.make(V1), reverse, {**drive, "T_con": arrival})
+    after = episode(gym.make(V1), reverse, {**drive, "T_con": arrival - dt})
+    assert at[-1]["time"] == after[-1]["time"] == arrival and at[-1]["is_success"] and after[-1]["is_success"]
+    assert costs(at).sum() == 0.0 and costs(after).sum() == 1.0 and costs(after)[-1] == 1.0
+
+
 @settings(max_examples=12, deadline=None)
 @given(seed=st.integers(0, 2**31 - 1), env_id=st.sampled_from([dwr_gym.ENV_ID, V1, V2]), disturbed=st.booleans())
 def test_the_cost_is_0_or_1_once_per_episode_at_its_end(seed: int, env_id: str, disturbed: bool) -> None:

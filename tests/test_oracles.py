@@ -66,15 +66,18 @@ def pipeline_rollout(env_id: str, policy: Any, episodes: list[tuple[tuple[float,
 @pytest.mark.parametrize(("env_id", "T_con"), [(V0, None), (V1, None), (V2, None), (V1, 10.0), (V2, 10.0)])
 def test_each_episodes_measures_are_the_oracles(env_id: str, T_con: float | None) -> None:
     """Per episode, the rollout's in time, arrival, final distance and heading, energy, return and arena exit are the
-    oracle's from the env's own steps; the sets hold the edge cases each rule must get right."""
+    oracle's from the env's own steps, and the env's summed cost is 1 exactly where the oracle is not in time; the
+    sets hold the edge cases each rule must get right."""
     policy = oracles.Recorder(Scripted(0.2))
     episodes = oracles.draw_set(env_id, 12, SEED, T_con)
     result = pipeline_rollout(env_id, policy, episodes, fixed=T_con is not None)
     played = oracles.play_set(env_id, policy, 0, episodes, fixed=T_con is not None)
     oracles.assert_same(oracles.rollout_rows(env_id, played, result))
     measures = [oracles.measure(e) for e in played]
-    for e, m in zip(played, measures, strict=True):  # the env's own energy agrees with the sum of u^2 + omega^2
-        assert e.steps[-1].energy_info == pytest.approx(m.energy, rel=1e-9)
+    for k, (e, m) in enumerate(zip(played, measures, strict=True)):
+        assert e.steps[-1].energy_info == pytest.approx(m.energy, rel=1e-9)  # the env's own: the sum of u^2 + omega^2
+        late = 0.0 if m.in_time else 1.0  # the deadline's violation, Safety-Gymnasium's info["cost"] summed
+        assert m.cost == late, f"episode {k} ({env_id}, T_con {e.T_con}): the env's summed cost {m.cost}, oracle {late}"
     inside_off_goal = [m.in_time and 1e-3 < m.final_distance <= 0.01 for m in measures]
     assert any(inside_off_goal), "no episode ends inside the tolerance but off the goal"
     assert any(m.in_time for m in measures) and (env_id == V0 or not all(m.in_time for m in measures))
