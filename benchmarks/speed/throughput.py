@@ -5,16 +5,14 @@
     python -m benchmarks run throughput --load 0     # quiet only
     python -m benchmarks run throughput --docs       # also write docs/throughput/throughput.json and render its block
 
-Each measurement runs twice: on the machine as it is ("quiet"), and while ``--load`` background processes
-(default 2) run busy loops, as other work would on a user's machine ("loaded"). The background processes
-are started here, end by themselves after ``--load-seconds`` at the latest, and are killed when their
-measurement ends, whatever happens. Measured, as medians of interleaved repeats (so that drifts in the
-machine's load hit both sides of a ratio):
+Each measurement runs twice: on the machine as it is ("quiet"), and while ``--load`` background processes (default
+2) run busy loops, as other work would on a user's machine ("loaded"); they end after ``--load-seconds`` at the
+latest, and are killed when their measurement ends. Measured, as medians of interleaved repeats (so that drifts in
+the machine's load hit both sides of a ratio):
 
-- the float64 kernels at N = 4096 that numpy evaluates one element at a time, by numpy, by torch on the
-  calling thread (as dwr_gym runs them) and by torch on its thread pool (as torch runs them by default);
-- one step of our single env and of CartPole-v1 (through gym.make, and unwrapped), each with one fixed
-  seeded action, resetting when an episode ends;
+- the float64 kernels at N = 4096 that numpy evaluates one element at a time, by numpy, by torch on the calling
+  thread (as dwr_gym runs them) and by torch on its thread pool (as torch runs them by default);
+- one step of our single env and of CartPole-v1 (gym.make'd, and unwrapped), one fixed seeded action, resetting;
 - env-steps per second of our vector env (float64, the default; float64 with torch's thread count set to
   1 by the user; the numpy-only path of DWR_GYM_TORCH=0; float32), of Gymnasium's SyncVectorEnv over our
   single env, and of Gymnasium's CartPoleVectorEnv, at N = 1, 64, 1024, 4096, 16384, and the default
@@ -24,9 +22,8 @@ machine's load hit both sides of a ratio):
   on this CPU and (on a CPU with AVX512) in a process with numpy's and torch's AVX512 switched off: where
   torch starts to pay, which is what ``dwr_gym.model.TORCH_MIN_SIZE`` is.
 
-Then the env-speed and busy-machine goals, met or not, and the machine and library versions. ``--docs`` writes
-every figure into the JSON, from which the results block of docs/throughput.md is rendered
-(:mod:`train.reporting.throughput_tables`). Compare two versions of the code with ``instructions`` (counts).
+Then the env-speed and busy-machine goals, met or not, and the machine and library versions. ``--docs`` writes every
+figure into the JSON, which renders docs/throughput.md's block (:mod:`train.reporting.throughput_tables`).
 """
 
 from __future__ import annotations

@@ -136,6 +136,10 @@ BUGS: dict[str, tuple[str, str, str, str]] = {
         "v2's terminal miss paid only outside the goal tolerance", "dwr_gym/core.py",
         "late = xp.where(terminated, -params.terminal_distance_weight * d, 0.0) if hold",
         "late = xp.where(terminated & (d > params.goal_tolerance), -params.terminal_distance_weight * d, 0.0) if hold"),
+    "cost_one_period_late_free": ("an arrival one control period after T_con costing 0", "dwr_gym/core.py",
+                                  "(step_count <= prescribed_steps)", "(step_count <= prescribed_steps + 1)"),
+    "cost_every_step": ("the cost charged at every step, not once at the episode's end", "dwr_gym/core.py",
+                        "xp.where(ended & xp.logical_not(in_time)", "xp.where(xp.logical_not(in_time)"),
     # the learners' conventions
     "apg_deadline_multiplier_sign": (
         "APG's deadline multiplier rewarding the distance instead of charging it", "train/learning/jitted/apg.py",
@@ -201,6 +205,8 @@ TARGETED: dict[str, list[str]] = {
         f"{LEARNERS}each_apg_option_adds_the_gradient_of_its_documented_charge[hold_heading_weight]"
     ],
     "apg_hold_miss_sign": [f"{LEARNERS}each_apg_option_adds_the_gradient_of_its_documented_charge[hold_steps]"],
+    "cost_one_period_late_free": ["tests/test_cost.py"],
+    "cost_every_step": [f"{ORACLES}each_episodes_measures_are_the_oracles"],
     "residual_head_1e-2": [f"{LEARNERS}the_jax_residual_starts_at_sb3s_scale_of_its_fresh_head"],
     "autoreset_wrong_fresh_episode": [f"{LEARNERS}the_autoreset_hands_the_kth_ended_robot_fresh_episode_k"],
     "es_return_after_the_end": [f"{LEARNERS}es_return_of_a_candidate_is_the_envs_own_episode_return"],
