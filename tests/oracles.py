@@ -10,7 +10,7 @@ definition in the docstrings in a plain loop over the recorded steps:
 - the constraint's cost: the env's ``info["cost"]`` summed over the episode is 1 where it is not in time, else 0;
 - E/opt: the episode's energy over the minimum energy to its goal *pose* by its *own* T_con, over the episodes in
   time that have an optimum; final heading: |psi - psi_d| at the episode's end; energy: the sum of
-  (u^2 + omega^2) dt; return: the sum of the env's rewards;
+  (u^2 + omega^2) dt; return: the sum of the env's rewards; the peaks of |u| and |omega|; the path: the sum of |u| dt;
 - per set: the mean over its episodes; over seeds: the interquartile mean (the middle half after sorting) and the
   2.5 and 97.5 percentiles of the bootstrapped IQMs; the tables' cells, formatted from those.
 
@@ -167,6 +167,9 @@ class Measures:
     reached_and_left: bool  # at the goal at some step before T_con, not at its end
     late_arrival: bool  # first at the goal after T_con
     cost: float  # the env's summed info["cost"] (the deadline's violation: 1 exactly where not in time)
+    peak_linear_velocity: float  # max |u| over the steps [m/s]
+    peak_angular_velocity: float  # max |omega| over the steps [rad/s]
+    path_length: float  # the sum of |u| dt [m]
 
 
 def measure(episode: Episode) -> Measures:
@@ -205,6 +208,9 @@ def measure(episode: Episode) -> Measures:
         reached_and_left=reached_before_end and not in_time,
         late_arrival=not math.isnan(arrival_time) and arrival_time > episode.T_con + 1e-9,
         cost=sum(step.cost for step in episode.steps),
+        peak_linear_velocity=max(abs(step.u) for step in episode.steps),
+        peak_angular_velocity=max(abs(step.omega) for step in episode.steps),
+        path_length=sum(abs(step.u) * episode.params.dt for step in episode.steps),
     )
 
 
@@ -399,6 +405,9 @@ ROLLOUT_FIELDS: dict[str, str] = {
     "energy": "energy",
     "episode_return": "episode_return",
     "left_arena": "left_arena",
+    "peak_linear_velocity": "peak_linear_velocity",
+    "peak_angular_velocity": "peak_angular_velocity",
+    "path_length": "path_length",
 }
 
 

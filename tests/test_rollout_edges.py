@@ -41,6 +41,28 @@ def test_a_robot_that_ends_at_its_first_step_has_its_one_command_change_as_its_r
     np.testing.assert_allclose(result.velocity_rate_rms, result.command_rate_rms)  # the ideal robot does as commanded
 
 
+class Constant:
+    """The same action for every robot at every step."""
+
+    def __init__(self, u: float, omega: float) -> None:
+        self.action = np.array([u, omega], np.float32)
+
+    def predict(
+        self, observation: Any, state: Any = None, episode_start: Any = None, deterministic: bool = True
+    ) -> tuple[Any, Any]:
+        return np.tile(self.action, (len(observation), 1)), None
+
+
+def test_actions_beyond_the_action_space_are_measured_as_the_env_clips_them() -> None:
+    """(3, -2.5) is (1, -1) to the env: the same command rate, peaks, path and energy as (1, -1) itself."""
+    beyond = rollout(Constant(3.0, -2.5), EnvParams(), STARTS, np.zeros((2, 3)))
+    clipped = rollout(Constant(1.0, -1.0), EnvParams(), STARTS, np.zeros((2, 3)))
+    for name in ("command_rate_rms", "velocity_rate_rms", "peak_linear_velocity", "peak_angular_velocity",
+                 "path_length", "energy"):  # fmt: skip
+        np.testing.assert_array_equal(getattr(beyond, name), getattr(clipped, name), err_msg=name)
+    assert clipped.command_rate_rms[0] > 0.0
+
+
 def test_on_step_receives_the_fraction_of_the_horizons_steps_done_before_each_step() -> None:
     fractions: list[float] = []
     rollout(Creep(), EnvParams(), STARTS, np.zeros((2, 3)), on_step=fractions.append)
