@@ -129,7 +129,7 @@ def test_verify_refuses_a_bad_tolerance(argv: list[str], message: str, capsys) -
 
 #: A shipped optimum (its key) on which the batched search (the cheapest coarse plan refined) stops 1.5e-6 above the
 #: shipped energy, and another of the same fine solver size (800 intervals).
-NEIGHBOURING_STATIONARY = "-4.999669273158e-01,-4.994638395080e-01,-7.960866141121e-01,3.030800634560e+01"
+BATCH_STOPS_ABOVE = "-4.999669273158e-01,-4.994638395080e-01,-7.960866141121e-01,3.030800634560e+01"
 SAME_SIZE = "-1.088301644463e-01,-7.059883345541e-01,-2.920180176385e-01,3.084763296714e+01"
 
 
@@ -153,8 +153,8 @@ def test_an_optimum_does_not_depend_on_what_its_solver_solved_before() -> None:
     """fatrop keeps its tolerance option only until a solver's first success (a first search of this optimum reaches
     the shipped energy, a later one stops 1.5e-6 above): each new solver is called once before its first search, so
     an optimum is the same alone, after another of its size, and whatever the threads' timing."""
-    alone = _in_a_new_thread(_jobs(NEIGHBOURING_STATIONARY))[0]
-    after = _in_a_new_thread(_jobs(SAME_SIZE, NEIGHBOURING_STATIONARY))[1]
+    alone = _in_a_new_thread(_jobs(BATCH_STOPS_ABOVE))[0]
+    after = _in_a_new_thread(_jobs(SAME_SIZE, BATCH_STOPS_ABOVE))[1]
     assert isinstance(alone, float) and alone == after, f"alone {alone!r}, after another optimum {after!r}"
 
 
@@ -164,14 +164,14 @@ def test_verify_decides_by_the_whole_search_where_the_batch_lands_above(
 ) -> None:
     real = shipped_optima.shipped_files()[0]
     problem, energies = shipped_optima.read_shipped(real)
-    shipped = energies[NEIGHBOURING_STATIONARY]
-    batched = _in_a_new_thread(_jobs(NEIGHBOURING_STATIONARY))[0]
-    whole = _in_a_new_thread(_jobs(NEIGHBOURING_STATIONARY), coarse=1)[0]
+    shipped = energies[BATCH_STOPS_ABOVE]
+    batched = _in_a_new_thread(_jobs(BATCH_STOPS_ABOVE))[0]
+    whole = _in_a_new_thread(_jobs(BATCH_STOPS_ABOVE), coarse=1)[0]
     assert isinstance(batched, float) and isinstance(whole, float)
     assert 1e-6 < (batched - shipped) / shipped < 2e-6, f"batched {batched!r}, shipped {shipped!r}"
     assert abs(whole - shipped) / shipped < 1e-9, f"whole search {whole!r}, shipped {shipped!r}"
-    shipped_optima.write_shipped(tmp_path / real.name, problem, {NEIGHBOURING_STATIONARY: shipped})
+    shipped_optima.write_shipped(tmp_path / real.name, problem, {BATCH_STOPS_ABOVE: shipped})
     monkeypatch.setattr(shipped_optima, "SHIPPED_DIR", tmp_path)
     assert cli(["optimum", "verify", "--no-progress", "--workers", "1"]) == 0
     out = capsys.readouterr().out
-    assert "1 optima reproduced by the whole fine search" in out and NEIGHBOURING_STATIONARY in out
+    assert "1 optima reproduced by the whole fine search" in out and BATCH_STOPS_ABOVE in out

@@ -9,7 +9,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from train.evaluation.optimum import solve_uncached
+from train.evaluation.optimum import EnergyJob, solve_uncached
 from train.evaluation.shipped_optima import read_shipped, shipped_files
 
 #: Shipped and re-solved energies agree to this relative difference by default (a plan's tolerance, docs/controllers.md).
@@ -73,12 +73,13 @@ def verify_shipped(
             jobs.append(((x, y, psi), T_con, problem["dt"], problem["u_max"], problem["omega_max"], problem["heading"]))
         done = report.checked
         progress = None if on_solved is None else (lambda n, done=done: on_solved(done + n, total))
-        missed = {}
+        missed: dict[str, tuple[EnergyJob, float | str]] = {}
         for key, job, solved in zip(keys, jobs, solve_uncached(jobs, workers, progress), strict=True):
-            if relative_difference(energies[key], solved) > rtol:
+            difference = relative_difference(energies[key], solved)
+            if difference > rtol:
                 missed[key] = (job, solved)
             else:
-                report.largest = max(report.largest, relative_difference(energies[key], solved))
+                report.largest = max(report.largest, difference)
         # The batched search refines the cheapest coarse plan: on a few optima it stops at fatrop's own tolerance, 1e-6
         # above (docs/results.md); the whole fine search decides whether the shipped energy is right.
         whole = solve_uncached([job for job, _ in missed.values()], workers, coarse=1) if missed else []
