@@ -31,6 +31,7 @@ from baselines.minimum_energy_nlp import (
     SOLVERS,
     casadi_step_exact,
     default_solver,
+    fill_stage_states,
     minimum_energy_solver,
     require_casadi,
     stage_order,
@@ -114,6 +115,7 @@ class MinimumEnergyProblem:
     solver: str
     start: tuple[float, float, float]
     tol: float = 1e-10  # the solver's convergence tolerance
+    stage: int = 1  # fatrop's intervals per stage (minimum_energy_solver)
 
 
 def minimum_energy_problem(
@@ -134,6 +136,7 @@ def minimum_energy_problem(
     max_iter: int = 1000,
     solver: str | None = None,
     tol: float = 1e-10,
+    stage: int = 1,
 ) -> MinimumEnergyProblem:
     """The search of :func:`solve_minimum_energy` (same keywords), unsolved; raises
     :class:`InfeasibleArrivalTimeError` where the time left is too short."""
@@ -155,6 +158,10 @@ def minimum_energy_problem(
         )
     planned = intervals
     intervals = -(-intervals // pad_to) * pad_to  # the next multiple of pad_to
+    if isinstance(stage, bool) or not isinstance(stage, int) or stage < 1 or intervals % stage or (
+            stage > 1 and response is not None):  # fmt: skip
+        raise ValueError(f"stage={stage!r} is invalid: expected an integer >= 1 that divides the {intervals} intervals "
+                         "(1 with response)")  # fmt: skip
     parameters = h if response is None else [h, *response]
     n_states = 3 * (intervals + 1)
     lower, upper = np.full(n_states + 2 * intervals, -np.inf), np.full(n_states + 2 * intervals, np.inf)
@@ -187,7 +194,7 @@ def minimum_energy_problem(
             candidates.append((guess, target if heading else None))
     return MinimumEnergyProblem(intervals, planned, h, lower, upper, parameters, tuple(candidates),
                                 warm_start is not None, response is not None, max_iter, solver or default_solver(),
-                                tuple(start), tol)  # fmt: skip
+                                tuple(start), tol, stage)  # fmt: skip
 
 
 def solve_minimum_energy(
@@ -218,8 +225,9 @@ def solve_minimum_energy(
     is the solver's convergence tolerance (the planners' 1e-8 saves an iteration of some ten where the plan's energy
     to 1e-7 is all a closed loop needs; the optimum keeps 1e-10).
     ``solver`` is "ipopt" or "fatrop" (:data:`SOLVERS`; default :func:`default_solver`); where fatrop converges
-    from no guess, IPOPT tries them too. The keywords are those of :func:`minimum_energy_problem`; many searches at
-    once: :func:`solve_plans`, the same plans to the last bit.
+    from no guess, IPOPT tries them too; ``stage`` is fatrop's intervals per stage (:func:`minimum_energy_solver`).
+    The keywords are those of :func:`minimum_energy_problem`; many searches at once: :func:`solve_plans`, the same
+    plans to the last bit.
     """
     (result,) = solve_plans([{"start": start, "arrival_time": arrival_time, "dt": dt, "u_max": u_max,
                               "omega_max": omega_max, **options}])  # fmt: skip
@@ -283,7 +291,8 @@ def _refined(jobs: list[dict[str, Any]], workers: int) -> list[dict[str, Any]]:
         k, pad_to = job["coarse"], job.get("pad_to", 1)
         if isinstance(k, bool) or not isinstance(k, int) or k < 1 or pad_to % k:
             raise ValueError(f"coarse={k!r} is invalid: expected an integer >= 1 that divides pad_to={pad_to}")
-        coarse_jobs.append({**refined[i], "hold_steps": job.get("hold_steps", 1) * k, "pad_to": pad_to // k})
+        coarse_jobs.append({**refined[i], "hold_steps": job.get("hold_steps", 1) * k, "pad_to": pad_to // k,
+                            "stage": 1})  # fmt: skip
     if not staged:
         return refined
     for (i, job), plan in zip(staged.items(), solve_plans(coarse_jobs, workers), strict=True):
@@ -346,10 +355,10 @@ def _run_round(tasks: list[tuple[int, int, str]], problems: dict[int, MinimumEne
     solve = functools.partial(_solve_guess, problems)
     if workers > 1 and len(tasks) > 1:
         share = -(-len(tasks) // (2 * workers))
-        sizes: dict[tuple[int, bool, int, str], list[int]] = {}
+        sizes: dict[tuple[int, bool, int, float, str, int], list[int]] = {}
         for t, (i, _, solver_name) in enumerate(tasks):
             p = problems[i]
-            sizes.setdefault((p.intervals, p.response, p.max_iter, p.tol, solver_name), []).append(t)
+            sizes.setdefault((p.intervals, p.response, p.max_iter, p.tol, solver_name, p.stage), []).append(t)
         units = [group[start : start + share] for _, group in sorted(sizes.items(), key=lambda kv: -kv[0][0])
                  for start in range(0, len(group), share)]  # fmt: skip
         futures = [_threads(workers).submit(lambda unit: [solve(tasks[t]) for t in unit], unit) for unit in units]
@@ -386,14 +395,16 @@ def _solve_guess(problems: dict[int, MinimumEnergyProblem], task: tuple[int, int
     if target is not None:
         lower, upper = lower.copy(), upper.copy()
         lower[3 * intervals + 2] = upper[3 * intervals + 2] = target
-    solver = thread_solver(intervals, problem.max_iter, problem.response, solver_name, problem.tol)
-    order = stage_order(intervals) if solver_name == "fatrop" else slice(None)
+    stage = problem.stage if solver_name == "fatrop" else 1  # IPOPT, the fallback: one stage per interval
+    solver = thread_solver(intervals, problem.max_iter, problem.response, solver_name, problem.tol, stage)
+    order = stage_order(intervals, stage) if solver_name == "fatrop" else slice(None)
     solution = solver(x0=guess[order], lbx=lower[order], ubx=upper[order], lbg=0.0, ubg=0.0, p=problem.parameters)
     stats = solver.stats()
     plan = None
     if stats["success"]:
         unknowns = np.empty(lower.shape)
         unknowns[order] = np.asarray(solution["x"]).ravel()
+        fill_stage_states(unknowns, intervals, stage, problem.h)
         plan = plan_from_solution(unknowns, intervals, problem.h, float(solution["f"]))
     return plan, int(stats.get("iter_count", 0)), str(stats.get("return_status", "")), time.perf_counter() - began
 
@@ -429,22 +440,7 @@ def plan_from_solution(solution: NDArray[np.float64], intervals: int, h: float, 
     return Plan(commands, states, h, energy, 0, 0.0, solution)
 
 
-__all__ = [
-    "PLAN_TOLERANCE",
-    "SMALL_HALF_TURN",
-    "SOLVERS",
-    "InfeasibleArrivalTimeError",
-    "MinimumEnergyProblem",
-    "OptimalControlError",
-    "Plan",
-    "casadi_step_exact",
-    "default_solver",
-    "least_arrival_time",
-    "minimum_energy_problem",
-    "minimum_energy_solver",
-    "require_casadi",
-    "solve_minimum_energy",
-    "solve_plans",
-    "stage_order",
-    "thread_solver",
-]
+__all__ = ["PLAN_TOLERANCE", "SMALL_HALF_TURN", "SOLVERS", "InfeasibleArrivalTimeError", "MinimumEnergyProblem",
+           "OptimalControlError", "Plan", "casadi_step_exact", "default_solver", "least_arrival_time",
+           "minimum_energy_problem", "minimum_energy_solver", "require_casadi", "solve_minimum_energy", "solve_plans",
+           "stage_order", "thread_solver"]  # fmt: skip

@@ -4,8 +4,8 @@
 
 A seeded sample of the ``--n`` distinct optima of compare's default sets (the random set's 1,000 starts, which the
 four disturbed sets share, and the paper's nine), solved in this one process as now
-(:func:`train.evaluation.optimum.solve_uncached`: a batch on ``--workers`` threads, fatrop, padded to ``PAD_TO``, a
-grid ``COARSE`` times coarser first) and, its first ``--before-n``, as before (IPOPT, padded to ``BEFORE_PAD_TO``,
+(:func:`train.evaluation.optimum.solve_uncached`: a batch on ``--workers`` threads, fatrop, ``STAGE`` intervals a stage,
+padded to ``PAD_TO``, a grid ``COARSE`` times coarser first) and, its first ``--before-n``, as before (IPOPT, padded to ``BEFORE_PAD_TO``,
 one search after another, every guess on the fine grid): CPU and wall seconds, plans per second, the load, and each
 optimum whose energy differs from the shipped one by more than 1e-6.
 """
@@ -86,14 +86,14 @@ def shipped(jobs: list[tuple[tuple[float, float, float], float]]) -> NDArray[np.
 
 def measure(n: int, seed: int, workers: int, before: bool, before_n: int | None = None) -> dict[str, Any]:
     from baselines.minimum_energy_nlp import minimum_energy_solver
-    from train.evaluation.optimum import COARSE, PAD_TO
+    from train.evaluation.optimum import COARSE, PAD_TO, STAGE
 
     every = default_jobs()
     chosen = sorted(np.random.default_rng(seed).choice(len(every), size=min(n, len(every)), replace=False))
     jobs = [every[i] for i in chosen]
     reference = shipped(jobs)
-    ways = {f"now: fatrop, padded to {PAD_TO}, coarse {COARSE}x then fine, a batch on {workers} threads": lambda: solve_now(
-        jobs, workers)}  # fmt: skip
+    ways = {f"now: fatrop, {STAGE} intervals a stage, padded to {PAD_TO}, coarse {COARSE}x then fine, a batch on {workers} "
+            "threads": lambda: solve_now(jobs, workers)}  # fmt: skip
     if before:  # the slow way on the sample's first ``before_n``
         ways[f"before: IPOPT, padded to {BEFORE_PAD_TO} intervals, one search after another"] = lambda: solve_before(
             jobs[:before_n])  # fmt: skip

@@ -45,8 +45,13 @@ CACHE_VERSION = 2
 #: and 4x less building, which is most of a batch's time (``python -m benchmarks run optimum-speed``).
 PAD_TO = 200
 #: Each optimum is searched on a grid this many times coarser first, then refined from the cheapest coarse plan
-#: (:func:`baselines.optimal.solve_plans`): the same energies to 1e-6 on all but 3 of the 1,009 default optima.
-COARSE = 10
+#: (:func:`baselines.optimal.solve_plans`): the same energies to 1e-6 on all but 2 of the 1,009 default optima. 20
+#: (1-s commands, 10-70 intervals) halves the coarse searches' time against 10 and leaves the fine solves' iterations as
+#: they were (5.3 on average); 40 misses 5 (``python -m benchmarks run optimum-speed``).
+COARSE = 20
+#: fatrop's intervals per stage on the fine grid, the states inside a stage eliminated
+#: (:func:`baselines.minimum_energy_nlp.minimum_energy_solver`; ``python -m benchmarks run optimum-speed``).
+STAGE = 4
 OPTIMA = ("pose", "position", "none")
 BATCH_PER_WORKER = 32
 """Plans per solving thread between two writes of the cache: a few seconds of work, so an interruption loses little."""
@@ -100,7 +105,7 @@ def _solve_energies(jobs: list[EnergyJob], workers: int, coarse: int = COARSE) -
     from baselines.optimal import Plan, solve_plans
 
     plans = solve_plans([{"start": start, "arrival_time": T_con, "dt": dt, "u_max": u_max, "omega_max": omega_max,
-                          "heading": heading, "pad_to": PAD_TO, "coarse": coarse}
+                          "heading": heading, "pad_to": PAD_TO, "coarse": coarse, "stage": STAGE}
                          for start, T_con, dt, u_max, omega_max, heading in jobs], workers)  # fmt: skip
     return [plan.energy if isinstance(plan, Plan) else str(plan) for plan in plans]
 
