@@ -198,4 +198,5 @@ def first_call(solver: Any, size: int, response: bool) -> None:
 
 
 __all__ = ["SMALL_HALF_TURN", "SOLVERS", "builds_in_parallel", "casadi_step_exact", "default_solver",
-           "fill_stage_states", "first_call", "minimum_energy_solver", "require_casadi", "stage_order", "thread_solver"]  # fmt: skip
+           "fill_stage_states", "first_call", "minimum_energy_solver", "require_casadi", "stage_order",
+           "thread_solver"]  # fmt: skip

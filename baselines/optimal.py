@@ -421,26 +421,30 @@ def _threads(workers: int) -> ThreadPoolExecutor:
     return _THREADS[workers]
 
 
+def new_threads() -> None:
+    """End the solving threads (their solvers with them): the next batch starts threads that have built nothing."""
+    for executor in _THREADS.values():
+        executor.shutdown()
+    _THREADS.clear()
+
+
 def frozen_guess(
     start: tuple[float, float, float], intervals: int, frozen: int, h: float, target: float, reverse: bool
 ) -> NDArray[np.float64]:
     """:func:`initial_guess` over the moving intervals, the robot still during the ``frozen`` ones."""
     moving = initial_guess(start, intervals - frozen, h, target, reverse)
-    n_moving = intervals - frozen
-    states = np.concatenate([np.tile(start, frozen), moving[: 3 * (n_moving + 1)]])
-    commands = np.concatenate([np.zeros(2 * frozen), moving[3 * (n_moving + 1) :]])
-    return np.concatenate([states, commands])
+    n_states = 3 * (intervals - frozen + 1)
+    return np.concatenate([np.tile(start, frozen), moving[:n_states], np.zeros(2 * frozen), moving[n_states:]])
 
 
 def plan_from_solution(solution: NDArray[np.float64], intervals: int, h: float, energy: float) -> Plan:
     """Unpack IPOPT's decision vector into a :class:`Plan`."""
     n_states = 3 * (intervals + 1)
-    states = solution[:n_states].reshape(intervals + 1, 3)
-    commands = solution[n_states:].reshape(intervals, 2)
-    return Plan(commands, states, h, energy, 0, 0.0, solution)
+    return Plan(solution[n_states:].reshape(intervals, 2), solution[:n_states].reshape(intervals + 1, 3), h, energy, 0,
+                0.0, solution)  # fmt: skip
 
 
 __all__ = ["PLAN_TOLERANCE", "SMALL_HALF_TURN", "SOLVERS", "InfeasibleArrivalTimeError", "MinimumEnergyProblem",
            "OptimalControlError", "Plan", "casadi_step_exact", "default_solver", "least_arrival_time",
-           "minimum_energy_problem", "minimum_energy_solver", "require_casadi", "solve_minimum_energy", "solve_plans",
-           "stage_order", "thread_solver"]  # fmt: skip
+           "minimum_energy_problem", "minimum_energy_solver", "new_threads", "require_casadi", "solve_minimum_energy",
+           "solve_plans", "stage_order", "thread_solver"]  # fmt: skip

@@ -55,8 +55,8 @@ def test_fatrop_with_several_intervals_per_stage_solves_the_same_problem(stage: 
     per interval: the energy to 1e-7 relative, each state the exact step of eq. (1) from the one before, from the start
     to the goal pose; a stage that does not divide the intervals, or beside a response, is refused naming it."""
     start = (2.0, 1.0, -3.0)
-    one = solve_minimum_energy(start, 12.0, **LIMITS, pad_to=optimum_module.PAD_TO)  # type: ignore[arg-type]
-    staged = solve_minimum_energy(start, 12.0, **LIMITS, pad_to=optimum_module.PAD_TO, stage=stage)  # type: ignore[arg-type]
+    one = solve_minimum_energy(start, 12.0, **LIMITS, pad_to=200)  # type: ignore[arg-type]
+    staged = solve_minimum_energy(start, 12.0, **LIMITS, pad_to=200, stage=stage)  # type: ignore[arg-type]
     assert staged.energy == pytest.approx(one.energy, rel=1e-7)
     assert staged.intervals == one.intervals == 240
     before, command = staged.states[:-1], staged.commands
@@ -67,9 +67,9 @@ def test_fatrop_with_several_intervals_per_stage_solves_the_same_problem(stage: 
     np.testing.assert_allclose(staged.states[-1], [0.0, 0.0, one.states[-1, 2]], atol=1e-8)
     np.testing.assert_allclose(staged.states, one.states, atol=1e-6)
     with pytest.raises(ValueError, match=r"^stage=3 is invalid: expected an integer >= 1 that divides the 400 "):
-        solve_minimum_energy(start, 12.0, **LIMITS, pad_to=optimum_module.PAD_TO, stage=3)  # type: ignore[arg-type]
+        solve_minimum_energy(start, 12.0, **LIMITS, pad_to=200, stage=3)  # type: ignore[arg-type]
     with pytest.raises(ValueError, match=r"^stage=2 is invalid: .*\(1 with response\)$"):
-        solve_minimum_energy(start, 12.0, **LIMITS, stage=2, pad_to=2, response=(0.0, 0.0, 1.0, 0.0))  # type: ignore[arg-type]
+        solve_minimum_energy(start, 9.0, **LIMITS, stage=2, pad_to=2, response=(0, 0, 1, 0))  # type: ignore[arg-type]
 
 
 @pytest.mark.skipif(not ca.has_nlpsol("fatrop"), reason="this CasADi ships no fatrop")

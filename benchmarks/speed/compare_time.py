@@ -186,9 +186,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--no-shipped", action="store_true",
                         help="do not read the optima shipped for the default sets (every missing one is solved)")  # fmt: skip
     parser.add_argument("--out", type=Path, help="keep compare's output there (default: a temporary directory)")
-    parser.add_argument(
-        "--docs", action="store_true", help=f"write {JSON_PATH.relative_to(ROOT)} (and render the block)"
-    )
+    parser.add_argument("--docs", action="store_true", help="write docs/compare/timing.json (and render its block)")
     args = parser.parse_args(argv)
     if args.busy < 0:
         parser.error(f"--busy={args.busy} is invalid: expected an integer >= 0")

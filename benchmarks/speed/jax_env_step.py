@@ -148,12 +148,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--repeats", type=int, default=7, help="interleaved repeats (default 7)")
     parser.add_argument("--steps", type=int, default=40, help="steps per repeat of the native env (default 40)")
     parser.add_argument("--scan", type=int, default=200, help="steps per compiled call in the scan case (default 200)")
-    parser.add_argument(
-        "--reset-ratio", type=int, default=16, help="robots per new episode drawn, optimistic case (default 16)"
-    )
-    parser.add_argument(
-        "--docs", action="store_true", help="write docs/jax/env_step.json (and render docs/jax.md's table)"
-    )
+    parser.add_argument("--reset-ratio", type=int, default=16, help="robots per new episode, optimistic case (16)")
+    parser.add_argument("--docs", action="store_true", help="write docs/jax/env_step.json (and render docs/jax.md)")
     args = parser.parse_args(argv)
     if min(args.num_envs, args.threads, args.repeats, args.steps, args.scan, args.reset_ratio) < 1:
         parser.error("--num-envs, --threads, --repeats, --steps, --scan and --reset-ratio must be positive integers")

@@ -4,14 +4,16 @@
 
 A seeded sample of the ``--n`` distinct optima of compare's default sets (the random set's 1,000 starts, which the
 four disturbed sets share, and the paper's nine), solved in this one process as now
-(:func:`train.evaluation.optimum.solve_uncached`: a batch on ``--workers`` threads, fatrop, ``STAGE`` intervals a stage,
-padded to ``PAD_TO``, a grid ``COARSE`` times coarser first) and, its first ``--before-n``, as before (IPOPT, padded to ``BEFORE_PAD_TO``,
-one search after another, every guess on the fine grid): CPU and wall seconds, plans per second, the load, and each
-optimum whose energy differs from the shipped one by more than 1e-6.
+(:func:`train.evaluation.optimum.solve_uncached`: a batch on ``--workers`` threads, fatrop, ``STAGE`` intervals a
+stage, padded to ``PAD_TO``, a grid ``COARSE`` times coarser first), with ``--stages``' other intervals a stage, and,
+its first ``--before-n``, as before (IPOPT, padded to ``BEFORE_PAD_TO``, one search after another, every guess on the
+fine grid): CPU and wall seconds, plans per second, the load, and each optimum whose energy differs from the shipped
+one by more than 1e-6. Each way starts threads that have built no solver yet.
 """
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import time
@@ -52,21 +54,18 @@ def solve_before(jobs: list[tuple[tuple[float, float, float], float]]) -> NDArra
 
     energies = np.full(len(jobs), np.nan)
     for i in sorted(range(len(jobs)), key=lambda i: -jobs[i][1]):
-        start, T_con = jobs[i]
         try:
-            energies[i] = solve_minimum_energy(
-                start, T_con, 0.05, 0.5, 2.0, pad_to=BEFORE_PAD_TO, solver="ipopt"
-            ).energy
+            energies[i] = solve_minimum_energy(*jobs[i], 0.05, 0.5, 2.0, pad_to=BEFORE_PAD_TO, solver="ipopt").energy
         except OptimalControlError:
             pass
     return energies
 
 
-def solve_now(jobs: list[tuple[tuple[float, float, float], float]], workers: int) -> NDArray[np.float64]:
-    """The jobs as ``dwr-gym compare`` solves a missing optimum now."""
+def solve_now(jobs: list[tuple[tuple[float, float, float], float]], workers: int, stage: int) -> NDArray[np.float64]:
+    """The jobs as ``dwr-gym compare`` solves a missing optimum now (with ``stage`` intervals per fatrop stage)."""
     from train.evaluation.optimum import solve_uncached
 
-    solved = solve_uncached([(start, T_con, 0.05, 0.5, 2.0, True) for start, T_con in jobs], workers)
+    solved = solve_uncached([(start, T_con, 0.05, 0.5, 2.0, True) for start, T_con in jobs], workers, stage=stage)
     return np.array([e if isinstance(e, float) else np.nan for e in solved])
 
 
@@ -84,22 +83,25 @@ def shipped(jobs: list[tuple[tuple[float, float, float], float]]) -> NDArray[np.
     return np.array([v if isinstance(v, float) else np.nan for v in values])
 
 
-def measure(n: int, seed: int, workers: int, before: bool, before_n: int | None = None) -> dict[str, Any]:
+def measure(n: int, seed: int, workers: int, before: bool, before_n: int | None = None, stages: tuple = ()) -> dict:
     from baselines.minimum_energy_nlp import minimum_energy_solver
+    from baselines.optimal import new_threads
     from train.evaluation.optimum import COARSE, PAD_TO, STAGE
 
     every = default_jobs()
     chosen = sorted(np.random.default_rng(seed).choice(len(every), size=min(n, len(every)), replace=False))
     jobs = [every[i] for i in chosen]
     reference = shipped(jobs)
-    ways = {f"now: fatrop, {STAGE} intervals a stage, padded to {PAD_TO}, coarse {COARSE}x then fine, a batch on {workers} "
-            "threads": lambda: solve_now(jobs, workers)}  # fmt: skip
+    ways = {f"{'now' if s == STAGE else 'other'}: fatrop, {s} interval{'s' * (s > 1)} a stage, padded to {PAD_TO}, "
+            f"coarse {COARSE}x then fine, a batch on {workers} threads": functools.partial(solve_now, jobs, workers, s)
+            for s in dict.fromkeys((STAGE, *stages))}  # fmt: skip
     if before:  # the slow way on the sample's first ``before_n``
         ways[f"before: IPOPT, padded to {BEFORE_PAD_TO} intervals, one search after another"] = lambda: solve_before(
             jobs[:before_n])  # fmt: skip
     results: dict[str, Any] = {}
     for label, solve in ways.items():
         minimum_energy_solver.cache_clear()
+        new_threads()
         cpu, wall = time.process_time(), time.perf_counter()
         energies = solve()
         cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
@@ -122,9 +124,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--workers", type=int, default=2, help="threads of the batch (default: 2)")
     parser.add_argument("--no-before", action="store_true", help="leave out the way of before (the slow one)")
     parser.add_argument("--before-n", type=int, default=None, help="the way of before on the first N (default: --n)")
-    parser.add_argument(
-        "--out", default=str(JSON_PATH), help=f"the JSON written (default: {JSON_PATH.relative_to(ROOT)})"
-    )
+    parser.add_argument("--stages", type=int, nargs="*", default=[], help="also these intervals per fatrop stage")
+    parser.add_argument("--out", default=str(JSON_PATH), help="the JSON (default: docs/compare/optimum_speed.json)")
     args = parser.parse_args(argv)
     if not 1 <= args.n <= 1009:
         parser.error(f"--n {args.n} is invalid: expected an integer in [1, 1009]")
@@ -132,6 +133,8 @@ def main(argv: list[str] | None = None) -> None:
         parser.error(f"--workers {args.workers} is invalid: expected an integer in [1, 64]")
     if args.before_n is not None and not 1 <= args.before_n <= args.n:
         parser.error(f"--before-n {args.before_n} is invalid: expected an integer in [1, --n = {args.n}]")
-    results = measure(args.n, args.seed, args.workers, not args.no_before, args.before_n)
+    if any(not 1 <= s <= 200 or 200 % s for s in args.stages):
+        parser.error(f"--stages {args.stages} is invalid: expected divisors of the padding, 200")
+    results = measure(args.n, args.seed, args.workers, not args.no_before, args.before_n, tuple(args.stages))
     Path(args.out).write_text(json.dumps(results, indent=1) + "\n")
     print(f"wrote {args.out}")

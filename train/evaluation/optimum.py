@@ -98,14 +98,15 @@ def _start_key(start: NDArray[np.float64], T_con: float) -> str:
 EnergyJob = tuple[tuple[float, float, float], float, float, float, float, bool]
 
 
-def _solve_energies(jobs: list[EnergyJob], workers: int, coarse: int = COARSE) -> list[float | str]:
+def _solve_energies(jobs: list[EnergyJob], workers: int, coarse: int = COARSE, stage: int | None = None
+                    ) -> list[float | str]:  # fmt: skip
     """The optimal energy of each job, or its error message (returned: one failure leaves the others intact), solved
     as one batch on ``workers`` threads (:func:`baselines.optimal.solve_plans`); ``coarse`` = 1: every guess searched
     on the fine grid (the whole search, some 5x slower)."""
     from baselines.optimal import Plan, solve_plans
 
     plans = solve_plans([{"start": start, "arrival_time": T_con, "dt": dt, "u_max": u_max, "omega_max": omega_max,
-                          "heading": heading, "pad_to": PAD_TO, "coarse": coarse, "stage": STAGE}
+                          "heading": heading, "pad_to": PAD_TO, "coarse": coarse, "stage": stage or STAGE}
                          for start, T_con, dt, u_max, omega_max, heading in jobs], workers)  # fmt: skip
     return [plan.energy if isinstance(plan, Plan) else str(plan) for plan in plans]
 
@@ -371,16 +372,18 @@ def solve_uncached(
     workers: int = 0,
     on_solved: Callable[[int], None] | None = None,
     coarse: int = COARSE,
+    stage: int | None = None,
 ) -> list[float | str]:
     """Solve each job (start in the goal's frame, T_con, dt, u_max, omega_max, heading) afresh on ``workers``
     threads (0: every core, at most 8), reading and writing no cache: the energy, or why there is none.
     ``on_solved`` receives the number solved so far (what ``dwr-gym optimum verify`` re-solves); ``coarse`` = 1
-    searches every guess on the fine grid instead of refining the cheapest coarse plan."""
+    searches every guess on the fine grid instead of refining the cheapest coarse plan; ``stage``: fatrop's intervals
+    per stage on the fine grid (default :data:`STAGE`)."""
     workers = workers or min(os.cpu_count() or 1, 8)
     results: list[float | str] = []
     size = BATCH_PER_WORKER * workers
     for first in range(0, len(jobs), size):  # a batch of a few seconds' work between two reports
-        results.extend(_solve_energies(jobs[first : first + size], workers, coarse))
+        results.extend(_solve_energies(jobs[first : first + size], workers, coarse, stage))
         if on_solved is not None:
             on_solved(len(results))
     return results
