@@ -44,6 +44,8 @@ def test_the_coarse_then_fine_search_finds_the_whole_fine_searchs_optimum(start:
     assert staged.tried == 1 and staged.iterations < plain.iterations / 2  # the warm start converged, no cold guess
     np.testing.assert_allclose(staged.states[0], start, atol=1e-12)
     np.testing.assert_allclose(staged.states[-1][:2], 0.0, atol=1e-8)
+    # the coarse grid's commands last at most COARSE_HOLD (1 s): 20 periods of 0.05 s, 4 of 0.25 s, none of 2 s
+    assert [optimum_module.coarse_factor(dt) for dt in (0.05, 0.25, 2.0)] == [20, 4, 1] == [optimum_module.COARSE, 4, 1]
     with pytest.raises(ValueError, match=r"^coarse=3 is invalid: expected an integer >= 1 that divides pad_to=20$"):
         solve_minimum_energy(start, 12.0, **LIMITS, pad_to=20, coarse=3)  # type: ignore[arg-type]
 

@@ -44,11 +44,21 @@ CACHE_VERSION = 2
 #: 0.04 ms per interval: the 7 sizes of 200 to 1,400 intervals cost more per solve than the 52 of a multiple of 20,
 #: and 4x less building, which is most of a batch's time (``python -m benchmarks run optimum-speed``).
 PAD_TO = 200
-#: Each optimum is searched on a grid this many times coarser first, then refined from the cheapest coarse plan
-#: (:func:`baselines.optimal.solve_plans`): the same energies to 1e-6 on all but 2 of the 1,009 default optima. 20
-#: (1-s commands, 10-70 intervals) halves the coarse searches' time against 10 and leaves the fine solves' iterations as
-#: they were (5.3 on average); 40 misses 5 (``python -m benchmarks run optimum-speed``).
-COARSE = 20
+#: Each optimum is searched first on commands held at most this long [s] (:func:`coarse_factor`), then refined from the
+#: cheapest coarse plan (:func:`baselines.optimal.solve_plans`). At the env's dt (0.05 s: 20 periods a command, 10-70
+#: intervals) 15-30 % less CPU time than 10 periods, the fine solves' iterations as they were (5.3 on average), the
+#: 1,009 default optima within 4.7e-7 of the shipped ones; 40 periods miss 5 by more than 1e-6. Longer holds lead
+#: the refinement into other local optima (at dt 0.25 s, 5-s commands found a plan 18 % cheaper than the search's).
+COARSE_HOLD = 1.0
+
+
+def coarse_factor(dt: float) -> int:
+    """The control periods a command of the coarse grid holds: the most that divide :data:`PAD_TO` and last at most
+    :data:`COARSE_HOLD` (1, no coarse search, where one period lasts longer)."""
+    return max((k for k in range(1, PAD_TO + 1) if PAD_TO % k == 0 and k * dt <= COARSE_HOLD * (1.0 + 1e-9)), default=1)
+
+
+COARSE = coarse_factor(0.05)  # at the env's dt: 20
 #: fatrop's intervals per stage on the fine grid, the states inside a stage eliminated
 #: (:func:`baselines.minimum_energy_nlp.minimum_energy_solver`; ``python -m benchmarks run optimum-speed``).
 STAGE = 4
@@ -98,7 +108,7 @@ def _start_key(start: NDArray[np.float64], T_con: float) -> str:
 EnergyJob = tuple[tuple[float, float, float], float, float, float, float, bool]
 
 
-def _solve_energies(jobs: list[EnergyJob], workers: int, coarse: int = COARSE, stage: int | None = None
+def _solve_energies(jobs: list[EnergyJob], workers: int, coarse: int | None = None, stage: int | None = None
                     ) -> list[float | str]:  # fmt: skip
     """The optimal energy of each job, or its error message (returned: one failure leaves the others intact), solved
     as one batch on ``workers`` threads (:func:`baselines.optimal.solve_plans`); ``coarse`` = 1: every guess searched
@@ -106,7 +116,7 @@ def _solve_energies(jobs: list[EnergyJob], workers: int, coarse: int = COARSE, s
     from baselines.optimal import Plan, solve_plans
 
     plans = solve_plans([{"start": start, "arrival_time": T_con, "dt": dt, "u_max": u_max, "omega_max": omega_max,
-                          "heading": heading, "pad_to": PAD_TO, "coarse": coarse, "stage": stage or STAGE}
+                          "heading": heading, "pad_to": PAD_TO, "coarse": coarse or coarse_factor(dt), "stage": stage or STAGE}
                          for start, T_con, dt, u_max, omega_max, heading in jobs], workers)  # fmt: skip
     return [plan.energy if isinstance(plan, Plan) else str(plan) for plan in plans]
 
@@ -371,14 +381,14 @@ def solve_uncached(
     jobs: list[EnergyJob],
     workers: int = 0,
     on_solved: Callable[[int], None] | None = None,
-    coarse: int = COARSE,
+    coarse: int | None = None,
     stage: int | None = None,
 ) -> list[float | str]:
     """Solve each job (start in the goal's frame, T_con, dt, u_max, omega_max, heading) afresh on ``workers``
     threads (0: every core, at most 8), reading and writing no cache: the energy, or why there is none.
     ``on_solved`` receives the number solved so far (what ``dwr-gym optimum verify`` re-solves); ``coarse`` = 1
-    searches every guess on the fine grid instead of refining the cheapest coarse plan; ``stage``: fatrop's intervals
-    per stage on the fine grid (default :data:`STAGE`)."""
+    searches every guess on the fine grid instead of refining the cheapest coarse plan (default: :func:`coarse_factor`
+    of each job's dt); ``stage``: fatrop's intervals per stage on the fine grid (default :data:`STAGE`)."""
     workers = workers or min(os.cpu_count() or 1, 8)
     results: list[float | str] = []
     size = BATCH_PER_WORKER * workers
