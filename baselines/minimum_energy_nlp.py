@@ -28,6 +28,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from dwr_gym.model import unicycle_step_exact
+
 #: Below |omega dt / 2| of this, sin(h)/h is its Taylor polynomial: smooth derivatives for IPOPT, same value to 1e-24.
 SMALL_HALF_TURN = 1e-6
 #: The nonlinear programming solvers of :func:`minimum_energy_solver`.
@@ -139,8 +141,6 @@ def stage_order(intervals: int, stage: int = 1) -> NDArray[np.intp]:
 def fill_stage_states(unknowns: NDArray[np.float64], intervals: int, stage: int, h: float) -> None:
     """Write into the decision vector ``unknowns`` (states, then commands) the states inside each stage of ``stage``
     intervals, by the exact steps of eq. (1) from the stage's first state (the heading unwrapped, as the solver's)."""
-    from dwr_gym.model import unicycle_step_exact
-
     states = unknowns[: 3 * (intervals + 1)].reshape(intervals + 1, 3)
     commands = unknowns[3 * (intervals + 1) :].reshape(intervals, 2)
     for k in range(1, stage):  # the k-th state of every stage from the one before it, all stages at once
