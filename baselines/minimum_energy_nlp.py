@@ -157,7 +157,7 @@ _BUILDING = threading.Lock()
 @lru_cache(maxsize=1)
 def builds_in_parallel() -> bool:
     """Whether this CasADi builds solvers on several threads at once: built with thread-safe symbolics (the PyPI
-    wheels from 3.6 on), whose builds release the GIL. Elsewhere the builds take turns (:data:`_BUILDING`)."""
+    wheels: 3.8.2 checked), whose builds release the GIL. Elsewhere the builds take turns (:data:`_BUILDING`)."""
     return "CASADI_WITH_THREADSAFE_SYMBOLICS" in require_casadi().CasadiMeta.compiler_flags()
 
 
