@@ -89,18 +89,16 @@ def minimum_energy_solver(
     ca = require_casadi()
     if solver not in SOLVERS:
         raise ValueError(f"solver={solver!r} is invalid: expected one of {', '.join(SOLVERS)}")
-    s, c, h_sym = ca.SX.sym("s", 3), ca.SX.sym("c", 2), ca.SX.sym("h")
-    step = ca.Function("step", [s, c, h_sym], [casadi_step_exact(s, c, h_sym)])
     if stage != 1 and (solver != "fatrop" or response or stage < 1 or intervals % stage):
         raise ValueError(f"stage={stage!r} is invalid: expected 1, or with fatrop and no response a divisor of "
                          f"intervals={intervals}")  # fmt: skip
     n_stages, width = intervals // stage, 3 + 2 * stage
-    if stage > 1:  # one stage: its first state and its commands; the end state is the exact steps through them
-        s, c = ca.SX.sym("s", 3), ca.SX.sym("c", 2 * stage)
-        end = s
-        for k in range(stage):
-            end = casadi_step_exact(end, c[2 * k : 2 * k + 2], h_sym)
-        step = ca.Function("stage", [s, c, h_sym], [end])
+    # one stage: its first state and its commands; the end state is the exact steps through them
+    s, c, h_sym = ca.SX.sym("s", 3), ca.SX.sym("c", 2 * stage), ca.SX.sym("h")
+    end = s
+    for k in range(stage):
+        end = casadi_step_exact(end, c[2 * k : 2 * k + 2], h_sym)
+    step = ca.Function("step", [s, c, h_sym], [end])
     if solver == "fatrop":  # stage order: (x_k, u_k) for each stage, then x_N
         unknowns = ca.MX.sym("x", width * n_stages + 3)
         stages = ca.reshape(unknowns[: width * n_stages], width, n_stages)

@@ -116,7 +116,8 @@ def _solve_energies(jobs: list[EnergyJob], workers: int, coarse: int | None = No
     from baselines.optimal import Plan, solve_plans
 
     plans = solve_plans([{"start": start, "arrival_time": T_con, "dt": dt, "u_max": u_max, "omega_max": omega_max,
-                          "heading": heading, "pad_to": PAD_TO, "coarse": coarse or coarse_factor(dt), "stage": stage or STAGE}
+                          "heading": heading, "pad_to": PAD_TO, "coarse": coarse or coarse_factor(dt),
+                          "stage": stage or STAGE}
                          for start, T_con, dt, u_max, omega_max, heading in jobs], workers)  # fmt: skip
     return [plan.energy if isinstance(plan, Plan) else str(plan) for plan in plans]
 
