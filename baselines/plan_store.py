@@ -59,7 +59,8 @@ def default_directory() -> Path:
 
 class PlanStore:
     """Plans (or their errors) by job key, read from ``directory`` at first use, new ones written there by
-    :meth:`flush` (only by the process that opened the store: a forked child's copy writes nothing)."""
+    :meth:`flush` (only by the process that opened the store: a forked child's copy writes nothing unless it
+    :meth:`adopt`\ s it)."""
 
     def __init__(self, directory: Path):
         self.directory = Path(directory)
@@ -88,6 +89,11 @@ class PlanStore:
         self._new[key] = result
         if len(self._new) >= FLUSH_EVERY:
             self.flush()
+
+    def adopt(self) -> None:
+        """In a forked child: write the plans this process solves from now on to files of its own (not the parent's
+        pending ones, which the parent writes)."""
+        self._owner, self._new, self._files = os.getpid(), {}, 0
 
     def flush(self) -> None:
         """Write the pending plans to a new file of this process (atomic: a reader sees all of it or none)."""

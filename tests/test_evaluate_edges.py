@@ -134,10 +134,11 @@ def test_the_optimums_own_bar_shows_where_asked_and_the_clock_is_silent_else_the
 
 
 class Planner:
-    """A planning controller's part that evaluate reads: the plans it could not find, and its process pool."""
+    """A planning controller's part that evaluate reads: the plans it could not find (one from an earlier set), and
+    its process pool."""
 
     def __init__(self) -> None:
-        self.failures = ["no plan from here", "nor from there"]
+        self.failures = ["no plan on the set before"]
         self.closed = False
 
     def close(self) -> None:
@@ -148,8 +149,14 @@ class PlanningAgent(Still):
     def __init__(self) -> None:
         self.controller = Planner()
 
+    def predict(self, observation: Any, *args: Any, **kwargs: Any) -> tuple[Any, Any]:
+        if len(self.controller.failures) < 3:  # two robots it finds no plan for on this set
+            self.controller.failures.append("no plan from here")
+        return super().predict(observation, *args, **kwargs)
+
 
 def test_a_policys_planner_failures_are_counted_and_its_planner_closed_after_its_rollout() -> None:
+    """The failures of the rollout's own (an agent's planner serves every set: not those of the sets before)."""
     agent = PlanningAgent()
     result = evaluate({"agent": agent}, make_scenario("random", n=1, seed=0, env_kwargs={"T_con": 5.0}))["agent"]
     assert result.planner_failures == 2 and agent.controller.closed

@@ -261,8 +261,10 @@ class FakeSide:
         self.started = []
         return ended
 
-    def take(self) -> str | None:
-        return self.waiting.pop() if self.waiting else None
+    def take(self, first: bool = False) -> Any:
+        if not self.waiting:
+            return None
+        return self.waiting.pop(0) if first else self.waiting.pop()
 
     def finished(self) -> dict[str, tuple[Any, float]]:
         if not self.fast:
@@ -271,9 +273,11 @@ class FakeSide:
         self._start()
         return ended
 
-    def results(self) -> dict[str, tuple[Any, float]]:
+    def results(self, labels: Any = None) -> dict[str, tuple[Any, float]]:
         evaluate_module.time.perf_counter.now += 2.0  # type: ignore[attr-defined]
-        return self._ended()
+        ended = self._ended()
+        self._start()
+        return ended
 
     def close(self) -> None:
         self.closed = True

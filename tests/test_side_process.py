@@ -143,3 +143,77 @@ def test_the_jobs_that_ended_beside_are_returned_as_they_end_and_once() -> None:
         assert side.finished() == {} and side.results() == {}
     finally:
         side.close()
+
+
+@needs_fork
+def test_the_command_can_take_the_job_the_side_process_would_start_next_and_wait_for_some() -> None:
+    jobs = {f"job{i}": (_slow_pid, (0.2,)) for i in range(4)}
+    side = side_process.SideProcess(jobs)
+    try:
+        assert side.take(first=True) == "job1"  # job0 started in the side process at once
+        assert side.take() == "job3"
+        assert side.started() <= {"job0", "job2"}
+        some = side.results({"job0"})
+        assert list(some) == ["job0"]
+        rest = side.results()
+    finally:
+        side.close()
+    assert set(rest) == {"job2"}
+
+
+def rows_of(monkeypatch: pytest.MonkeyPatch, switch: str) -> list[dict[str, Any]]:
+    from train.evaluation.evaluate import evaluate_sets
+
+    monkeypatch.setenv(side_process.SWITCH, switch)
+    # 'astolfi' and 'fixed-time' stand in for two planners: one runs here, the other beside, with the laws
+    monkeypatch.setattr(evaluate_module, "PLANNERS", frozenset({"astolfi", "fixed-time"}))
+    policies = {"ptc": "ptc", "astolfi": "astolfi", "fixed-time": "fixed-time", "fabregas": "fabregas"}
+    seen: list[int] = []
+    rows = evaluate_sets(policies, ["random", "disturbed", "noise"], 6, 2, {}, on_rows=lambda r: seen.append(len(r)))
+    assert seen == [4, 8, 12]  # the rows come set by set
+    return rows
+
+
+@needs_fork
+def test_every_set_on_two_processes_gives_the_rows_of_the_sets_in_turn(monkeypatch: pytest.MonkeyPatch) -> None:
+    """compare's sets on two processes, the jobs of every set in one queue: the same rows, in the same order, to the
+    last digit, as one process running them in turn."""
+    import json
+
+    alone, beside = rows_of(monkeypatch, "0"), rows_of(monkeypatch, "1")
+    assert [(r["scenario"], r["policy"]) for r in beside] == [(r["scenario"], r["policy"]) for r in alone]
+    timing = {"seconds", "optimum_seconds"}
+    for a, b in zip(alone, beside, strict=True):
+        assert json.dumps({k: v for k, v in a.items() if k not in timing}) == json.dumps(
+            {k: v for k, v in b.items() if k not in timing}
+        )
+        assert b["seconds"] > 0
+
+
+@needs_fork
+def test_the_plans_solved_beside_reach_the_plan_store(monkeypatch: pytest.MonkeyPatch, tmp_path: Any) -> None:
+    """A planner run in the side process writes its plans to the store, in files of that process's own: a second
+    command takes them instead of solving them again."""
+    import os
+    from collections import OrderedDict
+
+    pytest.importorskip("casadi")
+    from baselines import nmpc, plan_store
+    from train.evaluation.evaluate import evaluate_sets
+
+    monkeypatch.setenv("DWR_GYM_CACHE", str(tmp_path))
+    monkeypatch.setenv(side_process.SWITCH, "1")
+    policies = {"robust-pt": "robust-pt", "optimal": "optimal", "ptc": "ptc"}  # 'optimal' runs beside
+    kwargs = {"T_con": 4.0, "T_con_range": None}
+    first = evaluate_sets(policies, ["random"], 2, 0, kwargs)
+    writers = {path.name.split("-")[0] for path in plan_store.default_directory().glob("*.npz")}
+    assert str(os.getpid()) in writers and len(writers) == 2, writers
+    monkeypatch.setattr(nmpc, "_MEMO", OrderedDict())
+    solved: list[int] = []
+    real = nmpc.solve_plans
+    monkeypatch.setattr(nmpc, "solve_plans", lambda jobs, workers=1: solved.append(len(jobs)) or real(jobs, workers))
+    monkeypatch.setenv(side_process.SWITCH, "0")  # every planner here, where the solves are counted
+    second = evaluate_sets(policies, ["random"], 2, 0, kwargs)
+    assert sum(solved) == 0, solved  # every plan read from the store, none solved
+    for a, b in zip(first, second, strict=True):
+        assert a["energy_mean"] == b["energy_mean"] and a["success_rate"] == b["success_rate"], a["policy"]

@@ -15,7 +15,7 @@ from train.evaluation.optimum import OPTIMA, missing_optima, optimal_energies
 from train.evaluation.rollout import Policy, RolloutResult, rollout
 from train.evaluation.scenarios import Scenario, controller_for, make_scenario
 from train.evaluation.side_process import PLANNERS, SideProcess, side_process_usable
-from train.evaluation.stages import PLAN_SECONDS, StageClock, estimated_seconds
+from train.evaluation.stages import COLD_EPISODE_SECONDS, PLAN_SECONDS, StageClock, estimated_seconds
 
 
 def evaluate(
@@ -44,15 +44,7 @@ def evaluate(
     clock = clock or StageClock(progress=False)
     stage_scenario = stage_scenario or scenario.name
     params = EnvParams.from_kwargs(**split_env_kwargs(scenario.env_kwargs)[0])
-    optimal_energy, optimum_failures = None, []
-    if optimum != "none":
-        todo = len(missing_optima(params, scenario.starts, scenario.goals, scenario.T_cons, heading=optimum == "pose"))
-        with clock.stage(stage_scenario, "optimum", todo * PLAN_SECONDS, todo) as advance:
-            optimal_energy, optimum_failures = optimal_energies(
-                params, scenario.starts, scenario.goals, scenario.T_cons, heading=optimum == "pose",
-                progress=progress and not clock.shown, description=f"{scenario.name}: optimum",
-                on_solved=lambda done: advance(done / max(todo, 1)), address=address,
-            )  # fmt: skip
+    optimal_energy, optimum_failures = _optimum(scenario, params, optimum, clock, stage_scenario, progress, address)
     if address is not None:  # each policy's rollout one Ray task (its wall time the worker's)
         results = _rollouts_on_ray(policies, params, scenario, record, seed, address, clock, stage_scenario)
         for result in results.values():
@@ -61,9 +53,10 @@ def evaluate(
     beside = running_beside(policies)  # (not on Ray: returned above)
     plain = {label: policy for label, policy in policies.items() if label in beside}
     side = None
-    if plain:  # the planners here, the others beside them
-        # the agents first (a network's call per step: the costlier), the laws last: this process takes from the end
-        order = sorted(plain, key=lambda label: isinstance(plain[label], str))
+    if plain:  # the costliest planner here, the others beside it
+        # the planners first, the agents next (a network's call per step: the costlier), the laws last: this process
+        # takes from the end
+        order = sorted(plain, key=lambda label: (label not in PLANNERS, isinstance(plain[label], str)))
         side = SideProcess(
             {label: (_rollout_one, (label, plain[label], params, scenario, record, seed)) for label in order}
         )
@@ -100,6 +93,23 @@ def evaluate(
     for result in results.values():
         result.optimal_energy, result.optimum_failures = optimal_energy, optimum_failures
     return {label: results[label] for label in policies}
+
+
+def _optimum(
+    scenario: Scenario, params: EnvParams, optimum: str, clock: StageClock, stage_scenario: str, progress: bool,
+    address: str | None,
+) -> tuple[Any, list[str]]:  # fmt: skip
+    """The optimum's energy of each episode of ``scenario`` (solved, or read from the cache) and its failures; (None,
+    []) with ``optimum`` "none". Timed on ``clock`` as the stage "optimum"."""
+    if optimum == "none":
+        return None, []
+    todo = len(missing_optima(params, scenario.starts, scenario.goals, scenario.T_cons, heading=optimum == "pose"))
+    with clock.stage(stage_scenario, "optimum", todo * PLAN_SECONDS, todo) as advance:
+        return optimal_energies(  # type: ignore[no-any-return]
+            params, scenario.starts, scenario.goals, scenario.T_cons, heading=optimum == "pose",
+            progress=progress and not clock.shown, description=f"{scenario.name}: optimum",
+            on_solved=lambda done: advance(done / max(todo, 1)), address=address,
+        )  # fmt: skip
 
 
 def _rollouts_on_ray(
@@ -154,13 +164,15 @@ def _rollout_one(
     """One policy (a controller's name makes it) on the scenario, its planner's failures counted."""
     if isinstance(policy, str):
         policy = ExpertPolicy(controller_for(policy, scenario, params), params.u_max, params.omega_max)
+    # an agent's planner serves every set it runs on: this rollout's failures are those it adds
+    failed_before = len(getattr(getattr(policy, "controller", None), "failures", ()))
     result = rollout(
         policy, params, scenario.starts, scenario.goals, record=record, seed=seed, progress=progress,
         description=f"{scenario.name}: {label}", T_con=scenario.T_cons, env_kwargs=scenario.env_kwargs,
         on_step=on_step,
     )  # fmt: skip
     controller = getattr(policy, "controller", None)
-    result.planner_failures = len(getattr(controller, "failures", ()))
+    result.planner_failures = len(getattr(controller, "failures", ())) - failed_before
     if hasattr(controller, "close"):
         controller.close()
     return result
@@ -205,6 +217,13 @@ def evaluate_sets(
     groups = {scenario.name: "disturbed" if scenario.name in ROBUSTNESS_SETS else "nominal" for scenario in chosen}
     clock.plan(planned_seconds(policies, chosen, optimum, n_optimal), beside=running_beside(policies, address),
                groups=groups)  # fmt: skip
+    if running_beside(policies, address) and len(chosen) > 0:  # two processes over every set's stages
+        with plan_store.opened():
+            try:
+                return _evaluate_sets_beside(policies, chosen, seed, optimum, n_optimal, clock, on_rows)
+            finally:
+                if own:
+                    clock.close()
     rows = []
     try:
         with plan_store.opened():  # the planners' plans, kept for the next command (what they solved, also on Ctrl-C)
@@ -215,17 +234,7 @@ def evaluate_sets(
                     stage: round(clock.seconds(scenario.name, stage) - seconds, 2) for stage, seconds in before.items()
                 }
                 for label, result in results.items():
-                    note = result.optimum_failures[0] if result.optimum_failures else ""
-                    drawn = scenario.T_cons is not None
-                    T_row = float("nan") if drawn else result.params.T_con  # nan: drawn per episode, in T_con_range
-                    T_range = (
-                        list(result.params.T_con_range or (min(scenario.T_cons), max(scenario.T_cons)))
-                        if drawn
-                        else None
-                    )
-                    rows.append({"scenario": scenario.name, "T_con": T_row, "policy": label, **result.summary(),
-                                 "optimum_note": note, "T_con_range": T_range, "seconds": took[label],
-                                 "optimum_seconds": took["optimum"]})  # fmt: skip
+                    rows.append(_set_row(scenario, label, result, took[label], took["optimum"]))
                 if on_rows is not None:
                     on_rows(list(rows))
     finally:
@@ -234,12 +243,125 @@ def evaluate_sets(
     return rows
 
 
+def _set_row(scenario: Scenario, label: str, result: RolloutResult, seconds: float, optimum_seconds: float
+             ) -> dict[str, Any]:  # fmt: skip
+    """The row of one policy on one scenario set (see :func:`evaluate_sets`)."""
+    note = result.optimum_failures[0] if result.optimum_failures else ""
+    drawn = scenario.T_cons is not None
+    T_row = float("nan") if drawn else result.params.T_con  # nan: drawn per episode, in T_con_range
+    T_range = list(result.params.T_con_range or (min(scenario.T_cons), max(scenario.T_cons))) if drawn else None  # type: ignore[arg-type]
+    return {"scenario": scenario.name, "T_con": T_row, "policy": label, **result.summary(), "optimum_note": note,
+            "T_con_range": T_range, "seconds": seconds, "optimum_seconds": optimum_seconds}  # fmt: skip
+
+
+def _evaluate_sets_beside(
+    policies: dict[str, Policy | str],
+    chosen: list[Scenario],
+    seed: int,
+    optimum: str,
+    n_optimal: int | None,
+    clock: StageClock,
+    on_rows: Callable[[list[dict[str, Any]]], None] | None,
+) -> list[dict[str, Any]]:
+    """:func:`evaluate_sets` on two processes: every (set, policy) rollout is one job of one queue, which a forked
+    process (:class:`SideProcess`) and this one take in turn from its front, so that both cores work to the end,
+    across the sets (a set's planner no longer waits for the set before to end). In each set the planners come first
+    (the costliest first), then the agents, then the laws; this process solves the optima of a set before its first
+    job of that set. The rows come set by set, as the jobs of a set are all done (``on_rows``: what an interrupted
+    command still reports). Each rollout is the one :func:`evaluate` runs: the same numbers to the last digit."""
+    from dataclasses import replace
+
+    from train.evaluation.disturbance_sets import ROBUSTNESS_SETS
+
+    units: list[dict[str, tuple[Policy | str, Scenario]]] = []
+    for scenario in chosen:
+        unit: dict[str, tuple[Policy | str, Scenario]] = {}
+        for label, policy in policies.items():
+            own = scenario
+            if label == "optimal" and n_optimal is not None and scenario.name in ROBUSTNESS_SETS and \
+                    scenario.size > n_optimal:  # fmt: skip
+                own = replace(scenario, starts=scenario.starts[:n_optimal], goals=scenario.goals[:n_optimal],
+                              labels=scenario.labels[:n_optimal],
+                              T_cons=None if scenario.T_cons is None else scenario.T_cons[:n_optimal])  # fmt: skip
+            unit[label] = (policy, own)
+        units.append(unit)
+    params = [EnvParams.from_kwargs(**split_env_kwargs(scenario.env_kwargs)[0]) for scenario in chosen]
+
+    def cost(label: str, k: int) -> tuple[bool, bool, float]:
+        policy, own = units[k][label]
+        planner = label in PLANNERS
+        estimate = estimated_seconds(label, own.size, max_steps(own, params[k]), own.name, cold=True)
+        return not planner, isinstance(policy, str), -estimate
+
+    order = [(k, label) for k in range(len(chosen)) for label in sorted(units[k], key=lambda label: cost(label, k))]
+    side = SideProcess({key: (_rollout_one, (key[1], units[key[0]][key[1]][0], params[key[0]],
+                                              units[key[0]][key[1]][1], False, seed)) for key in order})  # fmt: skip
+    done: dict[tuple[int, str], tuple[RolloutResult, float]] = {}
+    optima: dict[tuple[int, int], tuple[tuple[Any, list[str]], float]] = {}  # by (set, episodes): its seconds
+    rows: list[dict[str, Any]] = []
+
+    def solve_optima(k: int) -> None:  # the optima of set k (and of its shorter head for 'optimal'), once
+        for own in {id(own): own for _, own in units[k].values()}.values():
+            if (k, own.size) not in optima:
+                before = clock.seconds(own.name, "optimum")
+                found = _optimum(own, params[k], optimum, clock, own.name, False, None)
+                optima[(k, own.size)] = (found, clock.seconds(own.name, "optimum") - before)
+
+    def collect(finished: dict[Any, tuple[RolloutResult, float]], waited: float = 0.0) -> None:
+        for (k, label), (result, seconds) in finished.items():
+            own = units[k][label][1]
+            clock.record(own.name, label, seconds, own.size, estimated_seconds(label, own.size, max_steps(own, params[k])), waited)  # fmt: skip
+            waited = 0.0
+            done[(k, label)] = (result, seconds)
+
+    def run_here(key: tuple[int, str]) -> None:
+        k, label = key
+        policy, own = units[k][label]
+        solve_optima(k)
+        with clock.stage(own.name, label, estimated_seconds(label, own.size, max_steps(own, params[k])), own.size) as advance:  # fmt: skip
+
+            def on_step(fraction: float) -> None:
+                advance(fraction)
+                collect(side.finished())
+
+            began = time.perf_counter()
+            result = _rollout_one(label, policy, params[k], own, False, seed, False, on_step)
+        done[key] = (result, time.perf_counter() - began)
+
+    try:
+        for k, scenario in enumerate(chosen):
+            keys = [(k, label) for label in policies]
+            while any(key not in done for key in keys):
+                key = side.take(first=True)
+                if key is not None:
+                    run_here(key)
+                    continue
+                solve_optima(k)
+                began = time.perf_counter()
+                finished = side.results(set(keys))  # nothing waits: the rest of this set runs beside
+                collect(finished, time.perf_counter() - began)
+            solve_optima(k)
+            for label in policies:
+                result, seconds = done[(k, label)]
+                own = units[k][label][1]
+                result.optimal_energy, result.optimum_failures = optima[(k, own.size)][0]
+                rows.append(_set_row(scenario, label, result, round(seconds, 2),
+                                     round(optima[(k, scenario.size)][1], 2)))  # fmt: skip
+            if on_rows is not None:
+                on_rows(list(rows))
+    finally:
+        side.close()
+    return rows
+
+
 def running_beside(policies: dict[str, Policy | str], address: str | None = None) -> frozenset[str]:
-    """The policies :func:`evaluate` runs in a second process while it runs the planners: the others, where there
-    are planners and a second process is usable (:func:`side_process_usable`), not on Ray; else none."""
-    plain = frozenset(label for label in policies if label not in PLANNERS)
-    if address is None and plain and len(plain) < len(policies) and side_process_usable():
-        return plain
+    """The policies :func:`evaluate` runs in a second process while it runs the costliest planner (by its cold cost
+    per episode): every other, where there is a planner and a second process is usable (:func:`side_process_usable`),
+    not on Ray; else none. :func:`evaluate_sets` then runs every set's stages on both processes."""
+    planners = [label for label in policies if label in PLANNERS]
+    if address is None and planners and side_process_usable():
+        here = max(planners, key=lambda label: sum(COLD_EPISODE_SECONDS.get(label, {}).values()))
+        return frozenset(label for label in policies if label != here)
     return frozenset()
 
 

@@ -1,14 +1,15 @@
-"""The policies without a planner, evaluated in a second process while the planners run in the command's own.
+"""The second process of ``compare`` and ``evaluate``: policies' rollouts in a forked process beside the command's.
 
-``compare`` evaluates each policy on each scenario set in turn. Most of its wall time goes to the three policies that
-solve CasADi problems while they drive (``optimal``, ``robust-pt`` and the ``robust`` agent: ``PLANNERS``), and the
-others (the laws, the agents: one batched rollout each) wait for them on one core. :class:`SideProcess` runs those
-others in one forked process at the same time, on the second core, and the command's process takes those the side
-process has not started once its planners are done (their plans solved before, :mod:`baselines.plan_store`, leave it
-little to do): the same rollouts with the same seeds in either process, so the same numbers to the last digit; each
-returns its result and its own wall time. Where a fork is not safe (not Linux,
-JAX's threads in the process) or the machine has one core, :func:`side_process_usable` says no and everything runs in
-turn, as before.
+Most of ``compare``'s wall time goes to the three policies that solve CasADi problems while they drive (``optimal``,
+``robust-pt`` and the ``robust`` agent: ``PLANNERS``); the others (the laws, the agents) take one batched rollout each.
+:class:`SideProcess` runs jobs in one forked process, from the first on, while the command's process takes those not
+started yet (:meth:`SideProcess.take`, the last or the next), so that both cores work to the end:
+:func:`train.evaluation.evaluate.evaluate_sets` puts every (set, policy) rollout of every set in one queue that both
+processes take from, :func:`train.evaluation.evaluate.evaluate` a set's policies but its costliest planner. The same
+rollouts with the same seeds in either process, so the same numbers to the last digit; each job returns its result
+and its own wall time, and the plans a planner solves there go to the plan store in files of that process's own
+(:meth:`baselines.plan_store.PlanStore.adopt`). Where a fork is not safe (not Linux, JAX's threads in the process) or
+the machine has one core, :func:`side_process_usable` says no and everything runs in turn.
 """
 
 from __future__ import annotations
@@ -20,9 +21,11 @@ import sys
 import threading
 import time
 from collections import deque
+from collections.abc import Container
 from typing import Any
 
-#: The policies that plan with CasADi while they drive (their labels in ``compare``): they stay in the command's process.
+#: The policies that plan with CasADi while they drive (their labels in ``compare``): first in a set's queue, the
+#: costliest in the command's process.
 PLANNERS = frozenset({"optimal", "robust-pt", "robust"})
 #: ``DWR_GYM_SIDE_PROCESS=0`` evaluates every policy in the command's process, one after the other.
 SWITCH = "DWR_GYM_SIDE_PROCESS"
@@ -41,15 +44,27 @@ def side_process_usable() -> bool:
     )
 
 
-def _ignore_interrupts() -> None:
-    """Ctrl-C goes to the command's process, which ends this one."""
+def _start_child() -> None:
+    """Ctrl-C goes to the command's process, which ends this one; the planners' plans solved here go to the plan store
+    in files of this process's own (:mod:`baselines.plan_store`)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    from baselines import plan_store
+
+    store = plan_store.current()
+    if store is not None:
+        store.adopt()
 
 
 def _run(label: str) -> tuple[Any, float]:
+    from baselines import plan_store
+
     began = time.perf_counter()
     function, args = _JOBS[label]
-    return function(*args), time.perf_counter() - began
+    result = function(*args)
+    store = plan_store.current()
+    if store is not None:
+        store.flush()
+    return result, time.perf_counter() - began
 
 
 class SideProcess:
@@ -61,7 +76,7 @@ class SideProcess:
     def __init__(self, jobs: dict[str, tuple[Any, tuple[Any, ...]]]):
         _JOBS.clear()
         _JOBS.update(jobs)
-        self._pool = multiprocessing.get_context("fork").Pool(1, initializer=_ignore_interrupts)
+        self._pool = multiprocessing.get_context("fork").Pool(1, initializer=_start_child)
         _JOBS.clear()  # the child has its copy: the parent keeps no reference to the jobs
         self._lock = threading.Lock()
         self._waiting = deque(jobs)  # not started yet
@@ -76,10 +91,13 @@ class SideProcess:
                 label = self._waiting.popleft()
                 self._pending[label] = self._pool.apply_async(_run, (label,), callback=self._next)
 
-    def take(self) -> str | None:
-        """A job the process has not started, which the caller runs itself instead (the last waiting), or None."""
+    def take(self, first: bool = False) -> Any:
+        """A job the process has not started, which the caller runs itself instead (the last waiting; with ``first``
+        the first, the one the process would start next), or None."""
         with self._lock:
-            return self._waiting.pop() if self._waiting else None
+            if not self._waiting:
+                return None
+            return self._waiting.popleft() if first else self._waiting.pop()
 
     def finished(self) -> dict[str, tuple[Any, float]]:
         """The result and wall seconds of each job that ended in the process since the last call (an error in one is
@@ -90,14 +108,20 @@ class SideProcess:
                 del self._pending[label]
         return {label: result.get() for label, result in ready.items()}
 
-    def results(self) -> dict[str, tuple[Any, float]]:
-        """The result and wall seconds of each job the process ran or runs that :meth:`finished` has not returned,
-        waiting for those not done (an error in one is raised here); call it once :meth:`take` has returned None (no
-        job waits: none will start any more)."""
+    def results(self, labels: Container[Any] | None = None) -> dict[str, tuple[Any, float]]:
+        """The result and wall seconds of each job the process ran or runs that :meth:`finished` has not returned (of
+        those in ``labels`` only, if given), waiting for those not done (an error in one is raised here); without
+        ``labels`` call it once :meth:`take` has returned None (no job waits: none will start any more)."""
         with self._lock:
-            pending = dict(self._pending)
-            self._pending.clear()
+            pending = {label: result for label, result in self._pending.items() if labels is None or label in labels}
+            for label in pending:
+                del self._pending[label]
         return {label: result.get() for label, result in pending.items()}
+
+    def started(self) -> frozenset[Any]:
+        """The jobs started in the process whose results :meth:`finished` or :meth:`results` has not returned."""
+        with self._lock:
+            return frozenset(self._pending)
 
     def close(self) -> None:
         """End the process (at once: what it still runs is not wanted after an error or Ctrl-C)."""

@@ -13,7 +13,7 @@ every policy's until the policy has run (a planner's estimate is measured per se
 empty, warm where it holds plans); the stage running here goes at its own pace once a tenth of it is done after
 its first step (a planner solves every robot's plan at its first step: a pace measured from the stage's start would
 take the plans' minutes for the rate of the seconds of steps that follow). A
-set whose stages run in two processes (the planners here, the others in a second one,
+set whose stages run in two processes (the costliest planner here, the others also in a second one,
 :mod:`train.evaluation.side_process`) takes the longer of this process's stages and half of all; the second
 process's stages leave the estimate as they end there.
 Where stderr is not a terminal (a redirected log) there is no bar: a plain line every tenth of the work instead,
