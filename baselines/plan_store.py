@@ -59,8 +59,8 @@ def default_directory() -> Path:
 
 class PlanStore:
     """Plans (or their errors) by job key, read from ``directory`` at first use, new ones written there by
-    :meth:`flush` (only by the process that opened the store: a forked child's copy writes nothing unless it
-    :meth:`adopt`\ s it)."""
+    :meth:`flush` (only by the process that opened the store: a forked child's copy writes nothing until
+    :meth:`adopt` makes it its own)."""
 
     def __init__(self, directory: Path):
         self.directory = Path(directory)
