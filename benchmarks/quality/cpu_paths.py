@@ -19,6 +19,7 @@ import json
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 from typing import Any
 
@@ -58,15 +59,16 @@ def differences(reference: list[dict[str, Any]], changed: list[dict[str, Any]]) 
             if ours.get(k) != theirs.get(k)}  # fmt: skip
 
 
-def run_changed(out: Path) -> dict[str, str]:
-    """``dwr-gym compare --out OUT`` in a fresh clone's state with the code paths changed; the environment it had."""
+def run_changed(out: Path) -> tuple[dict[str, str], float]:
+    """``dwr-gym compare --out OUT`` in a fresh clone's state with the code paths changed (the second CPU); the
+    environment it had and its wall seconds."""
     changed = {"NPY_DISABLE_CPU_FEATURES": numpy_features_above_baseline(), "MKL_CBWR": "COMPATIBLE",
                "ATEN_CPU_CAPABILITY": "default"}  # fmt: skip
     with tempfile.TemporaryDirectory() as tmp:
-        env = checkout_env(DWR_GYM_CACHE=f"{tmp}/cache", **changed)
+        env, began = checkout_env(DWR_GYM_CACHE=f"{tmp}/cache", **changed), time.perf_counter()
         subprocess.run([sys.executable, "-m", "train.cli", "compare", "--out", str(out), "--no-progress"], cwd=tmp,
                        env=env, check=True, stdout=subprocess.DEVNULL)  # fmt: skip
-    return changed
+    return changed, time.perf_counter() - began
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -82,14 +84,15 @@ def main(argv: list[str] | None = None) -> None:
     reference = json.loads(reference_file.read_text())
     with tempfile.TemporaryDirectory() as tmp:
         out = (args.out or Path(tmp) / "changed").resolve()
-        changed_env = run_changed(out)
+        changed_env, seconds = run_changed(out)
         changed = json.loads((out / "comparison.json").read_text())
     differ = differences(reference, changed)
-    result = {"cpu": cpu_model(), "changed": changed_env, "load_average_1min_at_end": load_average(),
+    result = {"cpu": cpu_model(), "changed": changed_env, "wall_seconds": round(seconds, 1),
+              "load_average_1min_at_end": load_average(),
               "rows": len(reference), "cells": len(cells(reference)), "cells_that_differ": len(differ),
               "rows_that_differ": len({k.rsplit(" / ", 1)[0] for k in differ}), "differences": differ}  # fmt: skip
-    print(f"{result['cells_that_differ']} of {result['cells']} printed cells differ "
-          f"({result['rows_that_differ']} of {result['rows']} rows)")  # fmt: skip
+    print(f"{result['cells_that_differ']} of {result['cells']} printed cells differ ({result['rows_that_differ']} of "
+          f"{result['rows']} rows); the changed run took {seconds / 60:.1f} min")  # fmt: skip
     for cell, (ours, theirs) in differ.items():
         print(f"  {cell}: {ours} -> {theirs}")
     if args.docs:
