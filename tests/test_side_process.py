@@ -15,7 +15,16 @@ from train.evaluation.evaluate import evaluate
 from train.evaluation.scenarios import make_scenario
 from train.evaluation.stages import StageClock
 
-needs_fork = pytest.mark.skipif(not side_process.side_process_usable(), reason="needs Linux, 2 cores and no JAX")
+
+@pytest.fixture
+def forkable() -> None:
+    """Skip where this process may not fork a second one (checked as the test runs: another test module may have
+    loaded JAX since collection); the fresh-interpreter test below then runs this module's tests there."""
+    if not side_process.side_process_usable():
+        pytest.skip("needs Linux, 2 cores and no JAX in this process")
+
+
+needs_fork = pytest.mark.usefixtures("forkable")
 
 
 def assert_same_results(a: dict[str, Any], b: dict[str, Any]) -> None:
@@ -217,3 +226,22 @@ def test_the_plans_solved_beside_reach_the_plan_store(monkeypatch: pytest.Monkey
     assert sum(solved) == 0, solved  # every plan read from the store, none solved
     for a, b in zip(first, second, strict=True):
         assert a["energy_mean"] == b["energy_mean"] and a["success_rate"] == b["success_rate"], a["policy"]
+
+
+def test_the_two_process_tests_run_in_a_fresh_interpreter_where_this_one_has_jax() -> None:
+    """The default suite loads JAX (other modules) before this module's tests run, and a process with JAX's threads
+    must not fork: there, this module's tests run in a fresh interpreter, so that the main job's two processes are
+    tested by the default suite wherever it runs on Linux with 2 cores."""
+    import os
+    import subprocess
+    import sys
+
+    if side_process.side_process_usable():
+        pytest.skip("this process runs them itself")
+    if not sys.platform.startswith("linux") or (os.cpu_count() or 1) < 2 or os.environ.get(side_process.SWITCH) == "0":
+        pytest.skip("needs Linux and 2 cores, the second process not turned off")
+    test = "not test_the_two_process_tests_run_in_a_fresh_interpreter"
+    done = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
+                           __file__, "-k", test], capture_output=True, text=True, timeout=900)  # fmt: skip
+    assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-2000:]
+    assert " passed" in done.stdout and "skipped" not in done.stdout, done.stdout[-1000:]
