@@ -53,20 +53,13 @@ def compare(
         steps = max_steps(scenario, EnvParams.from_kwargs(**split_env_kwargs(scenario.env_kwargs)[0]))
         clock.plan([((FIGURES, label), estimated_seconds(label, scenario.size, steps)) for label in group],
                    beside=running_beside(group))  # fmt: skip
-    rows: list[dict[str, Any]] = []
     recorded: dict[str, RolloutResult] = {}
-
-    def so_far(found: list[dict[str, Any]], before: list[dict[str, Any]]) -> None:
-        if on_rows is not None:
-            on_rows(before + found)
-
     try:
         with plan_store.opened():  # the planners' plans, kept for the next command (what they solved, also on Ctrl-C)
-            for group, kwargs in runs:
-                before = list(rows)
-                rows += evaluate_sets(group, scenarios, n, seed, kwargs, progress, optimum=optimum, T_cons=T_cons,
-                                      n_optimal=n_optimal, on_rows=lambda found, before=before: so_far(found, before),
-                                      clock=clock, address=address)  # fmt: skip
+            # every group's sets in one run of evaluate_sets: their stages share its two processes
+            rows = evaluate_sets(runs[0][0], scenarios, n, seed, runs[0][1], progress, optimum=optimum,
+                                 T_cons=T_cons, n_optimal=n_optimal, on_rows=on_rows, clock=clock, address=address,
+                                 more=runs[1:])  # fmt: skip
             for (group, _), scenario in zip(runs, trajectory_scenarios, strict=True):
                 recorded.update(evaluate(group, scenario, record=True, clock=clock, stage_scenario=FIGURES))
     finally:

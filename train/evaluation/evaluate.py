@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 from baselines import plan_store
@@ -191,8 +191,12 @@ def evaluate_sets(
     on_rows: Callable[[list[dict[str, Any]]], None] | None = None,
     clock: StageClock | None = None,
     address: str | None = None,
+    more: Sequence[tuple[dict[str, Policy | str], dict[str, Any]]] = (),
 ) -> list[dict[str, Any]]:
     """Evaluate policies on named scenario sets, at each prescribed time of ``T_cons`` (default: the set's own).
+    ``more``: further groups of policies, each with its own env keywords (an agent on the env id it was trained on),
+    on the same sets made with those keywords; their rows follow the first group's, and their stages share the
+    first group's two processes.
 
     With ``n_optimal``, the ``optimal`` controller (which re-plans from the measured pose once a disturbance pushes
     the robot off its plan, a CasADi solve each time) runs on the disturbed sets' first ``n_optimal`` episodes only.
@@ -204,32 +208,37 @@ def evaluate_sets(
     reports. With ``clock`` the stages advance its one bar (:class:`StageClock`), planned here before the first; with
     ``address`` the optima are solved as Ray tasks on that cluster.
     """
-    own = clock is None
-    clock = clock or StageClock(progress=progress)
-    chosen = []
-    for name in scenarios:
-        for T_con in T_cons or [None]:
-            # a prescribed time asked for replaces the env's range of them (v1 draws T_con per episode)
-            kwargs = env_kwargs if T_con is None else {**env_kwargs, "T_con": T_con, "T_con_range": None}
-            chosen.append(make_scenario(name, n=n, seed=seed, env_kwargs=kwargs))
     from train.evaluation.disturbance_sets import ROBUSTNESS_SETS
 
-    groups = {scenario.name: "disturbed" if scenario.name in ROBUSTNESS_SETS else "nominal" for scenario in chosen}
-    clock.plan(planned_seconds(policies, chosen, optimum, n_optimal), beside=running_beside(policies, address),
-               groups=groups)  # fmt: skip
-    if running_beside(policies, address) and len(chosen) > 0:  # two processes over every set's stages
+    own = clock is None
+    clock = clock or StageClock(progress=progress)
+    blocks: list[tuple[dict[str, Policy | str], Scenario]] = []  # (policies, set) in the order of the rows
+    beside = running_beside(policies, address)  # (the further groups' stages, where there are two processes, all)
+    for group, group_kwargs in [(policies, env_kwargs), *((dict(g), k) for g, k in more if g)]:
+        chosen = []
+        for name in scenarios:
+            for T_con in T_cons or [None]:
+                # a prescribed time asked for replaces the env's range of them (v1 draws T_con per episode)
+                kwargs = group_kwargs if T_con is None else {**group_kwargs, "T_con": T_con, "T_con_range": None}
+                chosen.append(make_scenario(name, n=n, seed=seed, env_kwargs=kwargs))
+        groups = {scenario.name: "disturbed" if scenario.name in ROBUSTNESS_SETS else "nominal" for scenario in chosen}
+        clock.plan(planned_seconds(group, chosen, optimum, n_optimal),
+                   beside=beside if group is policies else frozenset(group) if beside else frozenset(),
+                   groups=groups)  # fmt: skip
+        blocks += [(group, scenario) for scenario in chosen]
+    if beside and blocks:  # two processes over every set's stages
         with plan_store.opened():
             try:
-                return _evaluate_sets_beside(policies, chosen, seed, optimum, n_optimal, clock, on_rows)
+                return _evaluate_sets_beside(blocks, seed, optimum, n_optimal, clock, on_rows)
             finally:
                 if own:
                     clock.close()
     rows = []
     try:
         with plan_store.opened():  # the planners' plans, kept for the next command (what they solved, also on Ctrl-C)
-            for scenario in chosen:
-                before = {stage: clock.seconds(scenario.name, stage) for stage in ("optimum", *policies)}
-                results = evaluate_subset(policies, scenario, seed, progress, optimum, n_optimal, clock, address)
+            for group, scenario in blocks:
+                before = {stage: clock.seconds(scenario.name, stage) for stage in ("optimum", *group)}
+                results = evaluate_subset(group, scenario, seed, progress, optimum, n_optimal, clock, address)
                 took = {
                     stage: round(clock.seconds(scenario.name, stage) - seconds, 2) for stage, seconds in before.items()
                 }
@@ -255,15 +264,15 @@ def _set_row(scenario: Scenario, label: str, result: RolloutResult, seconds: flo
 
 
 def _evaluate_sets_beside(
-    policies: dict[str, Policy | str],
-    chosen: list[Scenario],
+    blocks: list[tuple[dict[str, Policy | str], Scenario]],
     seed: int,
     optimum: str,
     n_optimal: int | None,
     clock: StageClock,
     on_rows: Callable[[list[dict[str, Any]]], None] | None,
 ) -> list[dict[str, Any]]:
-    """:func:`evaluate_sets` on two processes: every (set, policy) rollout is one job of one queue, which a forked
+    """:func:`evaluate_sets` on two processes, its (policies, set) ``blocks`` in the order of the rows: every (set,
+    policy) rollout is one job of one queue, which a forked
     process (:class:`SideProcess`) and this one take in turn from its front, so that both cores work to the end,
     across the sets (a set's planner no longer waits for the set before to end). In each set the planners come first
     (the costliest first), then the agents, then the laws; this process solves the optima of a set before its first
@@ -274,7 +283,8 @@ def _evaluate_sets_beside(
     from train.evaluation.disturbance_sets import ROBUSTNESS_SETS
 
     units: list[dict[str, tuple[Policy | str, Scenario]]] = []
-    for scenario in chosen:
+    chosen = [scenario for _, scenario in blocks]
+    for policies, scenario in blocks:
         unit: dict[str, tuple[Policy | str, Scenario]] = {}
         for label, policy in policies.items():
             own = scenario
@@ -330,7 +340,7 @@ def _evaluate_sets_beside(
 
     try:
         for k, scenario in enumerate(chosen):
-            keys = [(k, label) for label in policies]
+            keys = [(k, label) for label in units[k]]
             while any(key not in done for key in keys):
                 key = side.take(first=True)
                 if key is not None:
@@ -341,7 +351,7 @@ def _evaluate_sets_beside(
                 finished = side.results(set(keys))  # nothing waits: the rest of this set runs beside
                 collect(finished, time.perf_counter() - began)
             solve_optima(k)
-            for label in policies:
+            for label in units[k]:
                 result, seconds = done[(k, label)]
                 own = units[k][label][1]
                 result.optimal_energy, result.optimum_failures = optima[(k, own.size)][0]
