@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 from typing import Any
 
 from baselines import plan_store
@@ -278,8 +279,6 @@ def _evaluate_sets_beside(
     (the costliest first), then the agents, then the laws; this process solves the optima of a set before its first
     job of that set. The rows come set by set, as the jobs of a set are all done (``on_rows``: what an interrupted
     command still reports). Each rollout is the one :func:`evaluate` runs: the same numbers to the last digit."""
-    from dataclasses import replace
-
     from train.evaluation.disturbance_sets import ROBUSTNESS_SETS
 
     units: list[dict[str, tuple[Policy | str, Scenario]]] = []
@@ -288,11 +287,8 @@ def _evaluate_sets_beside(
         unit: dict[str, tuple[Policy | str, Scenario]] = {}
         for label, policy in policies.items():
             own = scenario
-            if label == "optimal" and n_optimal is not None and scenario.name in ROBUSTNESS_SETS and \
-                    scenario.size > n_optimal:  # fmt: skip
-                own = replace(scenario, starts=scenario.starts[:n_optimal], goals=scenario.goals[:n_optimal],
-                              labels=scenario.labels[:n_optimal],
-                              T_cons=None if scenario.T_cons is None else scenario.T_cons[:n_optimal])  # fmt: skip
+            if label == "optimal" and n_optimal is not None and scenario.name in ROBUSTNESS_SETS:
+                own = _head(scenario, n_optimal) if scenario.size > n_optimal else scenario
             unit[label] = (policy, own)
         units.append(unit)
     params = [EnvParams.from_kwargs(**split_env_kwargs(scenario.env_kwargs)[0]) for scenario in chosen]
@@ -364,6 +360,12 @@ def _evaluate_sets_beside(
     return rows
 
 
+def _head(scenario: Scenario, n: int) -> Scenario:
+    """The first ``n`` episodes of ``scenario`` (where ``optimal`` runs on a disturbed set: ``n_optimal``)."""
+    return replace(scenario, starts=scenario.starts[:n], goals=scenario.goals[:n], labels=scenario.labels[:n],
+                   T_cons=None if scenario.T_cons is None else scenario.T_cons[:n])  # fmt: skip
+
+
 def running_beside(policies: dict[str, Policy | str], address: str | None = None) -> frozenset[str]:
     """The policies :func:`evaluate` runs in a second process while it runs the costliest planner (by its cold cost
     per episode): every other, where there is a planner and a second process is usable (:func:`side_process_usable`),
@@ -418,8 +420,6 @@ def evaluate_subset(
     address: str | None = None,
 ) -> dict[str, RolloutResult]:
     """:func:`evaluate`, with ``optimal`` on the first ``n_optimal`` episodes where the set is a disturbed one."""
-    from dataclasses import replace
-
     from train.evaluation.disturbance_sets import ROBUSTNESS_SETS
 
     if (
@@ -429,9 +429,7 @@ def evaluate_subset(
         or scenario.size <= n_optimal
     ):
         return evaluate(policies, scenario, seed=seed, progress=progress, optimum=optimum, clock=clock, address=address)
-    head = replace(scenario, starts=scenario.starts[:n_optimal], goals=scenario.goals[:n_optimal],
-                   labels=scenario.labels[:n_optimal],
-                   T_cons=None if scenario.T_cons is None else scenario.T_cons[:n_optimal])  # fmt: skip
+    head = _head(scenario, n_optimal)
     others = evaluate({k: v for k, v in policies.items() if k != "optimal"}, scenario, seed=seed, progress=progress,
                       optimum=optimum, clock=clock, address=address)  # fmt: skip
     optimal = evaluate({"optimal": policies["optimal"]}, head, seed=seed, progress=progress, optimum=optimum,
