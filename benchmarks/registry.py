@@ -31,6 +31,7 @@ SUITE: dict[str, str] = {
     "constraint-log": "benchmarks.learning.constraint_log",
     "ship-rl-agents": "benchmarks.learning.ship_rl_agents",
     "per-t-con": "benchmarks.learning.per_t_con",
+    "constraint-misses": "benchmarks.learning.misses",
     # robustness: the deadline under disturbances
     "robustness": "benchmarks.robustness.robustness",
     "robust-goal": "benchmarks.robustness.robust_goal",

@@ -140,3 +140,35 @@ def test_compare_cpu_paths_names_the_cells_that_differ_as_printed() -> None:
     assert differences([row], [row]) == {}
     extra = {**row, "policy": "ptc"}
     assert differences([row], [row, extra])["fault / None / ptc / energy_mean"] == ["absent", "1.000"]
+
+
+def test_every_planted_slip_names_code_that_is_in_its_file_once() -> None:
+    """The planted-bugs table (docs/testing.md) is only as current as its catalogue: each slip replaces text that must
+    still be in the tree, once, or the benchmark stops at that slip."""
+    from benchmarks.testing.planted_bugs import BUGS
+
+    root = Path(__file__).resolve().parents[1]
+    stale = {bug: slip["file"] for bug, slip in BUGS.items()
+             if bug != "additive_before_saturation" and (root / slip["file"]).read_text().count(slip["old"]) != 1}  # fmt: skip
+    assert not stale, f"planted slips whose code moved (benchmarks/testing/planted_bugs.json): {stale}"
+
+
+def test_the_misses_are_sorted_by_where_they_end_and_the_goals_side() -> None:
+    """constraint-misses: far (over 2 cm, and of those the ones still closing in), beside the goal, goal ahead."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from benchmarks.learning.misses import kinds_of_misses
+
+    # four robots at heading 0, 21 recorded distances each (the last second at 20 steps a second)
+    end = np.array([0.005, 0.10, 0.015, 0.015])  # in time; far; 1.5 cm with the goal to its left; 1.5 cm ahead
+    distance = np.tile(end, (21, 1))
+    distance[0, 1] = 0.30  # the far one came 20 cm nearer in the last second
+    x = np.array([0.0, -0.10, 0.0, -0.015])
+    y = np.array([0.0, 0.0, -0.015, 0.0])
+    trajectory = {"distance": distance, "x": x[None], "y": y[None], "psi": np.zeros((1, 4))}
+    result = SimpleNamespace(trajectory=trajectory, success=end <= 0.01, final_distance=end)
+    kinds = kinds_of_misses(result, np.zeros((4, 3)), steps_per_second=20)
+    assert (kinds["misses"], kinds["far"], kinds["closing_in"], kinds["beside"], kinds["ahead"]) == (3, 1, 1, 1, 1)
+    assert kinds["in_time"] == 0.25 and kinds["beside_distance"] == 0.015
