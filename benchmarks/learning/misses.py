@@ -76,7 +76,7 @@ def render(data: dict[str, Any]) -> str:
         lines.append(f"| `{row['policy']}` | " + " | ".join(cell(row["T_con"][k]) for k in keys) + f" | {span} |")
     caption = (f"*Each cell: in time: misses far (of them still closing in) / beside the goal / with the goal ahead; "
                f"{data['n']} random starts (seed {data['seed']}) per T_con; the last column: the median final distance "
-               f"of the *beside* misses, over the T_cons; {data['machine']}; "
+               f"of the beside misses, over the T_cons; {data['machine']}; "
                "`python -m benchmarks run constraint-misses --docs`.*")  # fmt: skip
     return "\n" + "\n".join(lines) + "\n\n" + caption + "\n"
 
