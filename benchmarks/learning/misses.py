@@ -1,4 +1,4 @@
-"""Where a learner misses the deadline at each T_con: late, stalled beside the goal, or otherwise.
+"""Where a learner misses the deadline at each T_con: far from the goal, beside it, or with it ahead.
 
     python -m benchmarks run constraint-misses --docs   # docs/rl_benchmark/constrained_misses.json, its table
 
