@@ -279,18 +279,11 @@ def _evaluate_sets_beside(
     (the costliest first), then the agents, then the laws; this process solves the optima of a set before its first
     job of that set. The rows come set by set, as the jobs of a set are all done (``on_rows``: what an interrupted
     command still reports). Each rollout is the one :func:`evaluate` runs: the same numbers to the last digit."""
-    from train.evaluation.disturbance_sets import ROBUSTNESS_SETS
-
     units: list[dict[str, tuple[Policy | str, Scenario]]] = []
     chosen = [scenario for _, scenario in blocks]
     for policies, scenario in blocks:
-        unit: dict[str, tuple[Policy | str, Scenario]] = {}
-        for label, policy in policies.items():
-            own = scenario
-            if label == "optimal" and n_optimal is not None and scenario.name in ROBUSTNESS_SETS:
-                own = _head(scenario, n_optimal) if scenario.size > n_optimal else scenario
-            unit[label] = (policy, own)
-        units.append(unit)
+        units.append({label: (policy, optimal_set(scenario, n_optimal) if label == "optimal" else scenario)
+                      for label, policy in policies.items()})  # fmt: skip
     params = [EnvParams.from_kwargs(**split_env_kwargs(scenario.env_kwargs)[0]) for scenario in chosen]
 
     def cost(label: str, k: int) -> tuple[bool, bool, float]:
@@ -360,8 +353,13 @@ def _evaluate_sets_beside(
     return rows
 
 
-def _head(scenario: Scenario, n: int) -> Scenario:
-    """The first ``n`` episodes of ``scenario`` (where ``optimal`` runs on a disturbed set: ``n_optimal``)."""
+def optimal_set(scenario: Scenario, n_optimal: int | None) -> Scenario:
+    """The episodes ``optimal`` runs on: a disturbed set's first ``n_optimal`` (where it has more), else the set."""
+    from train.evaluation.disturbance_sets import ROBUSTNESS_SETS
+
+    n = n_optimal
+    if n is None or scenario.name not in ROBUSTNESS_SETS or scenario.size <= n:
+        return scenario
     return replace(scenario, starts=scenario.starts[:n], goals=scenario.goals[:n], labels=scenario.labels[:n],
                    T_cons=None if scenario.T_cons is None else scenario.T_cons[:n])  # fmt: skip
 
@@ -383,8 +381,6 @@ def planned_seconds(
     """The estimated wall seconds of each stage of evaluating ``policies`` on ``scenarios`` (the optima not cached
     yet, then each policy on each set), as ((scenario, stage), seconds) in the order they run: what the bar plans, so
     that its time left spans every stage."""
-    from train.evaluation.disturbance_sets import ROBUSTNESS_SETS
-
     # the planners solve every plan (minutes, where a second run takes seconds); without planners, no store to look at
     cold = not PLANNERS.isdisjoint(policies) and not plan_store.has_plans()
     todo: set[tuple[str, str]] = set()
@@ -396,8 +392,7 @@ def planned_seconds(
             planned.append(((scenario.name, "optimum"), len(new - todo) * PLAN_SECONDS))
             todo |= new
         for label in policies:
-            limited = label == "optimal" and n_optimal is not None and scenario.name in ROBUSTNESS_SETS
-            episodes = min(scenario.size, n_optimal or scenario.size) if limited else scenario.size
+            episodes = optimal_set(scenario, n_optimal).size if label == "optimal" else scenario.size
             estimate = estimated_seconds(label, episodes, max_steps(scenario, params), scenario.name, cold)
             planned.append(((scenario.name, label), estimate))
     return planned
@@ -420,16 +415,9 @@ def evaluate_subset(
     address: str | None = None,
 ) -> dict[str, RolloutResult]:
     """:func:`evaluate`, with ``optimal`` on the first ``n_optimal`` episodes where the set is a disturbed one."""
-    from train.evaluation.disturbance_sets import ROBUSTNESS_SETS
-
-    if (
-        n_optimal is None
-        or "optimal" not in policies
-        or scenario.name not in ROBUSTNESS_SETS
-        or scenario.size <= n_optimal
-    ):
+    head = optimal_set(scenario, n_optimal)
+    if "optimal" not in policies or head is scenario:
         return evaluate(policies, scenario, seed=seed, progress=progress, optimum=optimum, clock=clock, address=address)
-    head = _head(scenario, n_optimal)
     others = evaluate({k: v for k, v in policies.items() if k != "optimal"}, scenario, seed=seed, progress=progress,
                       optimum=optimum, clock=clock, address=address)  # fmt: skip
     optimal = evaluate({"optimal": policies["optimal"]}, head, seed=seed, progress=progress, optimum=optimum,
