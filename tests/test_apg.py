@@ -43,6 +43,8 @@ from train.learning.jitted.apg_settings import APGSettings
         ({"keep_best": -1}, r"^keep_best=-1 is invalid: expected an integer in \[0, 1e\+06\]$"),
         ({"keep_best": 2.5}, r"^keep_best=2.5 is invalid"),
         ({"validation_episodes": 0}, r"^validation_episodes=0 is invalid: expected an integer in \[1, 65536\]$"),
+        ({"weight_average": 1}, r"^weight_average=1(\.0)? is invalid: expected a finite number in \[0, 1\)$"),
+        ({"weight_average": -0.1}, r"^weight_average=-0.1 is invalid: expected a finite number in \[0, 1\)$"),
         ({"learning_rate": "lin_x"}, r"^learning_rate='lin_x' is invalid: expected a number in \(0, 100\], or lin_"),
         ({"n_steps": 64}, r"^hyperparameter\(s\) \['n_steps'\] are not accepted by APG"),
         ({"policy_kwargs": {"log_std_init": -1}}, r"^policy_kwargs \['log_std_init'\] are not implemented by APG"),
@@ -205,6 +207,44 @@ def test_keep_best_exports_the_best_policy_its_validation_measured() -> None:
     assert float(after.best_return) == max(returns)
     last = JaxAPG(APGSettings(episodes=2, net_arch=(8,)), env, params)
     assert last.exported_params(state) is state.params  # keep_best off: the last policy
+
+
+def test_weight_average_is_the_polyak_average_and_what_is_validated_and_exported(tmp_path: Path) -> None:
+    """With ``weight_average`` each update moves the average (1 - decay) of the way to the new network; the average is
+    what the run exports and what ``keep_best`` validates; a state saved before the average existed loads with the
+    network as its average."""
+    import dataclasses
+    import pickle
+
+    import flax.serialization
+
+    from train.learning.jitted.apg import JaxAPG
+    from train.learning.jitted.run import load_runner
+
+    base = small_apg(state_grad_clip=1.0)
+    apg = JaxAPG(dataclasses.replace(base.settings, weight_average=0.9), base.env, base.env_params)
+    state = apg.init(0)
+    after, _ = apg.update(state)
+    for average, old, new in zip(jax.tree.leaves(after.average_params), jax.tree.leaves(state.params),
+                                 jax.tree.leaves(after.params), strict=True):  # fmt: skip
+        np.testing.assert_allclose(average, 0.9 * np.asarray(old) + 0.1 * np.asarray(new), rtol=1e-6, atol=1e-7)
+    assert any(not np.array_equal(a, b) for a, b in zip(jax.tree.leaves(after.average_params),
+                                                        jax.tree.leaves(after.params), strict=True))  # fmt: skip
+    assert apg.exported_params(after) is after.average_params
+    kept = JaxAPG(dataclasses.replace(apg.settings, keep_best=1, validation_episodes=2), apg.env, apg.env_params)
+    validated, metrics = kept.validate(after)
+    assert bool(metrics["kept"])
+    for a, b in zip(jax.tree.leaves(kept.exported_params(validated)), jax.tree.leaves(after.average_params),
+                    strict=True):  # fmt: skip
+        assert np.array_equal(a, b)
+    old = flax.serialization.to_state_dict(after)
+    del old["average_params"]
+    path = tmp_path / "resume_state.pkl"
+    path.write_bytes(pickle.dumps({"timesteps": 7, "runner": flax.serialization.msgpack_serialize(old)}))
+    loaded, steps = load_runner(path, apg.init(1))
+    assert steps == 7
+    for a, b in zip(jax.tree.leaves(loaded.average_params), jax.tree.leaves(after.params), strict=True):
+        assert np.array_equal(a, b)
 
 
 def test_an_update_counts_the_episodes_steps_and_keeps_every_number_finite() -> None:

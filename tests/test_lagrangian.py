@@ -174,12 +174,14 @@ def optax_norm(tree: Any) -> Any:
 
 TINY = ("train", "--algo", "apg", "--backend", "jax", "--env", "DWRPointStabilization-v2", "--eval-episodes", "3",
         "--no-progress", "--env-kwargs", "T_con_range=[1,2]", "--hyperparams", "episodes=4", "learning_rate=0.0003",
-        "policy_kwargs=dict(net_arch=[16])", "lagrangian=1", "multiplier_bins=2", "keep_best=0")  # fmt: skip
+        "policy_kwargs=dict(net_arch=[16])", "lagrangian=1", "multiplier_bins=2", "keep_best=0",
+        "weight_average=0.9")  # fmt: skip
 
 
 @pytest.mark.slow
 def test_a_constrained_run_logs_each_bin_and_resumes_bit_for_bit(tmp_path: Path) -> None:
-    """(The multipliers are in the saved state: a resumed run's next updates use the ones it stopped with.)"""
+    """(The multipliers and the weights' average are in the saved state: a resumed run's next updates use the ones it
+    stopped with.)"""
     split = assert_resume_is_bit_for_bit(TINY, 4000, 2000, tmp_path)
     for run_dir in (split, tmp_path / "straight"):
         with (run_dir / "constraint.csv").open() as handle:

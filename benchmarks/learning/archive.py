@@ -47,8 +47,9 @@ LEVERS: dict[str, str] = {
     "place of the hold weights and the near-miss clip, 200 M env steps, integral gain 1, no anti-windup",
     "constrained_560m_without_near_miss.json": "the same at 560 M env steps, integral gain 0.2, multipliers capped at "
     "100; the residual on PTC under the same constraints",
-    "constrained.json": "the constraints with the near misses' clip kept (16); the residual on PTC with its gradient "
-    "through the law kept where finite; PPO-Lagrangian, 8 M env steps and 30 minutes a seed",
+    "constrained.json": "the constraints with the near misses' clip kept (16), and with the weights' moving average "
+    "exported; the residual on PTC with its gradient through the law kept where finite; PPO-Lagrangian, 8 M env steps "
+    "and 30 minutes a seed",
 }
 
 

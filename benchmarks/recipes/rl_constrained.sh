@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The deadline and the heading as constraints (Lagrangian APG, its residual on PTC, PPO-Lagrangian) on v2, per T_con.
 # The deadline and the heading as constraints on DWRPointStabilization-v2: apg-lagrangian-v2 (APG from its open-loop
-# teacher, time-scaled, multipliers per T_con bin in PID form; 560 M env steps a seed), apg-lagrangian-residual-ptc-v2
+# teacher, time-scaled, multipliers per T_con bin in PID form; 560 M env steps a seed), apg-lagrangian-averaged-v2 (the
+# same, its weights' moving average validated and exported; AVG_SEEDS seeds, 2 by default), apg-lagrangian-residual-ptc-v2
 # (the residual on PTC under the same constraints, 30 M env steps a seed), ppo-lagrangian-v2 (the jitted PPO with a
 # cost critic and the same multipliers, 8 M env steps a seed) and ppo-lagrangian-30min-v2 (the same for 30 minutes
 # of a core: 60 M env steps, stopped at 1,800 s), SEEDS seeds each (APG_SEEDS and PPO30_SEEDS for the two long ones),
@@ -14,13 +15,15 @@ export OMP_NUM_THREADS=1
 OUT=${OUT:-results/rl-constrained}
 BUDGET=(--jobs "${JOBS:-2}" --eval-episodes 200 --disturbed-episodes 20 --optimum-episodes 50 --out "$OUT")
 dwr-gym benchmark --agents "apg-lagrangian-v2:threads=1" --seeds "${APG_SEEDS:-${SEEDS:-5}}" "${BUDGET[@]}"
+dwr-gym benchmark --agents "apg-lagrangian-averaged-v2:threads=1" --seeds "${AVG_SEEDS:-2}" "${BUDGET[@]}"
 dwr-gym benchmark --agents "apg-lagrangian-residual-ptc-v2:threads=1" "ppo-lagrangian-v2:threads=1" \
   --seeds "${SEEDS:-5}" "${BUDGET[@]}"
 dwr-gym benchmark --agents "ppo-lagrangian-30min-v2:threads=1" --seeds "${PPO30_SEEDS:-${SEEDS:-5}}" \
   --time-limit 1800 "${BUDGET[@]}"
 # the four entries' seeds in one table (each JSON of $OUT/results read as it is)
-dwr-gym benchmark --agents "apg-lagrangian-v2:threads=1" "apg-lagrangian-residual-ptc-v2:threads=1" \
-  "ppo-lagrangian-v2:threads=1" "ppo-lagrangian-30min-v2:threads=1" --seeds "${SEEDS:-5}" --report-only "${BUDGET[@]}"
+dwr-gym benchmark --agents "apg-lagrangian-v2:threads=1" "apg-lagrangian-averaged-v2:threads=1" \
+  "apg-lagrangian-residual-ptc-v2:threads=1" "ppo-lagrangian-v2:threads=1" "ppo-lagrangian-30min-v2:threads=1" \
+  --seeds "${SEEDS:-5}" --report-only "${BUDGET[@]}"
 cp "$OUT/benchmark.json" docs/rl_benchmark/constrained.json
 python -m benchmarks run constraint-log "$OUT" --json docs/rl_benchmark/constrained_log.json \
   --figure docs/rl_benchmark/constrained_log.png

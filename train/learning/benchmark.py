@@ -200,6 +200,12 @@ ENTRIES: dict[str, dict[str, Any]] = {
     "apg-lagrangian-v2": apg_teacher_time_scaled(
         560_000_000, clone_steps=16000, near_miss_clip=16.0, hold_steps=20, lagrangian=1
     ),
+    # and the weights' moving average (weight_average: Polyak averaging over some 200 updates) validated and exported
+    # in place of the last network: late in a run the network's in-time rate swings by 5-10 points at T_con 10 s from
+    # one evaluation to the next, the step's swing, and the average sits inside it
+    "apg-lagrangian-averaged-v2": apg_teacher_time_scaled(
+        560_000_000, clone_steps=16000, near_miss_clip=16.0, hold_steps=20, lagrangian=1, weight_average=0.995
+    ),
     "apg-lagrangian-residual-ptc-v2": {
         "algo": "apg",
         "backend": "jax",

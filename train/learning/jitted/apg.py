@@ -45,8 +45,9 @@ from train.learning.jitted.ppo import ObservationStatistics
 
 
 class APGState(flax.struct.PyTreeNode):
-    """Everything a run continues from: the network, Adam's state, the observation scaling, the key, the updates, and
-    for ``keep_best`` the best network measured, its mean return and the key of its validation episodes."""
+    """Everything a run continues from: the network, Adam's state, the observation scaling, the key, the updates, for
+    ``keep_best`` the best network measured, its mean return and the key of its validation episodes, the constraints'
+    multipliers, and for ``weight_average`` the weights' moving average (the network itself without it)."""
 
     params: Any
     opt_state: Any
@@ -57,6 +58,7 @@ class APGState(flax.struct.PyTreeNode):
     best_return: Any
     validation_key: Any
     multipliers: Any
+    average_params: Any
 
 
 def clipped(cotangent: Any, bound: Any) -> Any:
@@ -166,7 +168,8 @@ class JaxAPG:
         state = APGState(params=params, opt_state=self.optimizer.init(params), obs_stats=stats, rng=rng,
                          updates=jnp.asarray(0, jnp.int32), best_params=params,
                          best_return=jnp.asarray(-jnp.inf, jnp.float32), validation_key=key_val,
-                         multipliers=lagrangian.initial_multipliers(self.settings.constraint, jnp))  # fmt: skip
+                         multipliers=lagrangian.initial_multipliers(self.settings.constraint, jnp),
+                         average_params=params)  # fmt: skip
         return jax.tree.map(lambda x: jnp.asarray(x, x.dtype), state)  # no weak types: one compilation
 
     def act(self, params: Any, obs: Any, stats: Any) -> Any:
@@ -254,18 +257,25 @@ class JaxAPG:
         return jnp.where(self.near_miss(final), self.settings.near_miss_clip, limit)
 
     def exported_params(self, state: Any) -> Any:
-        """The network a run exports: with ``keep_best`` the best measured (:meth:`validate`), else the last."""
-        return state.best_params if self.settings.keep_best else state.params
+        """The network a run exports: with ``keep_best`` the best measured (:meth:`validate`), else the last (with
+        ``weight_average``, the weights' moving average)."""
+        return state.best_params if self.settings.keep_best else self.policy_params(state)
+
+    def policy_params(self, state: Any) -> Any:
+        """The network that is validated and exported: the weights' moving average with ``weight_average``, else the
+        last network."""
+        return state.average_params if self.settings.weight_average else state.params
 
     def _validate(self, state: Any) -> tuple[Any, dict[str, Any]]:
         """The policy's mean return on the run's ``validation_episodes`` fixed episodes; kept as the best when higher
         than the best so far (a network with a non-finite weight, or its non-finite return, never is: the env holds a
         NaN action's robot still, so such a network can score above a poor one)."""
         keys = jax.random.split(state.validation_key, self.settings.validation_episodes)
-        returns, steps = jax.vmap(self.episode, in_axes=(None, None, 0))(state.params, state.obs_stats, keys)
+        candidate = self.policy_params(state)
+        returns, steps = jax.vmap(self.episode, in_axes=(None, None, 0))(candidate, state.obs_stats, keys)
         mean = jnp.mean(returns)
-        better = all_finite(state.params) & jnp.isfinite(mean) & (mean > state.best_return)
-        state = state.replace(best_params=jax.tree.map(lambda new, old: jnp.where(better, new, old), state.params,
+        better = all_finite(candidate) & jnp.isfinite(mean) & (mean > state.best_return)
+        state = state.replace(best_params=jax.tree.map(lambda new, old: jnp.where(better, new, old), candidate,
                                                        state.best_params),
                               best_return=jnp.where(better, mean, state.best_return))  # fmt: skip
         return state, {"steps": jnp.sum(steps), "validation_return": mean, "kept": better}
@@ -302,11 +312,15 @@ class JaxAPG:
         grads = jax.tree.map(lambda g: jnp.where(finite, g, 0.0), grads)
         updates, opt_state = self.optimizer.update(grads, state.opt_state, state.params)
         params = optax.apply_updates(state.params, updates)
+        average = params
+        if self.settings.weight_average:  # Polyak averaging: the average moves (1 - decay) of the way to the network
+            decay = self.settings.weight_average
+            average = jax.tree.map(lambda a, p: decay * a + (1.0 - decay) * p, state.average_params, params)
         multipliers, constraint_metrics = state.multipliers, {}
         if constrained:  # the multipliers from this update's fresh episodes' violations, per T_con bin
             multipliers, constraint_metrics = self.constraint_step(state.multipliers, final)
         state = state.replace(params=params, opt_state=opt_state, rng=rng, updates=state.updates + 1,
-                              multipliers=multipliers)  # fmt: skip
+                              multipliers=multipliers, average_params=average)  # fmt: skip
         metrics = {"steps": jnp.sum(steps), "return_mean": jnp.mean(returns), "grad_norm": optax.tree.norm(grads),
                    "skipped": ~finite, **constraint_metrics}  # fmt: skip
         return state, metrics

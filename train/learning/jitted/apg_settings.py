@@ -17,7 +17,7 @@ APG_DEFAULTS: dict[str, Any] = {"episodes": 64, "learning_rate": 3e-4, "max_grad
                                  "hold_weight": 10.0, "hold_heading_weight": 0.0, "keep_best": 0,
                                  "validation_episodes": 256, "teacher_episodes": 0, "teacher_iterations": 400,
                                  "teacher_learning_rate": 0.02, "clone_steps": 4000,
-                                 **LAGRANGE_DEFAULTS}  # fmt: skip
+                                 "weight_average": 0.0, **LAGRANGE_DEFAULTS}  # fmt: skip
 #: Observations of fresh episodes the fixed observation scaling is computed from.
 INITIAL_OBSERVATIONS = 1024
 
@@ -79,6 +79,12 @@ class APGSettings:
     """Adam's step size of the teacher's search (on the actions before their tanh)."""
     clone_steps: int = 4000
     """Least-squares steps of the cloning (minibatches of 4,096 observation-action pairs)."""
+    weight_average: float = 0.0
+    """With a value in (0, 1), the run keeps an exponential moving average of the network's weights, this its decay
+    per update (Polyak averaging: 0.995 averages over some 200 updates), and that average, not the last network, is
+    what ``keep_best`` validates and the run exports; the updates go on from the last network. At the end of a run
+    the policy's in-time rate swings by 5-10 points at T_con 10 s from one evaluation to the next whatever the batch
+    (docs/rl-constrained.md): the step's, and the average sits inside the swing. 0 (the default): off."""
     constraint: LagrangeSettings = field(default_factory=LagrangeSettings)
     """The deadline and the heading as constraints with Lagrange multipliers per T_con bin (``lagrangian: 1`` and
     :class:`train.learning.jitted.lagrangian.LagrangeSettings`' keys): the multipliers, not ``hold_weight`` and
@@ -124,6 +130,8 @@ class APGSettings:
                 teacher_learning_rate=as_float("teacher_learning_rate", values["teacher_learning_rate"], 0.0, 100.0,
                                                low_inclusive=False, text=True),
                 clone_steps=as_int("clone_steps", values["clone_steps"], 1, 10_000_000, text=True),
+                weight_average=as_float("weight_average", values["weight_average"], 0.0, 1.0, high_inclusive=False,
+                                        text=True),
                 constraint=constraint_beside(values),
                 **network_fields(policy, "APG"),
             )  # fmt: skip

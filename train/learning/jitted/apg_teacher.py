@@ -80,7 +80,9 @@ def clone_from_teacher(apg: Any, state: Any, progress: bool = False) -> tuple[An
     targets = jnp.tanh(sequences).reshape(-1, 2)[mask]
     steps = float(jnp.sum(alive)) * (settings.teacher_iterations + 1)
     params, value = fitted(state.params, key_clone, inputs, targets)
-    state = state.replace(params=params, opt_state=apg.optimizer.init(params), best_params=params, rng=rng)
+    state = state.replace(
+        params=params, opt_state=apg.optimizer.init(params), best_params=params, rng=rng, average_params=params
+    )
     measures = {
         "steps": steps,
         "teacher_in_time": float(jnp.mean(final.is_success)),

@@ -103,10 +103,13 @@ class APGTrainer:
             if s.linear_schedule
             else f"{s.learning_rate:g}"
         )
+        policy = f"the weights' moving average (decay {s.weight_average:g} an update)" if s.weight_average else ""
         kept = (
-            f"; the best policy on {s.validation_episodes} validation episodes (every {s.keep_best} updates) is "
-            "the one exported"
+            f"; the best {'of ' + policy if policy else 'policy'} on {s.validation_episodes} validation episodes "
+            f"(every {s.keep_best} updates) is the one exported"
             if s.keep_best
+            else f"; {policy} is the one exported"
+            if policy
             else ""
         )
         taught = (

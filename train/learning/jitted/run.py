@@ -69,7 +69,10 @@ def load_runner(path: Path, template: Any) -> tuple[Any, int]:
 
     with path.open("rb") as handle:
         saved = pickle.load(handle)
-    return flax.serialization.from_bytes(template, saved["runner"]), int(saved["timesteps"])
+    runner = flax.serialization.msgpack_restore(saved["runner"])
+    if hasattr(template, "average_params") and "average_params" not in runner:  # an APG state saved before it had one
+        runner["average_params"] = runner["params"]
+    return flax.serialization.from_state_dict(template, runner), int(saved["timesteps"])
 
 
 class JaxRun:
