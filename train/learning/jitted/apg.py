@@ -23,7 +23,8 @@ from the reward alone: what it uses beside the reward is the env's own derivativ
 The policy is the actor of the jitted PPO's network (:func:`train.learning.jitted.policy.make_network`), exported
 as an SB3 PPO model (:class:`train.learning.jitted.export.SB3Exporter`) like the ES's; the observations are scaled by
 the mean and deviation of 1,024 first observations, fixed, folded into the exported first layer. With ``keep_best``
-the run exports the best policy measured on its own validation episodes (:meth:`JaxAPG.validate`), not the last. With
+the run exports the best policy measured on its own validation episodes (:meth:`JaxAPG.validate`), not the last; with
+``weight_average`` the policy validated and exported is the weights' moving average (Polyak averaging). With
 ``teacher_episodes`` the updates start from a policy cloned from open-loop sequences
 (:mod:`train.learning.jitted.apg_teacher`).
 """
