@@ -46,11 +46,12 @@ def plot(out: Path, figure: Path) -> None:
     import numpy as np
 
     paths = sorted(out.glob("runs/*/constraint.csv"))
-    entries = sorted({path.parent.name.rsplit("-seed", 1)[0] for path in paths})
+    entry_of = {path: path.parent.name.rsplit("-seed", 1)[0] for path in paths}  # the run's name less its seed
+    entries = sorted(set(entry_of.values()))
     fig, axes = plt.subplots(len(entries), 2, figsize=(11, 2.4 * len(entries)), squeeze=False, sharex="row")
     for path in paths:
         rows = read_log(path)
-        rate_ax, lam_ax = axes[entries.index(path.parent.name.rsplit("-seed", 1)[0])]
+        rate_ax, lam_ax = axes[entries.index(entry_of[path])]
         for k, low in enumerate(sorted({row["T_con_low"] for row in rows})):
             mine = [row for row in rows if row["T_con_low"] == low]
             steps = np.array([row["timesteps"] / 1e6 for row in mine])

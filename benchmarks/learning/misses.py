@@ -4,11 +4,11 @@
 
 Each run directory's exported policy (default: the Lagrangian APG's seeds that benchmarks/recipes/rl_constrained.sh
 trains, results/rl-constrained/runs/apg-lagrangian-v2-seed* and apg-lagrangian-averaged-v2-seed*, and the shipped
-apg_v2) on ``--n`` random starts (seed 2026) of its env id at each T_con of the benchmark. A miss is an episode not within the goal tolerance at T_con;
-by where it ends: *far*, over 2 cm from the goal (and of those, how many were still closing in, more than 1 cm nearer
-in the last second: late); *beside*, within 2 cm with the goal to its side (|sin| of the bearing from its heading to
-the goal over 0.7: an offset a unicycle closes only by turning away from the goal's heading and back); *ahead*,
-within 2 cm with the goal ahead or behind.
+apg_v2) on ``--n`` random starts (seed 2026) of its env id at each T_con of the benchmark. A miss is an episode not
+within the goal tolerance at T_con; by where it ends: *far*, over 2 cm from the goal (and of those, how many were
+still closing in, more than 1 cm nearer in the last second: late); *beside*, within 2 cm with the goal to its side
+(|sin| of the bearing from its heading to the goal over 0.7: an offset a unicycle closes only by turning away from
+the goal's heading and back); *ahead*, within 2 cm with the goal ahead or behind.
 """
 
 from __future__ import annotations
@@ -88,10 +88,10 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.n < 1:
         parser.error(f"--n {args.n} is invalid: expected an integer >= 1")
+    runs = ROOT / "results" / "rl-constrained" / "runs"
     paths = ([Path(p) for p in args.agents] if args.agents is not None else
-             [*sorted((ROOT / "results" / "rl-constrained" / "runs").glob("apg-lagrangian-v2-seed*")),
-              *sorted((ROOT / "results" / "rl-constrained" / "runs").glob("apg-lagrangian-averaged-v2-seed*")),
-              ROOT / "train" / "pretrained" / "apg_v2"])  # fmt: skip
+             [*(path for entry in ("apg-lagrangian-v2", "apg-lagrangian-averaged-v2")
+                for path in sorted(runs.glob(f"{entry}-seed*"))), ROOT / "train" / "pretrained" / "apg_v2"])  # fmt: skip
     missing = [str(p) for p in paths if not (p / "model.zip").is_file()]
     if missing or not paths:
         parser.error(f"no exported policy (model.zip) in {', '.join(missing) or 'the default run directories'}: "
