@@ -9,10 +9,11 @@ controllers, the same command run again).
 
 :class:`PlanStore` keeps the plans by :func:`baselines.nmpc.job_key` in ``$DWR_GYM_CACHE/plans-<solver>/`` (default
 ``~/.cache/dwr-gym``), where ``<solver>`` is a digest of :mod:`baselines.optimal`'s and
-:mod:`baselines.minimum_energy_nlp`'s source, CasADi's version and :data:`STORE_VERSION`: a changed solver never reads
-another's plans. Each process writes its new plans to files of its
-own (``<pid>-<n>.npz``, an atomic replace), every :data:`FLUSH_EVERY` plans and when the store closes, so an
-interrupted command keeps what it solved and two commands may write at once. ``DWR_GYM_PLAN_CACHE=0`` turns it off;
+:mod:`baselines.minimum_energy_nlp`'s source, CasADi's version, :data:`STORE_VERSION` and the code paths' switches
+(:data:`CODE_PATH_SWITCHES`): a changed solver, or one on other kernels, never reads another's plans.
+Each process writes its new plans to files of its own (``<pid>-<n>.npz``, an atomic replace), every
+:data:`FLUSH_EVERY` plans and when the store closes, so an interrupted command keeps what it solved and two commands
+may write at once. ``DWR_GYM_PLAN_CACHE=0`` turns it off;
 delete the directory to solve afresh (some 3 kB a plan: 56 MB for ``compare``'s defaults, 20,209 plans).
 """
 
@@ -35,6 +36,8 @@ STORE_VERSION = 2
 SWITCH = "DWR_GYM_PLAN_CACHE"
 #: New plans written to a file of their own once this many are pending (an interruption loses fewer).
 FLUSH_EVERY = 500
+#: The switches of the numerical libraries' code paths (train.code_paths): a plan is kept per setting of them.
+CODE_PATH_SWITCHES = ("NPY_DISABLE_CPU_FEATURES", "GLIBC_TUNABLES", "MKL_CBWR", "ATEN_CPU_CAPABILITY")
 #: The errors a solve returns, by name: a stored error is raised again as the same class with the same message.
 ERRORS = {cls.__name__: cls for cls in (OptimalControlError, InfeasibleArrivalTimeError)}
 
@@ -48,7 +51,8 @@ def solver_digest() -> str:
     import baselines.optimal
 
     source = b"".join(Path(m.__file__).read_bytes() for m in (baselines.optimal, baselines.minimum_energy_nlp))
-    return hashlib.sha256(source + f"{casadi.__version__}/{STORE_VERSION}".encode()).hexdigest()[:16]
+    paths = "/".join(os.environ.get(name, "") for name in CODE_PATH_SWITCHES)  # other kernels, other last bits
+    return hashlib.sha256(source + f"{casadi.__version__}/{STORE_VERSION}/{paths}".encode()).hexdigest()[:16]
 
 
 def default_directory() -> Path:

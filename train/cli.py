@@ -35,6 +35,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``dwr-gym`` console script."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    if argv is None and getattr(args, "code_paths", None) == "portable":  # the command line, not a Python caller
+        from train.code_paths import pin
+
+        pin(sys.argv[1:])  # once: this process becomes the same command on the portable code paths
     try:
         return int(args.func(args))
     except UsageError as error:

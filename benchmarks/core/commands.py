@@ -26,15 +26,15 @@ def dwr_gym(args: list[str], cwd: str | Path = ROOT, **kwargs: Any) -> subproces
 
 
 def command_main(args: list[str], docs: list[str]) -> Callable[[list[str] | None], int]:
-    """The ``main`` of an entry that is ``dwr-gym ARGS``: ``--docs`` adds ``docs`` (where the docs' JSON goes), the
-    other arguments go to the command."""
+    """The ``main`` of an entry that is ``dwr-gym ARGS``, run in a process of its own as the command line runs it (on
+    its code paths, train/code_paths.py): ``--docs`` adds ``docs`` (where the docs' JSON goes), the other arguments go
+    to the command."""
 
     def main(argv: list[str] | None = None) -> int:
         argv = list(argv or [])
         extra = docs if "--docs" in argv else []
-        from train.cli import main as cli
-
-        return cli([*args, *extra, *(a for a in argv if a != "--docs")])
+        command = [sys.executable, "-m", "train.cli", *args, *extra, *(a for a in argv if a != "--docs")]
+        return subprocess.run(command, cwd=ROOT, env=checkout_env(), check=False).returncode  # as the command line
 
     return main
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from train.code_paths import describe as describe_code_paths
 from train.commands.shared import (
     UsageError,
     add_agents_argument,
@@ -104,6 +105,7 @@ def _run(args: argparse.Namespace, env_id: str, env_kwargs: dict[str, Any], cont
         figures.append(out / "learning_curves.png")
         plot_learning_curves(run_dirs, figures[2])
     print(f"env: {env_id}")
+    print(f"code paths: {describe_code_paths()}")
     for other, group in elsewhere.items():
         print(f"env of {', '.join(group)}: {other}, the env id they were trained on")
     print_blocks(rows, asked_columns(EVAL_COLUMNS, optimum))

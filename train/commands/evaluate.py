@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from train.code_paths import describe as describe_code_paths
 from train.commands.shared import (
     add_agents_argument,
     add_scenario_arguments,
@@ -61,6 +62,7 @@ def _run(args: argparse.Namespace, env_id: str, env_kwargs: dict[str, Any], name
     clock.close()
     rows = [{**row, "env_id": env_id} for row in rows]
     print(f"env: {env_id}")
+    print(f"code paths: {describe_code_paths()}")
     print_blocks(rows, asked_columns(EVAL_COLUMNS, optimum))
     if table_notes(rows):
         print(table_notes(rows))
