@@ -33,8 +33,13 @@ def command_main(args: list[str], docs: list[str]) -> Callable[[list[str] | None
     def main(argv: list[str] | None = None) -> int:
         argv = list(argv or [])
         extra = docs if "--docs" in argv else []
-        command = [sys.executable, "-m", "train.cli", *args, *extra, *(a for a in argv if a != "--docs")]
-        return subprocess.run(command, cwd=ROOT, env=checkout_env(), check=False).returncode  # as the command line
+        command = [*args, *extra, *(a for a in argv if a != "--docs")]
+        if {"-h", "--help"} & set(argv):  # the command's help, printed here
+            from train.cli import main as cli
+
+            return cli(command)
+        run = subprocess.run([sys.executable, "-m", "train.cli", *command], cwd=ROOT, env=checkout_env(), check=False)
+        return run.returncode  # as the command line runs it
 
     return main
 

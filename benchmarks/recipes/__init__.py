@@ -35,9 +35,9 @@ BLOCKS: dict[str, tuple[Block, ...]] = {
             "rl-apg-near-miss",
             "rl-apg-hold",
             "rl-apg-hold-heading10",
-            "rl-constrained",
         )
     },
+    "rl-constrained": (*_and_per_t_con("rl-constrained"), *_tables("rl-constrained-30min-per-T_con")),
     "sbx-tqc-v2": _and_per_t_con("sbx-v2-30min-tqc"),
     "robust-rl": (table("rl-robust", Schema({"rows": list, "seed": int, "n": int, "seconds": NUMBER})),),
 }

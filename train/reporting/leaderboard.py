@@ -47,7 +47,7 @@ class Row:
 ROWS: tuple[Row, ...] = (
     Row("APG from the reward (v2)", "apg_v2", "docs/rl_benchmark/apg_hold_heading10.json",
         "apg-hold-heading10-time-scaled-30min-v2", "benchmark", "python -m benchmarks run rl-apg-hold-heading10"),
-    Row("APG, the deadline as a constraint (v2)", "-", "docs/rl_benchmark/constrained.json",
+    Row("APG, the deadline as a constraint (v2, 30 min)", "-", "docs/rl_benchmark/constrained_30min.json",
         "apg-lagrangian-averaged-v2", "benchmark", "python -m benchmarks run rl-constrained"),
     Row("residual on PTC, APG (v2)", "apg_residual_ptc_v2", "docs/rl_benchmark/apg.json", "apg-residual-v2",
         "benchmark", "python -m benchmarks run rl-apg"),

@@ -55,6 +55,10 @@ RL_TABLES: dict[str, tuple[str, Callable[[Any], str]]] = {
         "docs/rl_benchmark/constrained.json",
         lambda data: rl_table(data, "per-T_con-heading"),
     ),
+    "rl-constrained-30min-per-T_con": (
+        "docs/rl_benchmark/constrained_30min.json",
+        lambda data: rl_table(data, "per-T_con-heading"),
+    ),
     "leaderboard": ("docs/leaderboard.json", lambda data: leaderboard_table(data)),
     "leaderboard-per-T_con": ("docs/leaderboard.json", lambda data: leaderboard_per_T_con(data)),
     "rl-constrained-log": ("docs/rl_benchmark/constrained_log.json", lambda data: constraint_log_table(data)),
