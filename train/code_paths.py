@@ -4,7 +4,7 @@ tables are the same on any such CPU.
 numpy, glibc's libm, MKL, oneDNN and torch each choose a kernel by what the CPU offers (AVX2, FMA, AVX-512): numpy's
 ``arctan2``, ``arcsin`` and ``tanh`` and libm's ``sin`` and ``cos`` under FMA, the networks' matrix products in MKL.
 Their results differ from one kernel to the next in the last bits, and the closed loops and the planners' searches
-start from those bits: on another CPU a few cells of the tables differed as printed (docs/controllers.md). Each library
+start from those bits: on another CPU a few cells of the tables differed as printed (docs/results.md). Each library
 has a switch read once, when the process starts (or when the library loads), which limits it to its baseline code:
 
 - ``NPY_DISABLE_CPU_FEATURES``: every dispatched feature this CPU has (numpy's baseline, SSE to SSE4.2, is compiled in);
@@ -26,6 +26,7 @@ from collections.abc import Mapping
 
 #: Set in the environment of a process whose code paths are pinned (and of its children).
 MARK = "DWR_GYM_CODE_PATHS"
+#: ``--code-paths``: the pinned kernels (the default) or the machine's own.
 CODE_PATHS = ("portable", "native")
 #: libm's CPU variants off: glibc >= 2.33 names them AVX2 and FMA, older ones AVX2_Usable and FMA_Usable (an unknown
 #: name is ignored).
@@ -62,8 +63,9 @@ def portable_environment(environ: Mapping[str, str] | None = None) -> dict[str, 
 
 
 def pinned(environ: Mapping[str, str] | None = None) -> bool:
-    """Whether this process (or ``environ``) already runs on the pinned code paths."""
-    return (os.environ if environ is None else environ).get(MARK) == "portable"
+    """Whether this process (or ``environ``) already runs on the pinned code paths (marked, and the switches set)."""
+    env = os.environ if environ is None else environ
+    return env.get(MARK) == "portable" and all(env.get(k) == v for k, v in FIXED.items())
 
 
 def describe() -> str:

@@ -244,6 +244,7 @@ def add_scenario_arguments(p: argparse.ArgumentParser, out: str, sets: Sequence[
     """The options shared by ``evaluate`` and ``compare``: the env, the controllers and the scenario sets (by default
     ``sets``, else the scenario sets without disturbances)."""
     from baselines.registry import CONTROLLER_NAMES
+    from train.code_paths import CODE_PATHS
     from train.evaluation.disturbance_sets import ROBUSTNESS_SETS
     from train.evaluation.optimum import OPTIMA
     from train.evaluation.scenarios import SCENARIO_SETS
@@ -281,7 +282,7 @@ def add_scenario_arguments(p: argparse.ArgumentParser, out: str, sets: Sequence[
                    "runs, the first of the n: it re-plans with CasADi whenever pushed off its plan (default: 50)")  # fmt: skip
     p.add_argument("--seed", type=count, default=0, help="seed of the random scenario set (default: 0)")
     p.add_argument("--out", default=out, help=f"output directory (default: {out})")
-    p.add_argument("--code-paths", choices=("portable", "native"), default="portable",
+    p.add_argument("--code-paths", choices=CODE_PATHS, default=CODE_PATHS[0],
                    help="'portable' (default): numpy's, libm's, MKL's and torch's kernels limited to those every x86-64 "
                    "CPU runs, so the tables are the same on any such CPU (the command line re-runs itself once with "
                    "them set; a little slower); 'native': the fastest kernels this CPU has (docs/controllers.md)")  # fmt: skip
