@@ -280,3 +280,14 @@ def test_a_summary_without_a_metric_gives_none_for_it_not_a_crash() -> None:
 
     got = metrics_of({"success_rate": 0.75, "energy_mean": 2.5, "final_heading_error_mean": float("nan")})
     assert got == {"in_time": 0.75, "energy_ratio": None, "final_heading": None, "energy": 2.5}, got
+
+
+def test_env_steps_that_an_entry_overrides_is_said(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """``--env-steps`` does not change an entry that names its own budget (its schedules are sized to it): the command
+    says so, naming the entry, its budget and how to change it, instead of training another budget than asked."""
+    code = main(["benchmark", "--agents", "apg-lagrangian-averaged-v2", "--env-steps", "1000", "--report-only",
+                 "--out", str(tmp_path)])  # fmt: skip
+    err = capsys.readouterr().err
+    assert code == 2  # (nothing to report in an empty --out)
+    assert "--env-steps 1000 leaves apg-lagrangian-averaged-v2 at its own 560,000,000 env steps" in err
+    assert "apg-lagrangian-averaged-v2:total_timesteps=N" in err

@@ -7,6 +7,7 @@ import argparse
 import json
 import os
 import platform
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -69,6 +70,10 @@ def run(args: argparse.Namespace) -> int:
         entries = [parse_entry(text) for text in args.agents]
     except ConfigError as error:
         raise UsageError(str(error)) from error
+    for entry in entries if args.env_steps else []:  # an entry's own budget wins (its schedules are sized to it)
+        if "total_timesteps" in entry.options:
+            print(f"--env-steps {args.env_steps} leaves {entry.name} at its own {entry.options['total_timesteps']:,} "
+                  f"env steps: {entry.name}:total_timesteps=N changes it", file=sys.stderr)  # fmt: skip
     budget = {"env_steps": args.env_steps, "time_limit": args.time_limit, "eval_freq": args.eval_freq,
               "eval_episodes": args.eval_episodes, "disturbed_episodes": args.disturbed_episodes,
               "optimum_episodes": args.optimum_episodes}  # fmt: skip
