@@ -37,7 +37,13 @@ SWITCH = "DWR_GYM_PLAN_CACHE"
 #: New plans written to a file of their own once this many are pending (an interruption loses fewer).
 FLUSH_EVERY = 500
 #: The switches of the numerical libraries' code paths (train.code_paths): a plan is kept per setting of them.
-CODE_PATH_SWITCHES = ("NPY_DISABLE_CPU_FEATURES", "GLIBC_TUNABLES", "MKL_CBWR", "ATEN_CPU_CAPABILITY")
+CODE_PATH_SWITCHES = (
+    "NPY_DISABLE_CPU_FEATURES",
+    "GLIBC_TUNABLES",
+    "MKL_CBWR",
+    "ONEDNN_MAX_CPU_ISA",
+    "ATEN_CPU_CAPABILITY",
+)
 #: The errors a solve returns, by name: a stored error is raised again as the same class with the same message.
 ERRORS = {cls.__name__: cls for cls in (OptimalControlError, InfeasibleArrivalTimeError)}
 

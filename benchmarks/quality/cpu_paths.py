@@ -41,13 +41,6 @@ PRINTED = {"success_rate": "%", "arrival_rate": "%", "final_heading_error_mean":
            "energy_ratio_mean": ".2f", "energy_ratio_max": ".1f"}  # fmt: skip
 
 
-def numpy_features_above_baseline() -> str:
-    """The dispatched numpy features this CPU has (``X86_V3 X86_V4 ...``): the ones a CPU without them would not use."""
-    from numpy._core._multiarray_umath import __cpu_dispatch__, __cpu_features__
-
-    return " ".join(name for name in __cpu_dispatch__ if __cpu_features__.get(name))
-
-
 def printed(value: Any, fmt: str) -> str:
     if value is None or (isinstance(value, float) and value != value):
         return "-"
@@ -67,6 +60,10 @@ def differences(reference: list[dict[str, Any]], changed: list[dict[str, Any]]) 
             if ours.get(k) != theirs.get(k)}  # fmt: skip
 
 
+#: libm's CPU variants: the oldest x86-64 CPU has none of them.
+LIBM_FEATURES = ("AVX2", "FMA", "AVX", "SSE4_1", "SSE4_2", "SSSE3")
+
+
 def oldest_cpu_environment() -> dict[str, str]:
     """The switches that make this CPU compute as an x86-64 CPU without any feature above the libraries' baselines."""
     from train.code_paths import FIXED, numpy_dispatched_features
@@ -75,17 +72,15 @@ def oldest_cpu_environment() -> dict[str, str]:
             "GLIBC_TUNABLES": f"glibc.cpu.hwcaps={','.join(f'-{f}{s}' for f in LIBM_FEATURES for s in ('', '_Usable'))}"}  # fmt: skip
 
 
-#: libm's CPU variants: the oldest x86-64 CPU has none of them.
-LIBM_FEATURES = ("AVX2", "FMA", "AVX", "SSE4_1", "SSE4_2", "SSSE3")
-
-
 def run_changed(out: Path) -> tuple[dict[str, str], float]:
     """``dwr-gym compare --code-paths native --out OUT`` in a fresh clone's state on the oldest x86-64 CPU (emulated);
     the switches it had and its wall seconds."""
+    from train.code_paths import MARK
+
     changed = oldest_cpu_environment()
     with tempfile.TemporaryDirectory() as tmp:
         env, began = checkout_env(DWR_GYM_CACHE=f"{tmp}/cache", **changed), time.perf_counter()
-        env.pop("DWR_GYM_CODE_PATHS", None)
+        env.pop(MARK, None)
         subprocess.run([sys.executable, "-m", "train.cli", "compare", "--code-paths", "native", "--out", str(out),
                         "--no-progress"], cwd=tmp, env=env, check=True, stdout=subprocess.DEVNULL)  # fmt: skip
     return changed, time.perf_counter() - began
